@@ -1,0 +1,182 @@
+"""Declared configuration: frozen, typed models, TOML files and ``key=value`` overrides.
+
+Every scenario, sensor and vehicle setting is a field of a :class:`Config` model (pydantic), frozen
+after validation, with its unit in its name or docstring. Loading goes through one function,
+:func:`load_config`, so that an unknown field, a wrong type, a value out of range or a non-finite
+number always produce the same kind of one-line error naming the field, the value and what is
+allowed (:class:`~bauv_sim.errors.ConfigError`).
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any, TypeVar
+
+import pydantic
+from pydantic import BaseModel, ConfigDict
+
+from bauv_sim.errors import ConfigError
+
+C = TypeVar("C", bound="Config")
+
+
+class Config(BaseModel):
+    """Base of every configuration model: frozen, no unknown fields, finite numbers only."""
+
+    model_config = ConfigDict(
+        frozen=True, extra="forbid", allow_inf_nan=False, validate_default=True
+    )
+
+
+def parse_override(text: str) -> tuple[list[str], Any]:
+    """Parse one ``dotted.key=value`` override.
+
+    The value is read as a TOML value (``20``, ``0.5``, ``true``, ``"a"``, ``[1, 2]``); a bare word
+    that is not valid TOML is taken as a string (``noise=uniform``).
+
+    Args:
+        text: the override as typed on the command line.
+
+    Returns:
+        ``(path, value)`` with the dotted key split into its parts.
+
+    Raises:
+        ConfigError: if there is no ``=`` or the key is empty.
+    """
+    key, sep, raw = text.partition("=")
+    key = key.strip()
+    if not sep or not key or any(not part for part in key.split(".")):
+        raise ConfigError(f"override {text!r}: expected KEY=VALUE with a dotted KEY, e.g. usbl.period_s=20")
+    raw = raw.strip()
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key.split("."), value
+
+
+def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[str, Any]:
+    """Return a deep copy of ``data`` with ``key=value`` overrides applied.
+
+    Args:
+        data: nested mapping (as read from TOML).
+        overrides: ``dotted.key=value`` strings, applied in order.
+
+    Returns:
+        A new nested dict.
+
+    Raises:
+        ConfigError: if an override addresses inside a value that is not a table.
+    """
+    out = copy.deepcopy(dict(data))
+    for text in overrides:
+        path, value = parse_override(text)
+        node = out
+        for i, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                where = ".".join(path[: i + 1])
+                raise ConfigError(f"override {text!r}: {where} is a value, not a table")
+            node = child
+        node[path[-1]] = value
+    return out
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file, raising :class:`ConfigError` with the file name on a syntax error."""
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"scenario file {str(p)!r}: not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"scenario file {str(p)!r}: {exc}") from None
+
+
+def validate(model: type[C], data: Mapping[str, Any], what: str = "scenario") -> C:
+    """Validate nested data into a frozen model.
+
+    Args:
+        model: the :class:`Config` subclass.
+        data: nested mapping.
+        what: how the caller names this configuration in messages.
+
+    Returns:
+        The validated model instance.
+
+    Raises:
+        ConfigError: naming the first invalid field, its value and what is allowed.
+    """
+    try:
+        return model.model_validate(data)
+    except pydantic.ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, what)) from None
+
+
+def load_config(
+    model: type[C],
+    base: Mapping[str, Any] | None = None,
+    files: Iterable[str | Path] = (),
+    overrides: Iterable[str] = (),
+    what: str = "scenario",
+) -> C:
+    """Merge defaults, TOML files and overrides, then validate.
+
+    Args:
+        model: the :class:`Config` subclass to build.
+        base: nested defaults applied first (e.g. an experiment's preset).
+        files: TOML files merged in order over ``base`` (tables merge, values replace).
+        overrides: ``dotted.key=value`` strings applied last.
+        what: how messages name this configuration.
+
+    Returns:
+        The validated, frozen model.
+
+    Raises:
+        ConfigError: on a bad file, override or value.
+    """
+    data: dict[str, Any] = copy.deepcopy(dict(base or {}))
+    for f in files:
+        data = merge(data, read_toml(f))
+    data = apply_overrides(data, overrides)
+    return validate(model, data, what)
+
+
+def merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
+    """Deep-merge ``b`` over ``a``: tables merge recursively, other values replace."""
+    out = copy.deepcopy(dict(a))
+    for k, v in b.items():
+        if isinstance(v, Mapping) and isinstance(out.get(k), Mapping):
+            out[k] = merge(out[k], v)
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def to_plain(cfg: BaseModel) -> dict[str, Any]:
+    """The model as plain nested data (for writing the resolved scenario as TOML or JSON)."""
+    return cfg.model_dump(mode="json", exclude_none=True)
+
+
+def format_validation_error(exc: pydantic.ValidationError, what: str) -> str:
+    """One line per problem: ``what: field.path = value: message``."""
+    lines = []
+    for err in exc.errors(include_url=False):
+        loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
+        msg = err["msg"]
+        if err["type"] == "extra_forbidden":
+            lines.append(f"{what}: unknown field {loc!r} (value {err['input']!r})")
+            continue
+        if msg.startswith("Value error, "):
+            msg = msg[len("Value error, ") :]
+        if err["type"] == "missing":
+            lines.append(f"{what}: {loc}: required field is missing")
+            continue
+        val = err.get("input")
+        shown = "(table)" if isinstance(val, dict) else repr(val)
+        lines.append(f"{what}: {loc} = {shown}: {msg}")
+    return "\n".join(lines)
