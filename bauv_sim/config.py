@@ -10,12 +10,12 @@ allowed (:class:`~bauv_sim.errors.ConfigError`).
 from __future__ import annotations
 
 import copy
-import tomllib
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
 import pydantic
+import tomllib
 from pydantic import BaseModel, ConfigDict
 
 from bauv_sim.errors import ConfigError
@@ -49,7 +49,9 @@ def parse_override(text: str) -> tuple[list[str], Any]:
     key, sep, raw = text.partition("=")
     key = key.strip()
     if not sep or not key or any(not part for part in key.split(".")):
-        raise ConfigError(f"override {text!r}: expected KEY=VALUE with a dotted KEY, e.g. usbl.period_s=20")
+        raise ConfigError(
+            f"override {text!r}: expected KEY=VALUE with a dotted KEY, e.g. usbl.period_s=20"
+        )
     raw = raw.strip()
     try:
         value = tomllib.loads(f"v = {raw}")["v"]

@@ -75,8 +75,8 @@ class RandomisedCurrent:
     direction of the current are drawn from normal distributions N(|Vc|, sigma_V^2) and
     N(alpha_c, sigma_alpha^2), and the same deviation is held for N_d steps, N_d uniform on
     [1, N_d,max]. Here the hold is expressed in seconds (N_d,max times the paper's step), and the
-    paper's hull-angle scaling of |Vc| (eq. 29, rho_s) belongs to the kinematic replica, since in the
-    physics world the hull's response to the current comes out of the fluid forces.
+    paper's hull-angle scaling of |Vc| (eq. 29, rho_s) belongs to the kinematic replica, since in
+    the physics world the hull's response to the current comes out of the fluid forces.
 
     The realisation is piecewise constant in time and uniform in space. Segments are drawn lazily in
     time order from ``rng``, so any sequence of queries sees the same realisation.
@@ -144,7 +144,8 @@ class ShearCurrent:
     """A horizontal current whose speed varies linearly with depth (a bottom boundary layer or a
     wind-driven surface layer).
 
-    ``speed(depth) = surface_speed + (bottom_speed - surface_speed) * clip(depth / bottom_depth, 0, 1)``
+    ``speed(d) = surface_speed + (bottom_speed - surface_speed) * clip(d / bottom_depth, 0, 1)``
+    with ``d`` the depth
 
     Args:
         surface_speed_m_s: speed at the surface, m/s.
@@ -154,7 +155,10 @@ class ShearCurrent:
     """
 
     def __init__(
-        self, surface_speed_m_s: float, bottom_speed_m_s: float, bottom_depth_m: float,
+        self,
+        surface_speed_m_s: float,
+        bottom_speed_m_s: float,
+        bottom_depth_m: float,
         direction_rad: float,
     ) -> None:
         if bottom_depth_m <= 0:
@@ -188,8 +192,12 @@ class GyreCurrent:
     """
 
     def __init__(
-        self, center_en_m: tuple[float, float], core_radius_m: float, max_speed_m_s: float,
-        clockwise: bool = True, tidal_period_s: float | None = None,
+        self,
+        center_en_m: tuple[float, float],
+        core_radius_m: float,
+        max_speed_m_s: float,
+        clockwise: bool = True,
+        tidal_period_s: float | None = None,
     ) -> None:
         if core_radius_m <= 0:
             raise ValueError(f"core_radius_m = {core_radius_m}: must be > 0")
@@ -204,8 +212,9 @@ class GyreCurrent:
         d = p[..., :2] - self.center_en_m
         r = np.hypot(d[..., 0], d[..., 1])
         rc = self.core_radius_m
-        speed = np.where(r <= rc, self.max_speed_m_s * r / rc,
-                         self.max_speed_m_s * rc / np.maximum(r, rc))
+        speed = np.where(
+            r <= rc, self.max_speed_m_s * r / rc, self.max_speed_m_s * rc / np.maximum(r, rc)
+        )
         t = np.asarray(t_s, dtype=float)
         if self.tidal_period_s is not None:
             speed = speed * np.cos(2.0 * math.pi * t / self.tidal_period_s)
@@ -239,12 +248,17 @@ class UniformCurrentConfig(Config):
 
     kind: Literal["uniform"] = "uniform"
     speed_m_s: float = Field(0.0, ge=0, le=5, description="current speed, m/s")
-    direction_deg: float = Field(0.0, ge=0, lt=360, description="set (towards), clockwise from north, deg")
+    direction_deg: float = Field(
+        0.0, ge=0, lt=360, description="set (towards), clockwise from north, deg"
+    )
 
 
 class RandomisedCurrentConfig(Config):
-    """Seed 001's randomised current (defaults: the paper's sigma_V^2 = 0.02, sigma_alpha^2 = 10 deg^2,
-    N_d,max = 10000 steps of 0.001 s)."""
+    """Seed 001's randomised current.
+
+    Defaults are the paper's: sigma_V^2 = 0.02, sigma_alpha^2 = 10 deg^2, N_d,max = 10000 steps of
+    0.001 s.
+    """
 
     kind: Literal["randomised"] = "randomised"
     speed_m_s: float = Field(0.3, ge=0, le=5, description="dominant magnitude |Vc|, m/s")
@@ -308,13 +322,27 @@ def make_current(cfg: CurrentConfig, rng: np.random.Generator | None = None) -> 
         if rng is None:
             raise ValueError("a randomised current needs its random stream")
         return RandomisedCurrent(
-            cfg.speed_m_s, math.radians(cfg.direction_deg), cfg.sigma_speed_m_s,
-            math.radians(cfg.sigma_direction_deg), cfg.hold_max_s, cfg.hold_step_s, rng,
+            cfg.speed_m_s,
+            math.radians(cfg.direction_deg),
+            cfg.sigma_speed_m_s,
+            math.radians(cfg.sigma_direction_deg),
+            cfg.hold_max_s,
+            cfg.hold_step_s,
+            rng,
         )
     if isinstance(cfg, ShearCurrentConfig):
-        return ShearCurrent(cfg.surface_speed_m_s, cfg.bottom_speed_m_s, cfg.bottom_depth_m,
-                            math.radians(cfg.direction_deg))
+        return ShearCurrent(
+            cfg.surface_speed_m_s,
+            cfg.bottom_speed_m_s,
+            cfg.bottom_depth_m,
+            math.radians(cfg.direction_deg),
+        )
     if isinstance(cfg, GyreCurrentConfig):
-        return GyreCurrent((cfg.center_east_m, cfg.center_north_m), cfg.core_radius_m,
-                           cfg.max_speed_m_s, cfg.clockwise, cfg.tidal_period_s)
+        return GyreCurrent(
+            (cfg.center_east_m, cfg.center_north_m),
+            cfg.core_radius_m,
+            cfg.max_speed_m_s,
+            cfg.clockwise,
+            cfg.tidal_period_s,
+        )
     raise TypeError(f"unknown current configuration {cfg!r}")

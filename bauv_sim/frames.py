@@ -9,7 +9,8 @@ Conventions (see ``docs/architecture.md``):
   north, in radians inside the code, wrapped to [0, 2 pi) by :func:`wrap_2pi` unless a function says
   otherwise. Residuals and differences of angles are wrapped to [-pi, pi) by :func:`wrap_pi`.
   The elevation beta is positive when the target is above the observer.
-* **Attitude**: roll positive with the starboard side down, pitch positive nose up, heading as above.
+* **Attitude**: roll positive with the starboard side down, pitch positive nose up, heading as
+  above.
 * **Quaternions** carry their component order in their name: MuJoCo uses ``quat_wxyz``,
   rerun and scipy ``quat_xyzw``.
 * **Seed 004 angles**: theta is measured counter-clockwise from the x (east) axis, gamma up from the
@@ -96,7 +97,9 @@ def velocity_from_course_speed(course_rad: ArrayLike, speed_m_s: ArrayLike) -> N
     return np.stack(np.broadcast_arrays(s * np.sin(c), s * np.cos(c)), axis=-1)
 
 
-def course_speed_from_velocity(vel_en_m_s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def course_speed_from_velocity(
+    vel_en_m_s: ArrayLike,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Course and speed of a horizontal world velocity.
 
     Args:
@@ -171,7 +174,7 @@ def theta_from_course(course_rad: ArrayLike) -> NDArray[np.float64]:
 
 
 def quat_wxyz_to_xyzw(quat_wxyz: ArrayLike) -> NDArray[np.float64]:
-    """Reorder quaternions from MuJoCo's (w, x, y, z) to rerun/scipy's (x, y, z, w); shape (..., 4)."""
+    """Reorder quaternions (..., 4) from MuJoCo's (w, x, y, z) to rerun/scipy's (x, y, z, w)."""
     q = np.asarray(quat_wxyz, dtype=float)
     return np.concatenate([q[..., 1:], q[..., :1]], axis=-1)
 
@@ -300,16 +303,22 @@ def body_from_world(R_world_from_body: ArrayLike, vec_world: ArrayLike) -> NDArr
 def _rot_x(a: NDArray[np.float64]) -> NDArray[np.float64]:
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2)
+    return np.stack(
+        [np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2
+    )
 
 
 def _rot_y(a: NDArray[np.float64]) -> NDArray[np.float64]:
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
+    return np.stack(
+        [np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2
+    )
 
 
 def _rot_z(a: NDArray[np.float64]) -> NDArray[np.float64]:
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+    return np.stack(
+        [np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2
+    )

@@ -2,12 +2,14 @@
 
 Every random source gets its own stream, addressed by the run's seed, the run's index in a Monte
 Carlo batch and a path of component names (``"sensor", "usbl", "noise"``). The stream of a
-component therefore does not depend on which other components exist, on the order they are built in,
-or on which worker runs which runs of a batch: run ``i`` of seed ``s`` always draws the same numbers.
+component therefore does not depend on which other components exist, on the order they are built
+in, or on which worker runs which runs of a batch: run ``i`` of seed ``s`` always draws the same
+numbers.
 
-A stream is a :class:`numpy.random.Generator` over PCG64, seeded by a :class:`numpy.random.SeedSequence`
-with ``entropy=seed`` and ``spawn_key=(run, *crc32(names))`` (Gymnasium's ``utils/seeding.py`` is the
-model; the names are hashed with CRC-32 so the key is stable across Python processes).
+A stream is a :class:`numpy.random.Generator` over PCG64, seeded by a
+:class:`numpy.random.SeedSequence` with ``entropy=seed`` and ``spawn_key=(run, *crc32(names))``
+(Gymnasium's ``utils/seeding.py`` is the model; the names are hashed with CRC-32 so the key is
+stable across Python processes).
 """
 
 from __future__ import annotations

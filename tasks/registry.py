@@ -1,0 +1,147 @@
+"""The registry of experiments and missions, loaded by name.
+
+An experiment is one module in ``tasks/`` whose name starts with ``paper``, ``mission`` or
+``vehicle`` (e.g. ``tasks/paper000.py``). The module builds :class:`Experiment` instances and passes
+them to :func:`register` at import time, the way dm_control's suite domains add themselves with
+``@SUITE.add``. Adding an experiment touches its own module and nothing else: :func:`get` and
+:func:`names` import every such module the first time they are called.
+
+An experiment is split in two pure parts so that the runner can distribute it:
+
+* :meth:`Experiment.run_block` computes a block of Monte Carlo runs (a tuple of run indices) and
+  returns a picklable result. It must depend only on ``(scenario, seed, runs)``: each run draws from
+  its own streams (:mod:`bauv_sim.rng`), so a block's result does not depend on which worker ran it.
+* :meth:`Experiment.report` turns the block results, in block order, into ``metrics.json``, tables,
+  figures and the recording of one run.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+from bauv_sim.config import Config
+from bauv_sim.errors import ConfigError
+
+EXPERIMENT_MODULE_PREFIXES = ("paper", "mission", "vehicle")
+
+_REGISTRY: dict[str, Experiment] = {}
+_LOADED = False
+
+
+@dataclass(frozen=True)
+class ReportContext:
+    """What :meth:`Experiment.report` receives.
+
+    Attributes:
+        scenario: the validated scenario.
+        seed: the batch seed.
+        n_runs: number of Monte Carlo runs in the batch.
+        out_dir: the run folder to write into.
+        blocks: the block results, in block order (an iterator: read once).
+        quiet: whether to keep the console quiet (tests).
+    """
+
+    scenario: Config
+    seed: int
+    n_runs: int
+    out_dir: Path
+    blocks: Iterator[Any]
+    quiet: bool = False
+
+
+@dataclass(frozen=True)
+class ReportSummary:
+    """What :meth:`Experiment.report` returns: the text printed to the console and the files
+    written (paths relative to the run folder)."""
+
+    text: str
+    files: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """Base of every registered experiment or mission.
+
+    Attributes:
+        name: registry name, ``family/name`` (e.g. ``paper-000/test-1``).
+        summary: one line for ``bauv list``.
+        preset: nested overrides of the scenario defaults that make this experiment (the same
+            scenario type can serve several experiments).
+        default_runs: number of runs when the user does not say.
+        max_runs: the largest batch allowed, or ``None``.
+    """
+
+    scenario_type: ClassVar[type[Config]]
+
+    name: str
+    summary: str
+    preset: Mapping[str, Any] = field(default_factory=dict)
+    default_runs: int = 1
+    max_runs: int | None = None
+
+    def block_size(self, scenario: Config) -> int:
+        """Runs per block: fixed by the scenario, never by the worker count (so that results are
+        identical for any number of workers)."""
+        return 1
+
+    def run_block(self, scenario: Config, seed: int, runs: tuple[int, ...]) -> Any:
+        """Compute the runs of one block; see the module docstring."""
+        raise NotImplementedError
+
+    def report(self, ctx: ReportContext) -> ReportSummary:
+        """Write the outputs of a finished batch; see the module docstring."""
+        raise NotImplementedError
+
+
+def register(experiment: Experiment) -> Experiment:
+    """Add an experiment to the registry.
+
+    Raises:
+        ValueError: if the name is taken by another experiment.
+    """
+    if experiment.name in _REGISTRY and _REGISTRY[experiment.name] is not experiment:
+        raise ValueError(f"experiment name {experiment.name!r} is registered twice")
+    _REGISTRY[experiment.name] = experiment
+    return experiment
+
+
+def _load_all() -> None:
+    global _LOADED
+    if _LOADED:
+        return
+    import tasks
+
+    for info in pkgutil.iter_modules(tasks.__path__):
+        if info.name.startswith(EXPERIMENT_MODULE_PREFIXES):
+            importlib.import_module(f"tasks.{info.name}")
+    _LOADED = True
+
+
+def names() -> list[str]:
+    """All registered names, sorted."""
+    _load_all()
+    return sorted(_REGISTRY)
+
+
+def get(name: str) -> Experiment:
+    """The experiment registered under ``name``.
+
+    Raises:
+        ConfigError: naming the unknown name and listing the known ones.
+    """
+    _load_all()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        known = ", ".join(sorted(_REGISTRY)) or "(none)"
+        raise ConfigError(f"unknown experiment {name!r}; known: {known}") from None
+
+
+def all_experiments() -> list[Experiment]:
+    """Every registered experiment, sorted by name."""
+    return [get(n) for n in names()]
