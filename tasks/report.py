@@ -1,0 +1,116 @@
+"""Tables and metrics files shared by every experiment's report.
+
+A run folder gets ``tables.md`` (every table, Markdown, in the paper's layout), one CSV per table in
+``tables/`` and ``metrics.json`` (validated by a pydantic model whose JSON Schema is kept in
+``docs/schemas/``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pydantic import BaseModel
+
+from tasks.runner import atomic_write_text
+
+Cell = str | float | int | None
+
+
+@dataclass(frozen=True)
+class Table:
+    """A titled table.
+
+    Attributes:
+        title: caption, e.g. ``"Table 4 (test-1, 100 passages)"``.
+        columns: column headers (with units).
+        rows: rows of cells; floats are printed with ``digits`` decimals, ``None`` as a dash.
+        digits: decimals for floats.
+        note: a line printed under the table.
+    """
+
+    title: str
+    columns: Sequence[str]
+    rows: Sequence[Sequence[Cell]]
+    digits: int = 1
+    note: str = ""
+    slug: str = field(default="")
+
+    def _fmt(self, c: Cell) -> str:
+        if c is None:
+            return "-"
+        if isinstance(c, float):
+            return "nan" if math.isnan(c) else f"{c:.{self.digits}f}"
+        return str(c)
+
+    def cells(self) -> list[list[str]]:
+        """Rows as formatted strings."""
+        return [[self._fmt(c) for c in row] for row in self.rows]
+
+    def to_markdown(self) -> str:
+        """GitHub-flavoured Markdown with a bold caption."""
+        lines = [f"**{self.title}**", "", "| " + " | ".join(self.columns) + " |"]
+        lines.append("|" + "|".join("---" for _ in self.columns) + "|")
+        lines += ["| " + " | ".join(r) + " |" for r in self.cells()]
+        if self.note:
+            lines += ["", self.note]
+        return "\n".join(lines) + "\n"
+
+    def to_text(self) -> str:
+        """Aligned plain text for the console."""
+        body = [list(self.columns), *self.cells()]
+        widths = [max(len(r[i]) for r in body) for i in range(len(self.columns))]
+
+        def line(r: Sequence[str]) -> str:
+            first = r[0].ljust(widths[0])
+            return "  ".join([first] + [c.rjust(w) for c, w in zip(r[1:], widths[1:], strict=True)])
+
+        out = [self.title, line(body[0]), "  ".join("-" * w for w in widths)]
+        out += [line(r) for r in body[1:]]
+        if self.note:
+            out.append(self.note)
+        return "\n".join(out) + "\n"
+
+    def to_csv(self) -> str:
+        """CSV with full-precision numbers."""
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(self.columns)
+        for row in self.rows:
+            w.writerow(["" if c is None else repr(c) if isinstance(c, float) else c for c in row])
+        return buf.getvalue()
+
+    def file_slug(self) -> str:
+        """File name stem for the CSV."""
+        s = self.slug or self.title
+        return re.sub(r"[^a-z0-9]+", "-", s.lower()).strip("-")[:80]
+
+
+def write_tables(out_dir: Path, tables: Sequence[Table], heading: str = "") -> list[str]:
+    """Write ``tables.md`` and ``tables/<slug>.csv``.
+
+    Returns:
+        The written paths relative to ``out_dir``.
+    """
+    md = ([f"# {heading}", ""] if heading else []) + [t.to_markdown() for t in tables]
+    atomic_write_text(out_dir / "tables.md", "\n".join(md))
+    files = ["tables.md"]
+    for t in tables:
+        rel = f"tables/{t.file_slug()}.csv"
+        (out_dir / "tables").mkdir(exist_ok=True)
+        atomic_write_text(out_dir / rel, t.to_csv())
+        files.append(rel)
+    return files
+
+
+def write_metrics(out_dir: Path, metrics: BaseModel) -> str:
+    """Write ``metrics.json`` from a pydantic model (sorted keys, stable float repr)."""
+    text = json.dumps(metrics.model_dump(mode="json"), indent=2, sort_keys=True, allow_nan=False)
+    atomic_write_text(out_dir / "metrics.json", text + "\n")
+    return "metrics.json"
