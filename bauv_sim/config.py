@@ -83,6 +83,9 @@ def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[s
                 where = ".".join(path[: i + 1])
                 raise ConfigError(f"override {text!r}: {where} is a value, not a table")
             node = child
+        if path[-1] == "kind" and node.get("kind", value) != value:
+            # a new kind starts from its own defaults, not the old kind's fields
+            node.clear()
         node[path[-1]] = value
     return out
 
@@ -141,7 +144,7 @@ def load_config(
     Raises:
         ConfigError: on a bad file, override or value.
     """
-    data: dict[str, Any] = copy.deepcopy(dict(base or {}))
+    data = merge(model_defaults(model), base or {})
     for f in files:
         data = merge(data, read_toml(f))
     data = apply_overrides(data, overrides)
@@ -149,14 +152,36 @@ def load_config(
 
 
 def merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
-    """Deep-merge ``b`` over ``a``: tables merge recursively, other values replace."""
+    """Deep-merge ``b`` over ``a``: tables merge recursively, other values replace.
+
+    A table of ``b`` whose ``kind`` differs from the ``kind`` of the table it lands on replaces it
+    whole (switching ``current.kind`` from ``uniform`` to ``gyre`` must not keep the uniform
+    current's fields).
+    """
     out = copy.deepcopy(dict(a))
     for k, v in b.items():
-        if isinstance(v, Mapping) and isinstance(out.get(k), Mapping):
-            out[k] = merge(out[k], v)
+        old = out.get(k)
+        if (
+            isinstance(v, Mapping)
+            and isinstance(old, Mapping)
+            and not ("kind" in v and v["kind"] != old.get("kind"))
+        ):
+            out[k] = merge(old, v)
         else:
             out[k] = copy.deepcopy(v)
     return out
+
+
+def model_defaults(model: type[BaseModel]) -> dict[str, Any]:
+    """The model's defaults as nested data, so that a partial table given by a preset, a file or
+    an override fills in over the parent's defaults instead of the sub-model's bare defaults.
+
+    Returns an empty dict for a model with required fields.
+    """
+    try:
+        return model().model_dump(mode="json", exclude_none=True)
+    except pydantic.ValidationError:
+        return {}
 
 
 def to_plain(cfg: BaseModel) -> dict[str, Any]:

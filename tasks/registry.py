@@ -89,6 +89,9 @@ class Experiment:
         identical for any number of workers)."""
         return 1
 
+    def check(self, scenario: Config, n_runs: int) -> None:
+        """Checks that involve the batch size (raise :class:`ConfigError`); none by default."""
+
     def run_block(self, scenario: Config, seed: int, runs: tuple[int, ...]) -> Any:
         """Compute the runs of one block; see the module docstring."""
         raise NotImplementedError

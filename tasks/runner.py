@@ -103,6 +103,7 @@ def plan_batch(
     if exp.max_runs is not None and n > exp.max_runs:
         raise ConfigError(f"runs = {n}: {name} allows at most {exp.max_runs}")
     scenario = load_config(exp.scenario_type, exp.preset, scenario_files, overrides)
+    exp.check(scenario, n)
     return BatchPlan(exp, scenario, seed, n, _blocks(n, exp.block_size(scenario)))
 
 

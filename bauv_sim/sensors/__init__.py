@@ -1,0 +1,34 @@
+"""Synthetic sensors: truth in, measurements out, with the shared error vocabulary of
+:mod:`bauv_sim.sensors.errors` and one random stream per device and error term."""
+
+from bauv_sim.sensors.base import SensorSamples, check_multiple, periodic_indices
+from bauv_sim.sensors.compass import Compass, CompassConfig
+from bauv_sim.sensors.errors import (
+    AngleErrorConfig,
+    ErrorModel,
+    ErrorProcess,
+    LengthErrorConfig,
+    SpeedErrorConfig,
+)
+from bauv_sim.sensors.log import Log, LogConfig
+from bauv_sim.sensors.pressure import Pressure, PressureConfig
+from bauv_sim.sensors.usbl import Usbl, UsblConfig
+
+__all__ = [
+    "AngleErrorConfig",
+    "Compass",
+    "CompassConfig",
+    "ErrorModel",
+    "ErrorProcess",
+    "LengthErrorConfig",
+    "Log",
+    "LogConfig",
+    "Pressure",
+    "PressureConfig",
+    "SensorSamples",
+    "SpeedErrorConfig",
+    "Usbl",
+    "UsblConfig",
+    "check_multiple",
+    "periodic_indices",
+]

@@ -1,0 +1,58 @@
+"""Compass / INS heading (VectorNav VN-100 / VN-200 in the seeds).
+
+Seed 000 uses the INS course with sigma_COG = 3 deg in its analysis (section 3) and 8 deg in its
+experiment (section 6); in a world without current and drift angle the heading is the course over
+ground. Compass deviation (A + B sin psi + C cos psi + D sin 2 psi + E cos 2 psi) and the
+course-sector bias of seed 003 are part of the error vocabulary (:mod:`bauv_sim.sensors.errors`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from bauv_sim.config import Config
+from bauv_sim.frames import wrap_2pi
+from bauv_sim.sensors.base import SensorSamples, broadcast_runs
+from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess
+from bauv_sim.truth import Truth
+
+
+class CompassConfig(Config):
+    """Compass / INS heading sensor."""
+
+    period_s: float = Field(1.0, gt=0, description="sample period, s (a multiple of the tick)")
+    heading: AngleErrorConfig = Field(
+        default_factory=lambda: AngleErrorConfig(sigma_deg=3.0),
+        description="heading error (seed 000 section 3: sigma 3 deg)",
+    )
+
+
+class Compass:
+    """Heading measurements of a batch of runs.
+
+    Args:
+        cfg: configuration.
+        seed: batch seed.
+        runs: run indices of the rows.
+        name: stream name of this device.
+    """
+
+    def __init__(self, cfg: CompassConfig, seed: int, runs: tuple[int, ...], name: str = "compass"):
+        self.cfg = cfg
+        self._err = ErrorProcess(cfg.heading.to_model(), seed, runs, ("sensor", name, "heading"))
+        self.n = len(runs)
+
+    def sample(self, truth: Truth, index: NDArray[np.intp]) -> SensorSamples:
+        """Measure at the given tick indices of ``truth``.
+
+        Returns:
+            Samples with values = heading, shape (n, k), rad in [0, 2 pi) clockwise from north.
+        """
+        tr = truth.take(index)
+        heading = broadcast_runs(tr.heading_rad, self.n)
+        course = broadcast_runs(tr.course_over_ground_rad, self.n)
+        value, produced = self._err.apply(heading, tr.t_s, reference_rad=course)
+        t_arr = np.broadcast_to(tr.t_s, produced.shape)
+        return SensorSamples(tr.t_s, wrap_2pi(value), produced, t_arr)

@@ -1,0 +1,66 @@
+"""Pressure depth sensor (WIKA S-20 in seed 000).
+
+Two outputs: ``depth`` (the sensor's reading, for a filter that updates on depth) and
+``depth_change`` (seed 000 section 5: the change of submergence Delta z over each sample period,
+measured with its own independent error sigma_dz = 0.25 m, which is how the paper's EKF is driven).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from bauv_sim.config import Config
+from bauv_sim.sensors.base import SensorSamples, broadcast_runs
+from bauv_sim.sensors.errors import ErrorProcess, LengthErrorConfig
+from bauv_sim.truth import Truth
+
+
+class PressureConfig(Config):
+    """Pressure depth sensor."""
+
+    period_s: float = Field(1.0, gt=0, description="sample period, s")
+    output: Literal["depth", "depth_change"] = Field(
+        "depth", description="depth, or the change of depth since the previous sample"
+    )
+    depth: LengthErrorConfig = Field(
+        default_factory=lambda: LengthErrorConfig(sigma_m=0.25),
+        description="error of the output (seed 000: sigma_dz = 0.25 m)",
+    )
+
+
+class Pressure:
+    """Depth or depth-change measurements (see :class:`Compass` for the args)."""
+
+    def __init__(
+        self, cfg: PressureConfig, seed: int, runs: tuple[int, ...], name: str = "pressure"
+    ):
+        self.cfg = cfg
+        self._err = ErrorProcess(cfg.depth.to_model(), seed, runs, ("sensor", name, "depth"))
+        self.n = len(runs)
+
+    def sample(
+        self, truth: Truth, index: NDArray[np.intp], previous: NDArray[np.intp] | None = None
+    ) -> SensorSamples:
+        """Measure at the given tick indices.
+
+        Args:
+            truth: truth record.
+            index: tick indices of the samples, shape (k,).
+            previous: for ``depth_change``, the tick each change starts from (default: the tick
+                before each index, minus one sample period of the grid).
+
+        Returns:
+            Samples; values are depth (m, positive down) or the depth change (m, positive down)
+            from ``previous`` to ``index``, shape (n, k).
+        """
+        tr = truth.take(index)
+        depth = broadcast_runs(tr.depth_m, self.n)
+        if self.cfg.output == "depth_change":
+            prev = index - 1 if previous is None else previous
+            depth = depth - broadcast_runs(truth.take(prev).depth_m, self.n)
+        value, produced = self._err.apply(depth, tr.t_s)
+        return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))

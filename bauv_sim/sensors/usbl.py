@@ -1,0 +1,113 @@
+"""USBL: slant range, azimuth and elevation of the vehicle's transponder seen from a transceiver.
+
+Seed 000 (Tritech MicronNav): sigma_r = 0.2 m, sigma_alpha = sigma_beta = 3 deg, range limit 500 m.
+The geometry is seed 000 eq. 15 with world z up (:func:`bauv_sim.frames.range_azimuth_elevation`):
+azimuth clockwise from north, elevation positive when the vehicle is above the transceiver.
+
+Besides the per-component errors (:mod:`bauv_sim.sensors.errors`), a fix is not produced beyond
+``max_range_m``, outside the transceiver's field of view (``min_elevation_deg``), or with
+``dropout_probability``; it reaches the vehicle after the acoustic travel time plus a processing
+delay (the fix is valid for the moment of the reply).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from bauv_sim import rng as rng_mod
+from bauv_sim.config import Config
+from bauv_sim.frames import range_azimuth_elevation, wrap_2pi
+from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
+from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess, LengthErrorConfig
+from bauv_sim.truth import Truth
+
+
+class UsblConfig(Config):
+    """USBL positioning (defaults: Tritech MicronNav as in seed 000)."""
+
+    period_s: float = Field(5.0, gt=0, description="time between fixes, s (seed 000: 5, 20, 100)")
+    range: LengthErrorConfig = Field(
+        default_factory=lambda: LengthErrorConfig(sigma_m=0.2), description="slant-range error"
+    )
+    azimuth: AngleErrorConfig = Field(
+        default_factory=lambda: AngleErrorConfig(sigma_deg=3.0), description="azimuth error"
+    )
+    elevation: AngleErrorConfig = Field(
+        default_factory=lambda: AngleErrorConfig(sigma_deg=3.0), description="elevation error"
+    )
+    max_range_m: float = Field(500.0, gt=0, description="no fix beyond this slant range, m")
+    min_elevation_deg: float = Field(
+        -90.0, ge=-90, le=90, description="no fix below this elevation (field of view), deg"
+    )
+    dropout_probability: float = Field(0.0, ge=0, lt=1, description="probability a fix is lost")
+    sound_speed_m_s: float = Field(1500.0, gt=0, description="for the travel-time latency, m/s")
+    processing_delay_s: float = Field(0.0, ge=0, description="added latency, s")
+    transponder_body_m: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="transponder relative to the vehicle reference point, m, body"
+    )
+
+
+class Usbl:
+    """USBL fixes of a batch of runs.
+
+    Args:
+        cfg: configuration.
+        transceiver_world_m: transceiver position, shape (3,), m, world frame.
+        seed: batch seed.
+        runs: run indices of the rows.
+        name: stream name of this device.
+    """
+
+    def __init__(
+        self,
+        cfg: UsblConfig,
+        transceiver_world_m: NDArray[np.float64],
+        seed: int,
+        runs: tuple[int, ...],
+        name: str = "usbl",
+    ):
+        self.cfg = cfg
+        self.transceiver_world_m = np.asarray(transceiver_world_m, dtype=float)
+        self.n = len(runs)
+        base = ("sensor", name)
+        self._errs = [
+            ErrorProcess(cfg.range.to_model(), seed, runs, (*base, "range")),
+            ErrorProcess(cfg.azimuth.to_model(), seed, runs, (*base, "azimuth")),
+            ErrorProcess(cfg.elevation.to_model(), seed, runs, (*base, "elevation")),
+        ]
+        self._drop = (
+            rng_mod.generators(seed, runs, *base, "fix_dropout")
+            if cfg.dropout_probability > 0
+            else None
+        )
+
+    def sample(self, truth: Truth, index: NDArray[np.intp]) -> SensorSamples:
+        """Fix at the given tick indices.
+
+        Returns:
+            Samples with values ``(r, alpha, beta)``, shape (n, k, 3): m, rad in [0, 2 pi),
+            rad; ``t_arrival_s`` includes the travel time r / c and the processing delay.
+        """
+        tr = truth.take(index)
+        pos = broadcast_runs(point_world(tr, self.cfg.transponder_body_m), self.n)
+        true_rae = range_azimuth_elevation(pos - self.transceiver_world_m)
+        k = len(index)
+        comps, produced = [], np.ones((self.n, k), dtype=bool)
+        for j, err in enumerate(self._errs):
+            ref = true_rae[..., 1] if err.model.needs_reference() else None
+            v, ok = err.apply(true_rae[..., j], tr.t_s, reference_rad=ref)
+            comps.append(v)
+            produced &= ok
+        meas = np.stack(comps, axis=-1)
+        meas[..., 0] = np.abs(meas[..., 0])
+        meas[..., 1] = wrap_2pi(meas[..., 1])
+        meas[..., 2] = np.clip(meas[..., 2], -np.pi / 2, np.pi / 2)
+        produced &= true_rae[..., 0] <= self.cfg.max_range_m
+        produced &= true_rae[..., 2] >= np.radians(self.cfg.min_elevation_deg)
+        if self._drop is not None:
+            lost = np.stack([g.random(k) for g in self._drop]) < self.cfg.dropout_probability
+            produced &= ~lost
+        t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
+        return SensorSamples(tr.t_s, meas, produced, t_arr)

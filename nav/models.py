@@ -1,0 +1,183 @@
+"""Motion and measurement models (f, h, their Jacobians, Q, R), apart from the algorithms.
+
+State vector of the seed 000 models: ``x = (east, north, up)`` of the vehicle, m, world frame (ENU,
+z up; depth = -up). Arrays carry a leading run axis: ``x`` is (n, 3), covariances (n, 3, 3).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Array = NDArray[np.float64]
+
+
+def _wrap_pi(a: Array) -> Array:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+@dataclass(frozen=True)
+class CourseSpeedDepthMotion:
+    """Dead-reckoning motion from course, speed and depth change (seed 000 eq. 8 and 16).
+
+    ``f(x, u) = x + (dt S sin C, dt S cos C, -dz)`` with ``u = (C, S, dz)``: course over ground
+    (rad, clockwise from north), speed (m/s) and depth change over the step (m, positive down; the
+    state's third component is up, hence the minus sign). ``F = df/dx = I`` and
+    ``Q = G diag(sigma_C^2, sigma_S^2, sigma_dz^2) G^T`` with ``G = df/du`` (eq. 16).
+
+    Attributes:
+        sigma_course_rad: course standard deviation the filter assumes, rad.
+        sigma_speed_m_s: speed standard deviation, m/s.
+        sigma_depth_change_m: depth-change standard deviation per step, m.
+    """
+
+    sigma_course_rad: float
+    sigma_speed_m_s: float
+    sigma_depth_change_m: float
+
+    def increment(self, u: Array, dt_s: float | Array) -> Array:
+        """Displacement over one step, shape (n, 3), m, world (eq. 16 without the state)."""
+        c, s, dz = u[..., 0], u[..., 1], u[..., 2]
+        return np.stack([dt_s * s * np.sin(c), dt_s * s * np.cos(c), -dz], axis=-1)
+
+    def f(self, x: Array, u: Array, dt_s: float) -> Array:
+        """Predicted state (eq. 17): shape (n, 3)."""
+        return x + self.increment(u, dt_s)
+
+    def F(self, x: Array, u: Array, dt_s: float) -> Array:
+        """State Jacobian, the identity (section 5), shape (n, 3, 3)."""
+        return np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
+
+    def G(self, u: Array, dt_s: float | Array) -> Array:
+        """Input Jacobian ``df/du``, shape (n, 3, 3)."""
+        c, s = u[..., 0], u[..., 1]
+        G = np.zeros((*u.shape[:-1], 3, 3))
+        G[..., 0, 0] = dt_s * s * np.cos(c)
+        G[..., 0, 1] = dt_s * np.sin(c)
+        G[..., 1, 0] = -dt_s * s * np.sin(c)
+        G[..., 1, 1] = dt_s * np.cos(c)
+        G[..., 2, 2] = -1.0
+        return G
+
+    def Q(self, u: Array, dt_s: float | Array) -> Array:
+        """Process noise (eq. 16): ``G diag(sigma^2) G^T``, shape (n, 3, 3)."""
+        G = self.G(u, dt_s)
+        var = np.array(
+            [self.sigma_course_rad**2, self.sigma_speed_m_s**2, self.sigma_depth_change_m**2]
+        )
+        return np.einsum("...ij,j,...kj->...ik", G, var, G)
+
+
+@dataclass(frozen=True)
+class UsblMeasurement:
+    """USBL slant range, azimuth and elevation of the vehicle from a fixed transceiver (seed 000
+    eq. 15, with world z up).
+
+    ``h(x) = (r, alpha, beta)`` with ``d = x - transceiver``, ``r = |d|``,
+    ``alpha = atan2(d_e, d_n)`` and ``beta = atan2(d_u, sqrt(d_e^2 + d_n^2))``.
+    ``H = dh/dx`` is the Jacobian of section 5 (rows r, alpha, beta). Where the vehicle is nearly
+    vertically above or below the transceiver (horizontal distance below ``min_horizontal_m``) the
+    azimuth carries no usable linear information and its Jacobian diverges as 1/l: that component
+    is left out of the update (:meth:`active`) instead of producing inf or NaN.
+
+    Attributes:
+        transceiver_world_m: transceiver position, shape (3,), m, world.
+        sigma_range_m: range standard deviation the filter assumes, m.
+        sigma_azimuth_rad: azimuth standard deviation, rad.
+        sigma_elevation_rad: elevation standard deviation, rad.
+        min_horizontal_m: horizontal distance below which the azimuth is not used, m.
+    """
+
+    transceiver_world_m: Array
+    sigma_range_m: float
+    sigma_azimuth_rad: float
+    sigma_elevation_rad: float
+    min_horizontal_m: float = 1.0
+
+    ANGLES = (1, 2)
+    """Indices of the angle components (wrapped residuals)."""
+
+    def _d(self, x: Array) -> tuple[Array, Array, Array, Array, Array]:
+        d = np.asarray(x, dtype=float) - self.transceiver_world_m
+        l2 = d[..., 0] ** 2 + d[..., 1] ** 2
+        horiz = np.sqrt(l2)
+        r = np.sqrt(l2 + d[..., 2] ** 2)
+        return d, l2, horiz, r, l2 + d[..., 2] ** 2
+
+    def h(self, x: Array) -> Array:
+        """Predicted measurement, shape (n, 3): m, rad in [0, 2 pi), rad."""
+        d, _, horiz, r, _ = self._d(x)
+        alpha = np.arctan2(d[..., 0], d[..., 1]) % (2 * np.pi)
+        beta = np.arctan2(d[..., 2], horiz)
+        return np.stack([r, alpha, beta], axis=-1)
+
+    def H(self, x: Array) -> Array:
+        """Jacobian ``dh/dx``, shape (n, 3, 3); rows of inactive components are zero."""
+        d, l2, horiz, r, l3 = self._d(x)
+        dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
+        safe_r = np.maximum(r, 1e-9)
+        far = horiz >= self.min_horizontal_m
+        safe_l2 = np.where(far, l2, 1.0)
+        # unit horizontal direction, zero when exactly vertical
+        safe_h = np.where(horiz > 0, horiz, 1.0)
+        ux, uy = np.where(horiz > 0, dx / safe_h, 0.0), np.where(horiz > 0, dy / safe_h, 0.0)
+        safe_l3 = np.maximum(l3, 1e-18)
+        H = np.zeros((*d.shape[:-1], 3, 3))
+        H[..., 0, 0], H[..., 0, 1], H[..., 0, 2] = dx / safe_r, dy / safe_r, dz / safe_r
+        H[..., 1, 0] = np.where(far, dy / safe_l2, 0.0)
+        H[..., 1, 1] = np.where(far, -dx / safe_l2, 0.0)
+        H[..., 2, 0] = -dz * ux / safe_l3
+        H[..., 2, 1] = -dz * uy / safe_l3
+        H[..., 2, 2] = horiz / safe_l3
+        return H
+
+    def active(self, x: Array) -> NDArray[np.bool_]:
+        """Which components take part in the update, shape (n, 3)."""
+        _, _, horiz, _, _ = self._d(x)
+        act = np.ones((*horiz.shape, 3), dtype=bool)
+        act[..., 1] = horiz >= self.min_horizontal_m
+        return act
+
+    def R(self) -> Array:
+        """Measurement noise (section 5), shape (3, 3)."""
+        return np.diag(
+            [self.sigma_range_m**2, self.sigma_azimuth_rad**2, self.sigma_elevation_rad**2]
+        )
+
+    def residual(self, z: Array, hx: Array) -> Array:
+        """Innovation ``z - h(x)`` with the angles wrapped to [-pi, pi) (eq. 19)."""
+        y = np.asarray(z, dtype=float) - hx
+        y[..., 1] = _wrap_pi(y[..., 1])
+        y[..., 2] = _wrap_pi(y[..., 2])
+        return y
+
+    def invert(self, z: ArrayLike) -> Array:
+        """The USBL-only position fix from a measurement (inverse of :meth:`h`).
+
+        Args:
+            z: ``(r, alpha, beta)``, shape (..., 3).
+
+        Returns:
+            Vehicle position, shape (..., 3), m, world.
+        """
+        z = np.asarray(z, dtype=float)
+        r, alpha, beta = z[..., 0], z[..., 1], z[..., 2]
+        horiz = r * np.cos(beta)
+        rel = np.stack([horiz * np.sin(alpha), horiz * np.cos(alpha), r * np.sin(beta)], axis=-1)
+        return self.transceiver_world_m + rel
+
+    def fix_covariance(self, z: ArrayLike) -> Array:
+        """Covariance of :meth:`invert` by first-order propagation of ``R``, shape (..., 3, 3)."""
+        z = np.asarray(z, dtype=float)
+        r, a, b = z[..., 0], z[..., 1], z[..., 2]
+        J = np.zeros((*z.shape[:-1], 3, 3))
+        J[..., 0, :] = np.stack(
+            [np.cos(b) * np.sin(a), r * np.cos(b) * np.cos(a), -r * np.sin(b) * np.sin(a)], -1
+        )
+        J[..., 1, :] = np.stack(
+            [np.cos(b) * np.cos(a), -r * np.cos(b) * np.sin(a), -r * np.sin(b) * np.cos(a)], -1
+        )
+        J[..., 2, :] = np.stack([np.sin(b), np.zeros_like(r), r * np.cos(b)], -1)
+        return J @ self.R() @ np.swapaxes(J, -1, -2)

@@ -1,0 +1,169 @@
+"""Paper-style PNG figures (matplotlib, offscreen Agg backend).
+
+Figures show what the seeds' figures show: routes in the horizontal plane, distance to the
+reference over time, histograms of that distance, filter consistency against its chi-square band.
+Axes are labelled with units; east is x and north is y.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from numpy.typing import NDArray
+
+from nav.metrics import Histogram
+
+MPL_COLORS = {
+    "truth": "black",
+    "reference": "black",
+    "EKF": "tab:blue",
+    "DR": "tab:red",
+    "USBL": "tab:green",
+    "GPS": "tab:orange",
+}
+
+Array = NDArray[np.float64]
+
+
+def _save(fig: plt.Figure, path: Path) -> str:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path.name
+
+
+def routes(
+    path: Path,
+    reference_en: Array,
+    tracks: Mapping[str, Sequence[Array]],
+    points: Mapping[str, Sequence[Array]] | None = None,
+    landmarks: Mapping[str, Array] | None = None,
+    title: str = "",
+) -> str:
+    """Routes in the horizontal plane (seed 000 Figures 8, 19, 24, 30).
+
+    Args:
+        path: PNG file.
+        reference_en: reference route, shape (T, 2+), m (east, north).
+        tracks: method -> list of tracks, each (T, 2+), m.
+        points: method -> list of point sets, each (k, 2+), m (USBL fixes).
+        landmarks: label -> position (2+,), m.
+    """
+    fig, ax = plt.subplots(figsize=(7, 6.5))
+    for name, pts in (points or {}).items():
+        for i, p in enumerate(pts):
+            if len(p):
+                ax.plot(
+                    p[:, 0],
+                    p[:, 1],
+                    ".",
+                    ms=2,
+                    alpha=0.35,
+                    color=MPL_COLORS.get(name),
+                    label=name if i == 0 else None,
+                )
+    for name, trs in tracks.items():
+        alpha = 0.9 if len(trs) == 1 else max(0.08, 3.0 / len(trs))
+        for i, tr in enumerate(trs):
+            ax.plot(
+                tr[:, 0],
+                tr[:, 1],
+                lw=0.8,
+                alpha=alpha,
+                color=MPL_COLORS.get(name),
+                label=name if i == 0 else None,
+            )
+    ax.plot(reference_en[:, 0], reference_en[:, 1], "k-", lw=1.6, label="reference")
+    for label, p in (landmarks or {}).items():
+        ax.plot(p[0], p[1], "k^", ms=9)
+        ax.annotate(label, (p[0], p[1]), textcoords="offset points", xytext=(6, 6))
+    ax.set_xlabel("east (m)")
+    ax.set_ylabel("north (m)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)
+
+
+def distances(
+    path: Path,
+    series: Mapping[str, tuple[Array, Array]],
+    title: str = "",
+    ylabel: str = "distance to the reference position (m)",
+) -> str:
+    """Distance to the reference over time, one line per method (seed 000 Figures 13, 18...).
+
+    Args:
+        series: method -> (t_s (k,), distance_m (k,)).
+    """
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for name, (t, d) in series.items():
+        style = "o-" if len(t) < 60 else "-"
+        ax.plot(t, d, style, ms=3, lw=1, color=MPL_COLORS.get(name), label=name)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    ax.set_title(title)
+    return _save(fig, path)
+
+
+def histograms(path: Path, hists: Mapping[str, Histogram], title: str = "") -> str:
+    """Frequency of the distance to the reference (seed 000 Figures 20, 26, 32)."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    names = list(hists)
+    width = None
+    for i, name in enumerate(names):
+        h = hists[name]
+        w = np.diff(h.edges)
+        width = w / (len(names) + 0.5)
+        freq = h.counts / max(h.counts.sum(), 1)
+        ax.bar(
+            h.edges[:-1] + i * width,
+            freq,
+            width=width,
+            align="edge",
+            color=MPL_COLORS.get(name),
+            label=name,
+        )
+    ax.set_xlabel("distance to the reference position (m)")
+    ax.set_ylabel("relative frequency")
+    top = max(
+        (h.edges[np.flatnonzero(h.counts)[-1] + 1] if h.counts.any() else h.edges[1])
+        for h in hists.values()
+    )
+    ax.set_xlim(0, top)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    ax.set_title(title)
+    return _save(fig, path)
+
+
+def consistency(
+    path: Path,
+    t_s: Array,
+    mean_nees: Array,
+    band: tuple[float, float],
+    dim: int,
+    n_runs: int,
+    title: str = "",
+) -> str:
+    """Average NEES over runs against its two-sided chi-square band."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.plot(t_s, mean_nees, lw=1, color="tab:blue", label=f"mean NEES over {n_runs} runs")
+    ax.axhspan(band[0], band[1], color="tab:green", alpha=0.2, label="95% band")
+    ax.axhline(dim, color="k", lw=0.8, ls="--", label=f"dim = {dim}")
+    ax.set_yscale("log")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("NEES")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
+    ax.set_title(title)
+    return _save(fig, path)

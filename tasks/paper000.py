@@ -1,0 +1,915 @@
+"""Seed 000 (Naus & Nowak 2016): DR, EKF and USBL-only positioning on a straight passage.
+
+Registers ``paper-000/test-1``, ``test-2`` and ``test-3``: the BAUV passes a seabed USBL
+transceiver (section 6, Figure 7) while COG, SOG and the depth change are measured every second and
+USBL range, azimuth and elevation every 5, 20 or 100 s. Each passage is positioned three ways:
+
+* **DR**: dead reckoning from the measured course, speed and depth change (eq. 8, 16);
+* **EKF**: the extended Kalman filter of eq. 15-23 fusing the same inputs with the USBL fixes;
+* **USBL**: the position computed from each USBL measurement alone (inverse of eq. 15).
+
+The report gives the paper's tables: for single passages the minimum, maximum and mean distance to
+the reference position; for N passages the same statistics of zeta(k), the mean over passages of the
+distance at moment k (eq. 24 writes a sum; the figures and the tables' values are a mean). Distances
+are horizontal for EKF and DR and three-dimensional for USBL (its elevation error dominates; see
+``../shared/seeds/README.md``). Statistics run over ticks 1..T (the paper's tables start after the
+first measurement: their smallest DR and EKF distances are the one-step error, not the zero initial
+error) and over the fix times for USBL.
+
+Reading of the paper where it is silent (documented in the scenario fields):
+
+* sensor errors are uniform on +-3 sigma (section 6) while the filter is tuned with sigma itself;
+* the initial estimate is the reference start (the tables' minima show DR and EKF start on it),
+  while the filter's initial covariance has the "mean error of about 3 m" of section 6;
+* sigma_COG = 8 deg in the experiment (section 6), not the 3 deg of the analysis (section 3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, Field, model_validator
+
+from bauv_sim import rng as rng_mod
+from bauv_sim.config import Config
+from bauv_sim.errors import ConfigError
+from bauv_sim.frames import KNOT_M_S
+from bauv_sim.kinematic.passage import (
+    StraightPassageConfig,
+    TransceiverConfig,
+    straight_passage,
+)
+from bauv_sim.sensors import (
+    AngleErrorConfig,
+    Compass,
+    CompassConfig,
+    LengthErrorConfig,
+    Log,
+    LogConfig,
+    Pressure,
+    PressureConfig,
+    SpeedErrorConfig,
+    Usbl,
+    UsblConfig,
+    check_multiple,
+    periodic_indices,
+)
+from bauv_sim.truth import Truth
+from nav.dead_reckoning import dead_reckon
+from nav.ekf import BatchEKF
+from nav.metrics import (
+    Histogram,
+    SeriesSum,
+    distance_3d,
+    horizontal_distance,
+    nees,
+    nees_band,
+    series_stats,
+)
+from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+from tasks import figures
+from tasks.recording import COLORS, Recording
+from tasks.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.report import Table, write_metrics, write_tables
+
+METHODS = ("EKF", "DR", "USBL")
+SIGMA_SOG_M_S = 0.5 * KNOT_M_S
+"""Seed 000 section 3: ALIZE log, sigma_SOG = 0.5 kn."""
+
+# The paper's tables: (min, max, mean) distance to the reference position, m, for EKF, DR, USBL.
+PaperRow = tuple[float, float, float]
+
+
+def _rows(ekf: PaperRow, dr: PaperRow, usbl: PaperRow) -> dict[str, PaperRow]:
+    return {"EKF": ekf, "DR": dr, "USBL": usbl}
+
+
+PAPER_TABLES: dict[str, dict[str, object]] = {
+    "test-1": {
+        "usbl_period_s": 5.0,
+        "single": [
+            ("Table 1", _rows((0.1, 6.6, 2.2), (0.7, 25.8, 15.9), (0.3, 75.2, 22.6))),
+            ("Table 2", _rows((0.1, 6.4, 2.3), (0.1, 22.6, 11.8), (0.2, 81.6, 23.6))),
+            ("Table 3", _rows((0.1, 5.3, 1.8), (0.2, 14.0, 4.7), (0.7, 86.1, 21.6))),
+        ],
+        "hundred": ("Table 4", _rows((0.6, 3.3, 2.2), (0.6, 20.1, 10.6), (1.3, 57.0, 23.4))),
+    },
+    "test-2": {
+        "usbl_period_s": 20.0,
+        "single": [
+            ("Table 5", _rows((0.2, 7.3, 3.4), (0.7, 34.9, 10.9), (0.4, 68.0, 24.3))),
+            ("Table 6", _rows((0.1, 7.5, 2.5), (0.1, 26.7, 9.7), (1.4, 64.3, 21.0))),
+            ("Table 7", _rows((0.3, 6.1, 2.2), (0.3, 15.3, 6.2), (1.3, 72.6, 21.1))),
+        ],
+        "hundred": ("Table 8", _rows((0.7, 4.4, 2.9), (0.7, 19.1, 10.8), (1.3, 55.9, 22.7))),
+    },
+    "test-3": {
+        "usbl_period_s": 100.0,
+        "single": [
+            ("Table 9", _rows((0.1, 11.6, 4.0), (0.3, 33.8, 22.0), (3.4, 37.5, 18.7))),
+            ("Table 10", _rows((0.5, 11.4, 4.9), (0.5, 28.7, 12.0), (7.6, 20.0, 14.0))),
+            ("Table 11", _rows((0.2, 9.1, 4.0), (0.2, 20.3, 8.9), (3.5, 22.0, 11.7))),
+        ],
+        "hundred": ("Table 12", _rows((0.6, 6.4, 4.4), (0.6, 18.9, 10.7), (4.8, 43.0, 20.5))),
+    },
+}
+
+
+# ----------------------------------------------------------------------------------------------
+# Scenario
+
+
+def _uniform_angle(sigma_deg: float) -> AngleErrorConfig:
+    return AngleErrorConfig(distribution="uniform", sigma_deg=sigma_deg)
+
+
+class Paper000Sensors(Config):
+    """The four devices of section 6 with the paper's errors (uniform on +-3 sigma)."""
+
+    ins: CompassConfig = Field(
+        default_factory=lambda: CompassConfig(period_s=1.0, heading=_uniform_angle(8.0)),
+        description="INS VN-200 course: sigma_COG = 8 deg (section 6)",
+    )
+    log: LogConfig = Field(
+        default_factory=lambda: LogConfig(
+            period_s=1.0, speed=SpeedErrorConfig(distribution="uniform", sigma_m_s=SIGMA_SOG_M_S)
+        ),
+        description="ALIZE log: sigma_SOG = 0.5 kn",
+    )
+    pressure: PressureConfig = Field(
+        default_factory=lambda: PressureConfig(
+            period_s=1.0,
+            output="depth_change",
+            depth=LengthErrorConfig(distribution="uniform", sigma_m=0.25),
+        ),
+        description="WIKA S-20: depth change with sigma_dz = 0.25 m",
+    )
+    usbl: UsblConfig = Field(
+        default_factory=lambda: UsblConfig(
+            period_s=5.0,
+            range=LengthErrorConfig(distribution="uniform", sigma_m=0.2),
+            azimuth=_uniform_angle(3.0),
+            elevation=_uniform_angle(3.0),
+        ),
+        description="MicronNav: sigma_r = 0.2 m, sigma_alpha = sigma_beta = 3 deg, 500 m",
+    )
+
+
+class FilterConfig(Config):
+    """What DR and the EKF assume (section 6: the devices' sigmas)."""
+
+    sigma_course_deg: float = Field(8.0, gt=0)
+    sigma_speed_m_s: float = Field(SIGMA_SOG_M_S, gt=0)
+    sigma_depth_change_m: float = Field(0.25, gt=0)
+    sigma_range_m: float = Field(0.2, gt=0)
+    sigma_azimuth_deg: float = Field(3.0, gt=0)
+    sigma_elevation_deg: float = Field(3.0, gt=0)
+    initial_mean_error_m: float = Field(
+        3.0,
+        gt=0,
+        description="horizontal mean error of the initial fix (GNSS before diving), m; "
+        "split equally between east and north",
+    )
+    initial_sigma_depth_m: float = Field(0.25, gt=0, description="initial depth sigma, m")
+    azimuth_min_horizontal_m: float = Field(
+        1.0, gt=0, description="below this horizontal distance the USBL azimuth is not used, m"
+    )
+    gate_probability: float | None = Field(
+        None, gt=0, lt=1, description="chi-square innovation gate (e.g. 0.99), or none"
+    )
+
+    def P0(self) -> NDArray[np.float64]:
+        """Initial covariance, shape (3, 3), m^2 (east, north, up)."""
+        s2 = self.initial_mean_error_m**2 / 2.0
+        return np.diag([s2, s2, self.initial_sigma_depth_m**2])
+
+
+class InitialErrorConfig(Config):
+    """How the initial estimate differs from the reference start."""
+
+    distribution: Literal["none", "gaussian"] = Field(
+        "none",
+        description="none: start on the reference (the paper); gaussian: draw from the "
+        "filter's initial covariance",
+    )
+
+
+class ReportConfig(Config):
+    """What the report draws and records."""
+
+    single_passages: int = Field(3, ge=0, le=10, description="passages with their own tables")
+    routes_max: int = Field(100, ge=0, le=1000, description="passages drawn in the routes figure")
+    record_run: int = Field(0, ge=0, description="run written to recording.rrd")
+    recording: bool = True
+    figures: bool = True
+    histogram_bin_m: float = Field(1.0, gt=0)
+    histogram_max_m: float = Field(150.0, gt=0)
+    consistency_probability: float = Field(0.95, gt=0, lt=1)
+    consistency_min_fraction: float = Field(
+        0.9, gt=0, le=1, description="fraction of steps in band to call the filter consistent"
+    )
+
+
+class RunnerConfig(Config):
+    """Batching (fixed by the scenario, never by the worker count)."""
+
+    block_size: int = Field(100, ge=1, le=100_000, description="passages per block")
+
+
+class Paper000Scenario(Config):
+    """Scenario of seed 000's tests."""
+
+    passage: StraightPassageConfig = Field(default_factory=StraightPassageConfig)
+    transceiver: TransceiverConfig = Field(default_factory=TransceiverConfig)
+    sensors: Paper000Sensors = Field(default_factory=Paper000Sensors)
+    filter: FilterConfig = Field(default_factory=FilterConfig)
+    initial_error: InitialErrorConfig = Field(default_factory=InitialErrorConfig)
+    report: ReportConfig = Field(default_factory=ReportConfig)
+    runner: RunnerConfig = Field(default_factory=RunnerConfig)
+
+    @model_validator(mode="after")
+    def _timing(self) -> Paper000Scenario:
+        tick = self.passage.tick_s
+        for name in ("ins", "log", "pressure"):
+            period = getattr(self.sensors, name).period_s
+            if abs(period - tick) > 1e-9 * tick:
+                raise ValueError(
+                    f"sensors.{name}.period_s = {period:g}: the dead-reckoning inputs must be "
+                    f"sampled every tick (passage.tick_s = {tick:g} s)"
+                )
+        check_multiple(self.sensors.usbl.period_s, tick, "sensors.usbl.period_s")
+        return self
+
+
+# ----------------------------------------------------------------------------------------------
+# Simulation of a set of passages
+
+
+@dataclass(frozen=True)
+class Passages:
+    """Everything about some passages (runs) of a batch.
+
+    Attributes:
+        runs: run indices, length n.
+        truth: the reference motion (run axis 1).
+        t_fix_s: USBL fix times, shape (k,), s.
+        fix_tick: tick index of each fix, shape (k,).
+        ekf_m: EKF positions, shape (n, T + 1, 3), m, world.
+        ekf_P: EKF covariances, shape (n, T + 1, 3, 3), m^2.
+        dr_m: DR positions, shape (n, T + 1, 3), m, world.
+        usbl_m: USBL-only fixes, shape (n, k, 3), m, world; meaningless where not produced.
+        usbl_produced: shape (n, k).
+        nis: NIS of each USBL update, shape (n, k) (NaN where none).
+        gate_rejected: shape (n, k).
+    """
+
+    runs: tuple[int, ...]
+    truth: Truth
+    t_fix_s: NDArray[np.float64]
+    fix_tick: NDArray[np.intp]
+    ekf_m: NDArray[np.float64]
+    ekf_P: NDArray[np.float64]
+    dr_m: NDArray[np.float64]
+    usbl_m: NDArray[np.float64]
+    usbl_produced: NDArray[np.bool_]
+    nis: NDArray[np.float64]
+    gate_rejected: NDArray[np.bool_]
+
+    @property
+    def reference_m(self) -> NDArray[np.float64]:
+        """Reference positions, shape (T + 1, 3), m."""
+        return self.truth.pos_world_m[0]
+
+    def distances(self) -> dict[str, NDArray[np.float64]]:
+        """Distance to the reference: EKF and DR horizontal (n, T + 1), USBL 3-D (n, k)."""
+        ref = self.reference_m
+        return {
+            "EKF": horizontal_distance(self.ekf_m, ref),
+            "DR": horizontal_distance(self.dr_m, ref),
+            "USBL": distance_3d(self.usbl_m, ref[self.fix_tick]),
+        }
+
+    def ekf_nees(self) -> NDArray[np.float64]:
+        """NEES of the EKF (3-D state), shape (n, T + 1)."""
+        return nees(self.ekf_m - self.reference_m, self.ekf_P)
+
+
+def _hold_last(values: NDArray[np.float64], produced: NDArray[np.bool_], what: str):
+    """Fill absent samples with the last produced one (the first ones with the first produced)."""
+    if produced.all():
+        return values
+    if not produced.any(axis=1).all():
+        raise ConfigError(f"{what}: a run produced no measurement at all (dropout probability?)")
+    idx = np.where(produced, np.arange(values.shape[1]), -1)
+    idx = np.maximum.accumulate(idx, axis=1)
+    first = produced.argmax(axis=1)
+    idx = np.where(idx < 0, first[:, None], idx)
+    return np.take_along_axis(values, idx, axis=1)
+
+
+def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -> Passages:
+    """Simulate measurements and run DR, the EKF and USBL-only fixes for some runs.
+
+    Every run draws from its own streams, so a run's numbers do not depend on the other runs.
+
+    Args:
+        scn: the scenario.
+        seed: batch seed.
+        runs: run indices.
+
+    Returns:
+        The passages.
+    """
+    truth = straight_passage(scn.passage, scn.transceiver)
+    n, n_ticks, tick = len(runs), scn.passage.n_ticks, scn.passage.tick_s
+    T = n_ticks - 1
+    steps = np.arange(T)
+    s = scn.sensors
+    course = Compass(s.ins, seed, runs, "ins").sample(truth, steps)
+    speed = Log(s.log, seed, runs, "log").sample(truth, steps)
+    dz = Pressure(s.pressure, seed, runs, "pressure").sample(truth, steps + 1, previous=steps)
+    u = np.stack(
+        [
+            _hold_last(course.values, course.produced, "sensors.ins"),
+            _hold_last(speed.values, speed.produced, "sensors.log"),
+            _hold_last(dz.values, dz.produced, "sensors.pressure"),
+        ],
+        axis=-1,
+    )
+    tx = scn.transceiver.position_world_m()
+    fix_tick = periodic_indices(n_ticks, round(s.usbl.period_s / tick))
+    fixes = Usbl(s.usbl, tx, seed, runs, "usbl").sample(truth, fix_tick)
+
+    f = scn.filter
+    motion = CourseSpeedDepthMotion(
+        math.radians(f.sigma_course_deg), f.sigma_speed_m_s, f.sigma_depth_change_m
+    )
+    usbl_model = UsblMeasurement(
+        tx,
+        f.sigma_range_m,
+        math.radians(f.sigma_azimuth_deg),
+        math.radians(f.sigma_elevation_deg),
+        f.azimuth_min_horizontal_m,
+    )
+    P0 = f.P0()
+    x0 = np.broadcast_to(truth.pos_world_m[0, 0], (n, 3)).copy()
+    if scn.initial_error.distribution == "gaussian":
+        L = np.linalg.cholesky(P0)
+        draws = np.stack([rng_mod.generator(seed, r, "initial").standard_normal(3) for r in runs])
+        x0 = x0 + draws @ L.T
+
+    dr, _ = dead_reckon(x0, u, tick, motion)
+    ekf = BatchEKF(x0, P0)
+    xs = np.empty((n, n_ticks, 3))
+    Ps = np.empty((n, n_ticks, 3, 3))
+    xs[:, 0], Ps[:, 0] = ekf.x, ekf.P
+    k_fix = len(fix_tick)
+    nis = np.full((n, k_fix), np.nan)
+    rejected = np.zeros((n, k_fix), dtype=bool)
+    fix_at = {int(t): j for j, t in enumerate(fix_tick)}
+    for k in range(T):
+        ekf.predict(motion, u[:, k], tick)
+        j = fix_at.get(k + 1)
+        if j is not None:
+            info = ekf.update(
+                usbl_model, fixes.values[:, j], fixes.produced[:, j], f.gate_probability
+            )
+            nis[:, j] = info.nis
+            rejected[:, j] = info.rejected
+        xs[:, k + 1], Ps[:, k + 1] = ekf.x, ekf.P
+    ekf.check(float(truth.t_s[-1]))
+    usbl_pos = usbl_model.invert(fixes.values)
+    return Passages(
+        runs,
+        truth,
+        truth.t_s[fix_tick],
+        fix_tick,
+        xs,
+        Ps,
+        dr,
+        usbl_pos,
+        fixes.produced,
+        nis,
+        rejected,
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# Block reduction
+
+
+@dataclass
+class Paper000Block:
+    """What a block of passages contributes to the report (no full paths except a few).
+
+    Attributes:
+        runs: run indices of the block.
+        zeta: method -> sum over runs of the distance at each tick (EKF, DR: T + 1; USBL: k).
+        nees_ekf: sum over runs of the EKF NEES at each tick.
+        nis: sum over runs of the NIS at each fix.
+        per_run: shape (n, 3 methods, 3 (min, max, mean)), m.
+        hist: method -> histogram of the distances (ticks 1..T, fixes).
+        routes: run -> method -> positions (float32) for runs below ``routes_max``.
+        single: run -> method -> distance series for runs below ``single_passages``.
+        fixes_produced: number of USBL fixes produced.
+        fixes_expected: number of USBL fixes scheduled.
+        gate_rejected: number of fixes the gate rejected.
+    """
+
+    runs: tuple[int, ...]
+    zeta: dict[str, SeriesSum]
+    nees_ekf: SeriesSum
+    nis: SeriesSum
+    per_run: NDArray[np.float64]
+    hist: dict[str, Histogram]
+    routes: dict[int, dict[str, NDArray[np.float32]]] = field(default_factory=dict)
+    single: dict[int, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
+    fixes_produced: int = 0
+    fixes_expected: int = 0
+    gate_rejected: int = 0
+
+
+def _edges(cfg: ReportConfig) -> NDArray[np.float64]:
+    return np.arange(0.0, cfg.histogram_max_m + cfg.histogram_bin_m / 2, cfg.histogram_bin_m)
+
+
+def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
+    """Reduce simulated passages to the block's statistics."""
+    d = p.distances()
+    prod = p.usbl_produced
+    edges = _edges(scn.report)
+    per_run = np.full((len(p.runs), 3, 3), np.nan)
+    for i in range(len(p.runs)):
+        for m, name in enumerate(METHODS):
+            present = prod[i] if name == "USBL" else None
+            series = d[name][i] if name == "USBL" else d[name][i, 1:]
+            st = series_stats(series, present)
+            per_run[i, m] = (st.min, st.max, st.mean)
+    block = Paper000Block(
+        runs=p.runs,
+        zeta={
+            "EKF": SeriesSum.of(d["EKF"]),
+            "DR": SeriesSum.of(d["DR"]),
+            "USBL": SeriesSum.of(d["USBL"], prod),
+        },
+        nees_ekf=SeriesSum.of(p.ekf_nees()),
+        nis=SeriesSum.of(p.nis, np.isfinite(p.nis)),
+        per_run=per_run,
+        hist={
+            "EKF": Histogram.of(d["EKF"][:, 1:], edges),
+            "DR": Histogram.of(d["DR"][:, 1:], edges),
+            "USBL": Histogram.of(d["USBL"], edges, prod),
+        },
+        fixes_produced=int(prod.sum()),
+        fixes_expected=int(prod.size),
+        gate_rejected=int(p.gate_rejected.sum()),
+    )
+    for i, run in enumerate(p.runs):
+        if run < scn.report.routes_max:
+            block.routes[run] = {
+                "EKF": p.ekf_m[i].astype(np.float32),
+                "DR": p.dr_m[i].astype(np.float32),
+                "USBL": p.usbl_m[i][prod[i]].astype(np.float32),
+            }
+        if run < scn.report.single_passages:
+            block.single[run] = {
+                "EKF": d["EKF"][i],
+                "DR": d["DR"][i],
+                "USBL": np.where(prod[i], d["USBL"][i], np.nan),
+            }
+    return block
+
+
+# ----------------------------------------------------------------------------------------------
+# Metrics file
+
+
+class MethodStats(BaseModel):
+    """Minimum, maximum and mean distance to the reference position, m."""
+
+    min_m: float | None
+    max_m: float | None
+    mean_m: float | None
+
+
+class SinglePassage(BaseModel):
+    """Statistics of one passage."""
+
+    run: int
+    methods: dict[str, MethodStats]
+    paper_table: str | None = None
+    paper: dict[str, MethodStats] | None = None
+
+
+class Consistency(BaseModel):
+    """EKF consistency: average NEES over the runs against its chi-square band."""
+
+    nees_dim: int
+    n_runs: int
+    probability: float
+    band_low: float
+    band_high: float
+    fraction_in_band: float = Field(description="fraction of ticks 1..T with the mean NEES in band")
+    mean_nees: float
+    consistent: bool
+    note: str
+
+
+class ErrorDraw(BaseModel):
+    """How a simulated error compares with what the filter assumes."""
+
+    quantity: str
+    distribution: str
+    simulated_std: float
+    filter_sigma: float
+    ratio: float
+
+
+class Paper000Metrics(BaseModel):
+    """``metrics.json`` of ``paper-000/test-*`` (schema in ``docs/schemas/``)."""
+
+    schema_version: Literal[1] = 1
+    experiment: str
+    seed: int
+    n_runs: int
+    usbl_period_s: float
+    passages: dict[str, MethodStats] = Field(
+        description="min / max / mean over ticks 1..T of zeta(k), the mean over runs (eq. 24)"
+    )
+    paper_table: str
+    paper: dict[str, MethodStats]
+    mean_ratio_to_paper: dict[str, float]
+    single_passages: list[SinglePassage]
+    per_run_mean_m: dict[str, MethodStats] = Field(
+        description="min / max / mean over runs of each run's mean distance"
+    )
+    consistency: Consistency
+    error_draws: list[ErrorDraw]
+    usbl_fix_availability: float
+    gate_rejections: int
+
+
+def _stats(mn: float, mx: float, mean: float) -> MethodStats:
+    def clean(v: float) -> float | None:
+        return None if not np.isfinite(v) else float(v)
+
+    return MethodStats(min_m=clean(mn), max_m=clean(mx), mean_m=clean(mean))
+
+
+def _error_draws(scn: Paper000Scenario) -> list[ErrorDraw]:
+    s, f = scn.sensors, scn.filter
+    rows = [
+        ("COG (deg)", s.ins.heading, f.sigma_course_deg),
+        ("SOG (m/s)", s.log.speed, f.sigma_speed_m_s),
+        ("dz (m)", s.pressure.depth, f.sigma_depth_change_m),
+        ("r (m)", s.usbl.range, f.sigma_range_m),
+        ("alpha (deg)", s.usbl.azimuth, f.sigma_azimuth_deg),
+        ("beta (deg)", s.usbl.elevation, f.sigma_elevation_deg),
+    ]
+    out = []
+    for name, cfg, sigma in rows:
+        std = cfg.to_model().noise_std / cfg.unit_to_si
+        out.append(
+            ErrorDraw(
+                quantity=name,
+                distribution=cfg.distribution,
+                simulated_std=std,
+                filter_sigma=sigma,
+                ratio=std / sigma,
+            )
+        )
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# The experiment
+
+
+def _paper_stats(rows: dict[str, PaperRow]) -> dict[str, MethodStats]:
+    return {k: _stats(*v) for k, v in rows.items()}
+
+
+@dataclass(frozen=True)
+class StraightPassageExperiment(Experiment):
+    """Seed 000 test: N passages with USBL fixes every ``usbl_period_s``."""
+
+    scenario_type = Paper000Scenario
+    test: str = "test-1"
+
+    def block_size(self, scenario: Paper000Scenario) -> int:
+        return scenario.runner.block_size
+
+    def check(self, scenario: Paper000Scenario, n_runs: int) -> None:
+        if scenario.report.record_run >= n_runs:
+            raise ConfigError(
+                f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
+            )
+
+    def run_block(self, scenario: Paper000Scenario, seed: int, runs: tuple[int, ...]):
+        return reduce_block(scenario, simulate_passages(scenario, seed, runs))
+
+    def report(self, ctx: ReportContext) -> ReportSummary:
+        return report_paper000(self, ctx)
+
+
+def _merge_blocks(ctx: ReportContext) -> Paper000Block:
+    total: Paper000Block | None = None
+    for b in ctx.blocks:
+        if total is None:
+            total = b
+            continue
+        total = Paper000Block(
+            runs=total.runs + b.runs,
+            zeta={k: total.zeta[k].merge(b.zeta[k]) for k in METHODS},
+            nees_ekf=total.nees_ekf.merge(b.nees_ekf),
+            nis=total.nis.merge(b.nis),
+            per_run=np.concatenate([total.per_run, b.per_run]),
+            hist={k: total.hist[k].merge(b.hist[k]) for k in METHODS},
+            routes={**total.routes, **b.routes},
+            single={**total.single, **b.single},
+            fixes_produced=total.fixes_produced + b.fixes_produced,
+            fixes_expected=total.fixes_expected + b.fixes_expected,
+            gate_rejected=total.gate_rejected + b.gate_rejected,
+        )
+    if total is None:
+        raise ValueError("no blocks to report")
+    return total
+
+
+def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> ReportSummary:
+    """Tables, figures, metrics and the recording of a seed 000 test."""
+    scn: Paper000Scenario = ctx.scenario  # type: ignore[assignment]
+    tot = _merge_blocks(ctx)
+    ref = PAPER_TABLES[exp.test]
+    truth = straight_passage(scn.passage, scn.transceiver)
+    n_ticks = scn.passage.n_ticks
+    fix_tick = periodic_indices(n_ticks, round(scn.sensors.usbl.period_s / scn.passage.tick_s))
+    zeta = {k: tot.zeta[k].mean() for k in METHODS}
+    zeta_window = {"EKF": zeta["EKF"][1:], "DR": zeta["DR"][1:], "USBL": zeta["USBL"]}
+    passages = {
+        k: _stats(*(lambda s: (s.min, s.max, s.mean))(series_stats(v, np.isfinite(v))))
+        for k, v in zeta_window.items()
+    }
+    paper_name, paper_rows = ref["hundred"]  # type: ignore[misc]
+    ratio = {
+        k: float(passages[k].mean_m / paper_rows[k][2]) if passages[k].mean_m else float("nan")
+        for k in METHODS
+    }
+    singles = []
+    for run in sorted(tot.single):
+        d = tot.single[run]
+        methods = {}
+        for k in METHODS:
+            v = d[k] if k == "USBL" else d[k][1:]
+            st = series_stats(v, np.isfinite(v))
+            methods[k] = _stats(st.min, st.max, st.mean)
+        tab = ref["single"][run] if run < len(ref["single"]) else None  # type: ignore[arg-type]
+        singles.append(
+            SinglePassage(
+                run=run,
+                methods=methods,
+                paper_table=tab[0] if tab else None,
+                paper=_paper_stats(tab[1]) if tab else None,
+            )
+        )
+    per_run_mean = {
+        k: _stats(
+            float(np.nanmin(tot.per_run[:, m, 2])),
+            float(np.nanmax(tot.per_run[:, m, 2])),
+            float(np.nanmean(tot.per_run[:, m, 2])),
+        )
+        for m, k in enumerate(METHODS)
+    }
+    # consistency of the EKF
+    mean_nees = tot.nees_ekf.mean()
+    lo, hi = nees_band(3, ctx.n_runs, scn.report.consistency_probability)
+    window = mean_nees[1:]
+    frac = float(np.mean((window >= lo) & (window <= hi)))
+    consistent = frac >= scn.report.consistency_min_fraction
+    draws = _error_draws(scn)
+    mismatched = [d for d in draws if abs(d.ratio - 1.0) > 0.05]
+    if consistent:
+        note = "consistent: the mean NEES stays inside its chi-square band"
+    elif mismatched:
+        what = ", ".join(f"{d.quantity} std {d.ratio:.2f}x the filter's sigma" for d in mismatched)
+        note = (
+            "inconsistent: the filter is mis-tuned for the simulated errors (" + what + "); "
+            "seed 000 draws errors uniform on +-3 sigma, whose standard deviation is "
+            "sqrt(3) sigma"
+        )
+    else:
+        note = (
+            "inconsistent although the simulated errors match the filter's sigmas: "
+            "linearisation or the initial covariance dominate"
+        )
+    consistency = Consistency(
+        nees_dim=3,
+        n_runs=ctx.n_runs,
+        probability=scn.report.consistency_probability,
+        band_low=lo,
+        band_high=hi,
+        fraction_in_band=frac,
+        mean_nees=float(np.mean(window)),
+        consistent=consistent,
+        note=note,
+    )
+    metrics = Paper000Metrics(
+        experiment=exp.name,
+        seed=ctx.seed,
+        n_runs=ctx.n_runs,
+        usbl_period_s=scn.sensors.usbl.period_s,
+        passages=passages,
+        paper_table=paper_name,
+        paper=_paper_stats(paper_rows),
+        mean_ratio_to_paper=ratio,
+        single_passages=singles,
+        per_run_mean_m=per_run_mean,
+        consistency=consistency,
+        error_draws=draws,
+        usbl_fix_availability=tot.fixes_produced / max(tot.fixes_expected, 1),
+        gate_rejections=tot.gate_rejected,
+    )
+    files = [write_metrics(ctx.out_dir, metrics)]
+
+    # tables in the paper's layout, with the paper's values beside
+    cols = [
+        "Positioning method",
+        "Minimum distance (m)",
+        "Maximum distance (m)",
+        "Average distance (m)",
+        "Paper min",
+        "Paper max",
+        "Paper average",
+    ]
+    tables = []
+    for sp in singles:
+        rows = []
+        for k in METHODS:
+            paper = sp.paper[k] if sp.paper else MethodStats(min_m=None, max_m=None, mean_m=None)
+            rows.append(
+                [
+                    k,
+                    sp.methods[k].min_m,
+                    sp.methods[k].max_m,
+                    sp.methods[k].mean_m,
+                    paper.min_m,
+                    paper.max_m,
+                    paper.mean_m,
+                ]
+            )
+        title = f"Single passage {sp.run + 1}" + (
+            f" (paper: {sp.paper_table})" if sp.paper_table else ""
+        )
+        tables.append(Table(title, cols, rows, slug=f"single-passage-{sp.run + 1}"))
+    rows = [
+        [k, passages[k].min_m, passages[k].max_m, passages[k].mean_m, *paper_rows[k]]
+        for k in METHODS
+    ]
+    main = Table(
+        f"{ctx.n_runs} passages: statistics of zeta(k) (paper: {paper_name}, 100 passages)",
+        cols,
+        rows,
+        slug="passages",
+        note="Mean ratio to the paper: " + ", ".join(f"{k} {ratio[k]:.2f}" for k in METHODS),
+    )
+    tables.append(main)
+    tables.append(
+        Table(
+            "Simulated errors against the filter's assumptions",
+            ["Quantity", "Draw", "Simulated std", "Filter sigma", "Ratio"],
+            [[d.quantity, d.distribution, d.simulated_std, d.filter_sigma, d.ratio] for d in draws],
+            digits=3,
+            slug="error-draws",
+        )
+    )
+    tables.append(
+        Table(
+            "EKF consistency (average NEES over runs, 3-D state)",
+            ["Runs", "Band low", "Band high", "Fraction of ticks in band", "Mean NEES", "Verdict"],
+            [
+                [
+                    ctx.n_runs,
+                    lo,
+                    hi,
+                    frac,
+                    consistency.mean_nees,
+                    "consistent" if consistent else "inconsistent",
+                ]
+            ],
+            digits=3,
+            slug="consistency",
+            note=note,
+        )
+    )
+    files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
+
+    if scn.report.figures:
+        files += _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, (lo, hi))
+    if scn.report.recording:
+        files.append(record_passage(exp, scn, ctx.seed, scn.report.record_run, ctx.out_dir))
+    text = main.to_text() + "\n" + tables[-1].to_text()
+    text += f"\nwrote {len(files)} files to {ctx.out_dir}\n"
+    return ReportSummary(text, tuple(files))
+
+
+def _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, band) -> list[str]:
+    out = ctx.out_dir
+    t = truth.t_s
+    ref = truth.pos_world_m[0]
+    tx = scn.transceiver.position_world_m()
+    files = []
+    runs = sorted(tot.routes)
+    files.append(
+        figures.routes(
+            out / "routes.png",
+            ref,
+            {
+                "DR": [tot.routes[r]["DR"] for r in runs],
+                "EKF": [tot.routes[r]["EKF"] for r in runs],
+            },
+            {"USBL": [tot.routes[r]["USBL"] for r in runs]},
+            {"transceiver": tx},
+            title=f"{exp.name}: determined routes ({len(runs)} passages)",
+        )
+    )
+    files.append(
+        figures.distances(
+            out / "distance.png",
+            {
+                "EKF": (t[1:], zeta["EKF"][1:]),
+                "DR": (t[1:], zeta["DR"][1:]),
+                "USBL": (t[fix_tick], zeta["USBL"]),
+            },
+            title=f"{exp.name}: mean distance to the reference over {ctx.n_runs} passages",
+        )
+    )
+    for run in sorted(tot.single):
+        d = tot.single[run]
+        files.append(
+            figures.distances(
+                out / f"distance-passage-{run + 1}.png",
+                {
+                    "EKF": (t[1:], d["EKF"][1:]),
+                    "DR": (t[1:], d["DR"][1:]),
+                    "USBL": (t[fix_tick], d["USBL"]),
+                },
+                title=f"{exp.name}: passage {run + 1}",
+            )
+        )
+    files.append(
+        figures.histograms(
+            out / "histogram.png", tot.hist, title=f"{exp.name}: {ctx.n_runs} passages"
+        )
+    )
+    files.append(
+        figures.consistency(
+            out / "nees.png",
+            t[1:],
+            mean_nees[1:],
+            band,
+            3,
+            ctx.n_runs,
+            title=f"{exp.name}: EKF consistency",
+        )
+    )
+    return files
+
+
+def record_passage(exp: Experiment, scn: Paper000Scenario, seed: int, run: int, out_dir) -> str:
+    """Write ``recording.rrd`` for one passage (re-simulated: identical to its batch numbers)."""
+    p = simulate_passages(scn, seed, (run,))
+    t = p.truth.t_s
+    rec = Recording(out_dir / "recording.rrd", exp.name, f"{exp.name}/seed{seed}/run{run}")
+    rec.point("transceiver", scn.transceiver.position_world_m(), (0, 0, 0), "USBL transceiver")
+    rec.track("truth", t, p.reference_m, COLORS["truth"])
+    rec.track("dr", t, p.dr_m[0], COLORS["dr"])
+    rec.track("ekf", t, p.ekf_m[0], COLORS["ekf"])
+    rec.ellipsoids("ekf", t, p.ekf_m[0], p.ekf_P[0], COLORS["ekf"])
+    ok = p.usbl_produced[0]
+    rec.fixes("usbl", p.t_fix_s[ok], p.usbl_m[0][ok], COLORS["usbl"])
+    d = p.distances()
+    rec.scalars("distance/ekf", t, d["EKF"][0])
+    rec.scalars("distance/dr", t, d["DR"][0])
+    rec.scalars("distance/usbl", p.t_fix_s[ok], d["USBL"][0][ok])
+    rec.scalars("consistency/nees_ekf", t, p.ekf_nees()[0])
+    rec.blueprint("distance", "consistency")
+    rec.close()
+    return "recording.rrd"
+
+
+_SUMMARY = "seed 000 Test {n}: straight passage, USBL fix every {p:g} s; DR vs EKF vs USBL"
+for _n, _test in enumerate(("test-1", "test-2", "test-3"), start=1):
+    _period = PAPER_TABLES[_test]["usbl_period_s"]
+    register(
+        StraightPassageExperiment(
+            name=f"paper-000/{_test}",
+            summary=_SUMMARY.format(n=_n, p=_period),
+            preset={"sensors": {"usbl": {"period_s": _period}}},
+            default_runs=100,
+            test=_test,
+        )
+    )
