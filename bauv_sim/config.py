@@ -204,6 +204,10 @@ def format_validation_error(exc: pydantic.ValidationError, what: str) -> str:
             lines.append(f"{what}: {loc}: required field is missing")
             continue
         val = err.get("input")
-        shown = "(table)" if isinstance(val, dict) else repr(val)
-        lines.append(f"{what}: {loc} = {shown}: {msg}")
+        if not err["loc"]:
+            lines.append(f"{what}: {msg}")
+        elif isinstance(val, dict):
+            lines.append(f"{what}: {loc}: {msg}")
+        else:
+            lines.append(f"{what}: {loc} = {val!r}: {msg}")
     return "\n".join(lines)

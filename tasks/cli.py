@@ -1,0 +1,219 @@
+"""The ``bauv`` command line.
+
+    bauv list
+    bauv show NAME [--set k=v ...]          print the resolved scenario as TOML
+    bauv run NAME [--runs N] [--seed S] [--out DIR] [--set k=v ...] [--scenario FILE ...]
+                  [--workers K] [--executor local|dask] [--address tcp://host:8786] [--resume]
+    bauv view RUN_DIR [--web] [--web-port P] [--grpc-port Q]
+
+Exit status: 0 on success, 2 on invalid input (one line naming the field, the value and what is
+allowed; nothing written), 1 when a run fails (the message says which run, when and why), 130 when
+interrupted (finished blocks are kept; ``--resume`` completes the batch).
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import click
+import tomli_w
+
+from bauv_sim.config import load_config, to_plain
+from bauv_sim.errors import BauvSimError, ConfigError
+from nav.errors import NavError
+
+EXIT_INPUT = 2
+EXIT_FAILED = 1
+EXIT_INTERRUPTED = 130
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+def cli() -> None:
+    """bauv-sim: a biomimetic AUV and its navigation, simulated."""
+
+
+@cli.command("list")
+def list_cmd() -> None:
+    """List the registered experiments and missions."""
+    from tasks import registry
+
+    exps = registry.all_experiments()
+    width = max(len(e.name) for e in exps)
+    for e in exps:
+        click.echo(f"{e.name.ljust(width)}  {e.summary}")
+
+
+@cli.command("show")
+@click.argument("name")
+@click.option("--set", "overrides", multiple=True, metavar="KEY=VALUE", help="Override a field.")
+@click.option(
+    "--scenario",
+    "files",
+    multiple=True,
+    type=click.Path(dir_okay=False),
+    help="TOML file merged over the experiment's preset.",
+)
+def show_cmd(name: str, overrides: tuple[str, ...], files: tuple[str, ...]) -> None:
+    """Print the resolved scenario of NAME as TOML (every field, with its default)."""
+    from tasks import registry
+
+    exp = registry.get(name)
+    scn = load_config(exp.scenario_type, exp.preset, files, overrides)
+    click.echo(tomli_w.dumps(to_plain(scn)), nl=False)
+
+
+@cli.command("run")
+@click.argument("name")
+@click.option(
+    "--runs", type=int, default=None, help="Monte Carlo runs (default: the experiment's)."
+)
+@click.option("--seed", type=int, default=None, help="Batch seed (default 0).")
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Run folder (default runs/<name>/<time>-seed<S>).",
+)
+@click.option(
+    "--set",
+    "overrides",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Override a scenario field, e.g. --set sensors.usbl.period_s=20.",
+)
+@click.option(
+    "--scenario",
+    "files",
+    multiple=True,
+    type=click.Path(dir_okay=False),
+    help="TOML file merged over the experiment's preset (before --set).",
+)
+@click.option("--workers", type=int, default=1, show_default=True, help="Worker processes.")
+@click.option(
+    "--executor",
+    type=click.Choice(["local", "dask"]),
+    default="local",
+    show_default=True,
+    help="Where runs execute.",
+)
+@click.option("--address", default=None, help="Dask scheduler address (default: a local cluster).")
+@click.option("--resume", is_flag=True, help="Complete the interrupted batch in --out.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def run_cmd(
+    name: str,
+    runs: int | None,
+    seed: int | None,
+    out: str | None,
+    overrides: tuple[str, ...],
+    files: tuple[str, ...],
+    workers: int,
+    executor: str,
+    address: str | None,
+    resume: bool,
+    quiet: bool,
+) -> None:
+    """Run experiment or mission NAME and write its run folder."""
+    from tasks.runner import run
+
+    out_dir, summary = run(
+        name,
+        n_runs=runs,
+        seed=seed,
+        out_dir=out,
+        overrides=overrides,
+        scenario_files=files,
+        executor=executor,
+        workers=workers,
+        address=address,
+        resume=resume,
+        progress=not quiet,
+    )
+    click.echo(summary.text, nl=False)
+    rec = out_dir / "recording.rrd"
+    if rec.is_file():
+        click.echo(f"recording: {rec}  (open it with: bauv view {out_dir} [--web])")
+    click.echo(f"tables:    {out_dir / 'tables.md'}\nmetrics:   {out_dir / 'metrics.json'}")
+
+
+def rerun_command() -> list[str]:
+    """How to start the rerun viewer of the installed rerun-sdk."""
+    exe = shutil.which("rerun", path=str(Path(sys.executable).parent)) or shutil.which("rerun")
+    return [exe] if exe else [sys.executable, "-m", "rerun"]
+
+
+def view_command(
+    recording: Path, web: bool, web_port: int = 9090, grpc_port: int = 9876
+) -> list[str]:
+    """The viewer command line; with ``web`` it serves on 127.0.0.1 only."""
+    cmd = rerun_command()
+    if web:
+        return [
+            *cmd,
+            "--serve-web",
+            "--bind",
+            "127.0.0.1",
+            "--web-viewer-port",
+            str(web_port),
+            "--port",
+            str(grpc_port),
+            str(recording),
+        ]
+    return [*cmd, str(recording)]
+
+
+@cli.command("view")
+@click.argument("run_dir", type=click.Path(exists=True, file_okay=False))
+@click.option("--web", is_flag=True, help="Serve the web viewer on 127.0.0.1 instead.")
+@click.option("--web-port", type=int, default=9090, show_default=True)
+@click.option("--grpc-port", type=int, default=9876, show_default=True)
+def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
+    """Open RUN_DIR's recording.rrd in the rerun viewer."""
+    rec = Path(run_dir) / "recording.rrd"
+    if not rec.is_file():
+        raise ConfigError(f"run_dir = {run_dir!r}: no recording.rrd in it")
+    cmd = view_command(rec, web, web_port, grpc_port)
+    if web:
+        click.echo(f"serving {rec} at http://127.0.0.1:{web_port} (Ctrl-C to stop)")
+    try:
+        code = subprocess.call(cmd)
+    except KeyboardInterrupt:
+        code = 0
+    if code != 0 and not web:
+        click.echo("the native viewer needs a display; try: bauv view RUN_DIR --web", err=True)
+    sys.exit(code)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: run the CLI and map errors to exit statuses without tracebacks."""
+    from tasks.runner import BatchFailed, BatchInterrupted
+
+    try:
+        cli.main(args=argv, prog_name="bauv", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("aborted", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except click.ClickException as exc:
+        exc.show()
+        sys.exit(EXIT_INPUT)
+    except BatchInterrupted as exc:
+        click.echo(str(exc), err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except ConfigError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_INPUT)
+    except BatchFailed as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_FAILED)
+    except (BauvSimError, NavError) as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_FAILED)
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+
+
+if __name__ == "__main__":
+    main()
