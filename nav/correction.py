@@ -1,0 +1,891 @@
+"""Seed 001's correction procedures: sea current and the vehicle's systematic velocity error from
+GPS fixes at surfacing, corrected dead reckoning and the current-compensating course.
+
+The vehicle of seed 001 dead-reckons from the odometry speed ``|Va|`` of its drive setting and the
+compass course ``alpha`` only (eq. 30-31), so the position error of a leg of duration ``T`` is
+
+    ``delta = S_GPS - S_DR = (Vs + Vc) T``                                      (eq. 5-10)
+
+where ``Vs`` is the vehicle's systematic velocity error (constant magnitude, deviated from the
+course by a constant angle ``beta``) and ``Vc`` the sea current's effect. This module estimates
+``Vs``, ``beta`` and ``Vc`` from the errors of two legs:
+
+* :func:`cp1` - correction procedure 1 (eq. 7-12): two legs on arbitrary, non-parallel courses;
+  the current is assumed the same on both.
+* :func:`cp2` - correction procedure 2 (eq. 13-21): two legs on opposite courses (45 and 225 deg
+  in the paper); closed form; the current is rescaled to other courses with the hull-response
+  model ``xi`` / ``rho`` of eq. 21 (:class:`CurrentResponse`).
+* :func:`baseline` - the simple published estimator: current = (GPS fix - DR position) / time
+  since the last fix, no vehicle error (``../shared/notes/navigation.md``).
+
+and uses the estimates for corrected DR (:func:`dr_velocity`, :func:`dr_track`: eq. 32-33) and for
+the course that compensates the estimated current and vehicle error (:func:`compensated_course`:
+eq. 22-26, with CP2's three-phase fix).
+
+Conventions: x east, y north; courses clockwise from north in radians, the paper's degrees only in
+names that say so; ``u(c) = (sin c, cos c)`` is the unit vector of course ``c``. This module
+repeats these two formulas instead of importing :mod:`bauv_sim.frames` because :mod:`nav` never
+imports :mod:`bauv_sim`; ``tests/nav/test_correction.py`` checks that they agree. Arrays carry a
+leading axis of runs ``n`` (one run is a batch of one).
+
+Vector formulation (differences from the printed equations, all documented where they occur):
+
+* The paper writes every velocity by its x component and ``tan(psi(.))`` of its course
+  (``V^y = V^x tan(psi(alpha))``), which is ``V^y = V^x cot(alpha)``: singular at courses 0 and
+  180 deg (``V^x = 0``) and at 90 / 270 deg (``psi`` undefined). Here a velocity with course ``c``
+  and signed magnitude ``s`` is ``s u(c)``; no course is special and nothing produces inf or NaN.
+* ``Vs`` is one signed magnitude ``vs`` along ``course + beta`` (``beta`` in [-90, 90) deg, the sign
+  given by eq. 34) shared by both legs. The paper's eq. 11-12 instead keep two x components tied
+  only by ``|Vs,1| = |Vs,2|`` (Error_5), which also admits ``Vs`` reversing between the legs: a
+  second zero of eq. 12 that is physically meaningless (eq. 34 exists to repair the sign
+  afterwards). With one signed magnitude Error_5 vanishes identically.
+* ``Delta S = S_GPS - S_DR`` as in the section "Formulation"; the experiment section's
+  ``S_noCP - S_GPS`` is a slip (with it eq. 7 would estimate ``-(Vs + Vc)``).
+
+References:
+    Praczyk T., Correction of navigational information supplied to biomimetic autonomous
+    underwater vehicle (seed 001), eq. 5-34.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.polynomial import chebyshev
+from numpy.typing import ArrayLike, NDArray
+
+from nav.errors import NavInputError
+
+Array = NDArray[np.float64]
+OnBad = Literal["raise", "fallback"]
+
+DEFAULT_RHO_S_COS_COEFFS: tuple[float, ...] = (1.0, 0.1, 0.1)
+"""Default hull response ``rho_s(gamma) = 1 + 0.1 cos(gamma) + 0.1 cos(2 gamma)``; see
+:class:`CurrentResponse` for the justification."""
+
+
+# --------------------------------------------------------------------------------------------
+# Angles (the conventions of bauv_sim.frames, repeated because nav does not import bauv_sim)
+
+
+def unit_vector(course_rad: ArrayLike) -> Array:
+    """Unit vector of a course: ``(sin c, cos c)`` (x east, y north).
+
+    Args:
+        course_rad: courses clockwise from north, shape (...), rad.
+
+    Returns:
+        Shape (..., 2), world frame.
+    """
+    c = np.asarray(course_rad, dtype=float)
+    return np.stack([np.sin(c), np.cos(c)], axis=-1)
+
+
+def course_of(vel_world: ArrayLike) -> Array:
+    """Course of a horizontal vector (the paper's ``getCourse360``), in [0, 2 pi).
+
+    Args:
+        vel_world: vectors (east, north), shape (..., 2).
+
+    Returns:
+        Courses clockwise from north, shape (...), rad; 0 for a zero vector.
+    """
+    v = np.asarray(vel_world, dtype=float)
+    c = np.arctan2(v[..., 0], v[..., 1]) % (2.0 * np.pi)
+    return np.where(c >= 2.0 * np.pi, 0.0, c)
+
+
+def wrap_pi(angle_rad: ArrayLike) -> Array:
+    """Wrap angles to [-pi, pi)."""
+    return (np.asarray(angle_rad, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def diff_course(a_rad: ArrayLike, b_rad: ArrayLike) -> Array:
+    """The paper's ``diffCourse``: the unsigned difference of two courses, in [0, pi].
+
+    Args:
+        a_rad: courses, rad, any shape broadcastable with ``b_rad``.
+        b_rad: courses, rad.
+
+    Returns:
+        ``|wrap_pi(a - b)|``, rad.
+    """
+    return np.abs(wrap_pi(np.asarray(a_rad, dtype=float) - np.asarray(b_rad, dtype=float)))
+
+
+# --------------------------------------------------------------------------------------------
+# The current's effect versus the angle between the hull and the current
+
+
+@dataclass(frozen=True)
+class CurrentResponse:
+    """The hull's response to the current versus the angle ``gamma`` between the vehicle's course
+    and the current's set direction: seed 001's ``rho`` (eq. 21) and ``rho_s`` (eq. 29).
+
+    The paper's ``rho`` is a curve measured on the ROV "Gluptak" (1 m/s, current 0.4 m/s) and is not
+    printed; only ratios ``rho(gamma_2) / rho(gamma_1)`` are ever used, so its scale is free. Here
+    it is a cosine series
+
+        ``rho_s(gamma) = sum_k a_k cos(k gamma)``
+
+    which is even in ``gamma`` - the same for a current from port or from starboard (10 and 350
+    deg), the symmetry the paper gives ``rho_s`` ("symmetrical only with respect to axis Y of the
+    vehicle", its longitudinal axis) - and ``rho`` keeps only the even ``k``:
+
+        ``rho(gamma) = (rho_s(gamma) + rho_s(pi - gamma)) / 2 = sum_{k even} a_k cos(k gamma)``
+
+    which is in addition the same for a current from ahead or from astern (10 and 170 deg): the
+    symmetry about both vehicle axes that CP2 needs (eq. 13-16, Fig. 5). ``rho`` is thus the
+    bow-stern average of ``rho_s``: what a CP that can only see the symmetric part would model.
+
+    Default ``(a_0, a_1, a_2) = (1, 0.1, 0.1)``: the current acts 20 % more along the hull than
+    across it (``rho_s`` 1.2 at 0 deg, 0.9 at 90 deg, 1.0 at 180 deg) and 10 % more from astern
+    than from ahead. The text gives no curve, so this is chosen to reproduce the paper's own
+    "without CP" rows: with eq. 29's normalisation by ``rho_s(alpha_c = 20 deg)`` the effective
+    current over random courses averages about 0.85 ``|Vc|`` and peaks at about ``1.02 |Vc|``,
+    which is what Tables 1-2 imply (e.g. ``|Vg| = 0.1, |Vc| = 0.5``: mean 48 m, maximum 59 m after
+    100 s). ``(1.0,)`` is a hull on which the current acts the same at every angle.
+
+    Attributes:
+        cos_coeffs: ``(a_0, a_1, ...)``, dimensionless; ``rho_s`` must be positive on [0, pi].
+
+    Raises:
+        NavInputError: if the coefficients are empty, not finite or ``rho_s`` is not positive.
+    """
+
+    cos_coeffs: tuple[float, ...] = DEFAULT_RHO_S_COS_COEFFS
+    _even: tuple[float, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        a = np.asarray(self.cos_coeffs, dtype=float)
+        if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
+            raise NavInputError(
+                f"cos_coeffs = {self.cos_coeffs!r}: need at least one finite coefficient"
+            )
+        g = np.linspace(0.0, np.pi, 3601)
+        low = float(np.min(chebyshev.chebval(np.cos(g), a)))
+        if low <= 0.0:
+            raise NavInputError(
+                f"cos_coeffs = {self.cos_coeffs!r}: rho_s must be positive on [0, 180] deg "
+                f"(its minimum is {low:.3g})"
+            )
+        even = np.where(np.arange(a.size) % 2 == 0, a, 0.0)
+        object.__setattr__(self, "cos_coeffs", tuple(float(x) for x in a))
+        object.__setattr__(self, "_even", tuple(float(x) for x in even))
+
+    def rho_s(self, gamma_rad: ArrayLike) -> Array:
+        """``rho_s(gamma)`` of eq. 29 (port-starboard symmetric), any shape, dimensionless."""
+        return chebyshev.chebval(np.cos(np.asarray(gamma_rad, dtype=float)), self.cos_coeffs)
+
+    def rho(self, gamma_rad: ArrayLike) -> Array:
+        """``rho(gamma)`` of eq. 21 (symmetric about both vehicle axes), any shape."""
+        return chebyshev.chebval(np.cos(np.asarray(gamma_rad, dtype=float)), self._even)
+
+
+# --------------------------------------------------------------------------------------------
+# Estimates
+
+
+def vs_sign(vs_world_m_s: ArrayLike, course_rad: ArrayLike) -> Array:
+    """Sign of the systematic error ``Vs`` relative to the course (eq. 34).
+
+    ``+1`` when ``U3 = diffCourse(getCourse360(Vs), alpha) < 90 deg`` (``Vs`` adds to the
+    progressive speed), ``-1`` otherwise; ``+1`` for ``Vs = 0``.
+
+    Args:
+        vs_world_m_s: ``Vs`` (east, north), shape (..., 2), m/s, world.
+        course_rad: the course ``alpha``, shape broadcastable with ``vs_world_m_s[..., 0]``, rad.
+
+    Returns:
+        ``+1.0`` or ``-1.0``, shape (...).
+    """
+    v = np.asarray(vs_world_m_s, dtype=float)
+    u3 = diff_course(course_of(v), course_rad)
+    zero = np.hypot(v[..., 0], v[..., 1]) == 0.0
+    return np.where((u3 < np.pi / 2) | zero, 1.0, -1.0)
+
+
+def _signed_vs(vs_world: Array, course_rad: Array) -> tuple[Array, Array]:
+    """``(vs, beta)`` with ``Vs = vs u(course + beta)``, sign from eq. 34, beta in [-pi/2, pi/2]."""
+    sign = vs_sign(vs_world, course_rad)
+    mag = np.hypot(vs_world[..., 0], vs_world[..., 1])
+    beta = wrap_pi(course_of(vs_world) - course_rad - np.where(sign < 0, np.pi, 0.0))
+    return sign * mag, np.where(mag > 0.0, beta, 0.0)
+
+
+@dataclass(frozen=True)
+class CorrectionEstimate:
+    """What a correction procedure estimates, for a batch of runs.
+
+    The vehicle's velocity error on course ``alpha`` is ``Vs + Vc(alpha)`` with
+    ``Vs = vs u(alpha + beta)`` (eq. 32-33) and ``Vc(alpha)`` from :meth:`current_for_course`.
+
+    Attributes:
+        method: ``"cp1"``, ``"cp2"``, ``"baseline"`` or ``"none"``.
+        vs_m_s: signed magnitude of ``Vs`` (sign of eq. 34), shape (n,), m/s.
+        beta_rad: deviation of ``Vs`` from the course, shape (n,), rad in [-pi/2, pi/2].
+        current_world_m_s: estimated current (east, north) on ``reference_course_rad``, shape
+            (n, 2), m/s, world.
+        reference_course_rad: the course the current estimate belongs to (CP2: the first leg's,
+            eq. 21's ``alpha_1``), shape (n,), rad.
+        response: the hull response used to carry the current to other courses (eq. 21), or
+            ``None`` when the estimate does not depend on the course (CP1, baseline).
+        residual_m_s: ``sqrt(F)`` of eq. 12 at the solution (0 for the closed forms), shape (n,),
+            m/s.
+        valid: False for runs whose input was unusable and that got the no-correction fallback
+            (``vs = 0``, current 0: corrected DR equals uncorrected DR), shape (n,).
+    """
+
+    method: str
+    vs_m_s: Array
+    beta_rad: Array
+    current_world_m_s: Array
+    reference_course_rad: Array
+    response: CurrentResponse | None
+    residual_m_s: Array
+    valid: NDArray[np.bool_]
+
+    @property
+    def n(self) -> int:
+        """Number of runs."""
+        return self.vs_m_s.shape[0]
+
+    @classmethod
+    def none(cls, n: int) -> CorrectionEstimate:
+        """The no-correction estimate (corrected DR = uncorrected DR) for ``n`` runs."""
+        z = np.zeros(n)
+        return cls(
+            "none", z, z.copy(), np.zeros((n, 2)), z.copy(), None, z.copy(), np.ones(n, bool)
+        )
+
+    def _expand(self, a: Array, course: Array) -> Array:
+        """Reshape a per-run array (n, ...) to broadcast against courses of shape (n, k...)."""
+        return a.reshape((self.n,) + (1,) * (course.ndim - 1) + a.shape[1:])
+
+    def current_for_course(self, course_rad: ArrayLike) -> Array:
+        """The estimated current for a vehicle on ``course_rad`` (eq. 21).
+
+        ``|Vc,alpha_2| = |Vc,alpha_1| rho(gamma_2) / rho(gamma_1)`` with ``gamma_i`` the angle
+        between the estimated current's direction and ``alpha_i`` (``diffCourse``); the direction is
+        unchanged. Without a response the estimate is returned for every course.
+
+        Args:
+            course_rad: courses, shape (n,) or (n, k...), rad.
+
+        Returns:
+            Current (east, north), shape ``course_rad.shape + (2,)``, m/s, world.
+        """
+        course = self._course_array(course_rad)
+        c = self._expand(self.current_world_m_s, course)
+        if self.response is None:
+            return np.broadcast_to(c, course.shape + (2,)).copy()
+        set_dir = course_of(c)
+        g1 = diff_course(set_dir, self._expand(self.reference_course_rad, course))
+        g2 = diff_course(set_dir, course)
+        ratio = self.response.rho(g2) / self.response.rho(g1)
+        return c * ratio[..., None]
+
+    def vs_world(self, course_rad: ArrayLike) -> Array:
+        """``Vs = vs u(course + beta)`` on ``course_rad`` (eq. 32-33), shape
+        ``course.shape + (2,)``, m/s, world."""
+        course = self._course_array(course_rad)
+        vs = self._expand(self.vs_m_s, course)
+        beta = self._expand(self.beta_rad, course)
+        return vs[..., None] * unit_vector(course + beta)
+
+    def velocity_error(self, course_rad: ArrayLike) -> Array:
+        """``Vs + Vc(course)``: what corrected DR adds to ``|Va| u(course)``; shape
+        ``course.shape + (2,)``, m/s, world."""
+        return self.vs_world(course_rad) + self.current_for_course(course_rad)
+
+    def _course_array(self, course_rad: ArrayLike) -> Array:
+        course = np.asarray(course_rad, dtype=float)
+        if course.ndim == 0 or course.shape[0] != self.n:
+            raise NavInputError(
+                f"course_rad has shape {course.shape}: expected a leading axis of {self.n} runs"
+            )
+        return course
+
+
+# --------------------------------------------------------------------------------------------
+# Input checks shared by the procedures
+
+
+def _bad_rows(message: str, rows: NDArray[np.bool_], on_bad: OnBad) -> None:
+    if np.any(rows) and on_bad == "raise":
+        idx = np.flatnonzero(rows)
+        shown = ", ".join(str(i) for i in idx[:5]) + (", ..." if idx.size > 5 else "")
+        raise NavInputError(f"{message} (run{'s' if idx.size > 1 else ''} {shown})")
+
+
+def _leg_inputs(
+    delta_world_m: ArrayLike | None,
+    duration_s: ArrayLike,
+    course_rad: ArrayLike,
+    on_bad: OnBad,
+    procedure: str,
+) -> tuple[Array, Array, Array, NDArray[np.bool_]]:
+    """Validate two-leg inputs; return ``(m, T, course, bad)`` with ``m = delta / T`` (n, 2, 2)."""
+    if on_bad not in ("raise", "fallback"):
+        raise NavInputError(f"on_bad = {on_bad!r}: must be 'raise' or 'fallback'")
+    if delta_world_m is None:
+        raise NavInputError(
+            f"{procedure}: no GPS fix available: the position errors of the two legs "
+            "(GPS fix minus DR) are needed"
+        )
+    d = np.asarray(delta_world_m, dtype=float)
+    if d.ndim != 3 or d.shape[1:] != (2, 2):
+        raise NavInputError(
+            f"{procedure}: delta_world_m has shape {d.shape}: "
+            "expected (n runs, 2 legs, 2 east/north)"
+        )
+    n = d.shape[0]
+    try:
+        T = np.broadcast_to(np.asarray(duration_s, dtype=float), (n, 2))
+        c = np.broadcast_to(np.asarray(course_rad, dtype=float), (n, 2))
+    except ValueError:
+        raise NavInputError(
+            f"{procedure}: duration_s {np.shape(duration_s)} and course_rad {np.shape(course_rad)} "
+            f"must broadcast to (n, 2) = ({n}, 2)"
+        ) from None
+    no_fix = ~np.all(np.isfinite(d), axis=(1, 2))
+    _bad_rows(f"{procedure}: no GPS fix available (non-finite position error)", no_fix, on_bad)
+    bad_T = ~np.all(np.isfinite(T) & (T > 0.0), axis=1)
+    _bad_rows(
+        f"{procedure}: leg durations must be finite and > 0 s, got {T[bad_T][:1].tolist()}",
+        bad_T,
+        on_bad,
+    )
+    bad_c = ~np.all(np.isfinite(c), axis=1)
+    _bad_rows(f"{procedure}: courses must be finite", bad_c, on_bad)
+    bad = no_fix | bad_T | bad_c
+    safe_T = np.where(bad[:, None], 1.0, T)
+    m = np.where(bad[:, None, None], 0.0, d) / safe_T[..., None]
+    return m, safe_T, np.where(bad[:, None], 0.0, c), bad
+
+
+def _fallback(est: CorrectionEstimate, bad: NDArray[np.bool_]) -> CorrectionEstimate:
+    """Replace the estimates of bad runs by the no-correction estimate."""
+    if not np.any(bad):
+        return est
+    keep = ~bad
+    return CorrectionEstimate(
+        est.method,
+        np.where(keep, est.vs_m_s, 0.0),
+        np.where(keep, est.beta_rad, 0.0),
+        np.where(keep[:, None], est.current_world_m_s, 0.0),
+        np.where(keep, est.reference_course_rad, 0.0),
+        est.response,
+        np.where(keep, est.residual_m_s, 0.0),
+        keep & est.valid,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# CP1
+
+
+def cp1_objective(params: ArrayLike, m_world_m_s: ArrayLike, course_rad: ArrayLike) -> Array:
+    """Eq. 12: ``F = sum_i Error_i`` in the vector formulation.
+
+    ``F = |vs u(alpha_1 + beta) + Vc - dS_1/T_1|^2 + |vs u(alpha_2 + beta) + Vc - dS_2/T_2|^2``:
+    Error_1 + Error_2 (first leg) and Error_3 + Error_4 (second leg); Error_5 (``|Vs,1| = |Vs,2|``)
+    is zero by construction because both legs share the signed magnitude ``vs``.
+
+    Args:
+        params: ``(vs m/s, beta rad, Vc east m/s, Vc north m/s)``, shape (..., 4).
+        m_world_m_s: mean velocity errors ``dS_j / T_j`` of the two legs, shape (..., 2, 2), m/s.
+        course_rad: the two legs' courses, shape (..., 2), rad.
+
+    Returns:
+        ``F``, shape (...), m^2/s^2.
+    """
+    p = np.asarray(params, dtype=float)
+    r, _ = _cp1_residual_jacobian(
+        p, np.asarray(m_world_m_s, dtype=float), np.asarray(course_rad, dtype=float)
+    )
+    return np.sum(r * r, axis=-1)
+
+
+def _cp1_residual_jacobian(p: Array, m: Array, course: Array) -> tuple[Array, Array]:
+    """Residuals (..., 4) and Jacobian (..., 4, 4) of eq. 12 w.r.t. (vs, beta, cx, cy)."""
+    vs, beta, c = p[..., 0], p[..., 1], p[..., 2:]
+    a1 = course[..., 0] + beta
+    a2 = course[..., 1] + beta
+    u1, u2 = unit_vector(a1), unit_vector(a2)
+    du1 = np.stack([np.cos(a1), -np.sin(a1)], axis=-1)
+    du2 = np.stack([np.cos(a2), -np.sin(a2)], axis=-1)
+    r = np.concatenate(
+        [vs[..., None] * u1 + c - m[..., 0, :], vs[..., None] * u2 + c - m[..., 1, :]], axis=-1
+    )
+    J = np.zeros(p.shape[:-1] + (4, 4))
+    J[..., 0:2, 0] = u1
+    J[..., 2:4, 0] = u2
+    J[..., 0:2, 1] = vs[..., None] * du1
+    J[..., 2:4, 1] = vs[..., None] * du2
+    J[..., 0, 2] = J[..., 2, 2] = 1.0
+    J[..., 1, 3] = J[..., 3, 3] = 1.0
+    return r, J
+
+
+def cp1(
+    delta_world_m: ArrayLike | None,
+    duration_s: ArrayLike,
+    course_rad: ArrayLike,
+    *,
+    beta_max_rad: float = math.radians(20.0),
+    beta_step_rad: float = math.radians(1.0),
+    min_separation_rad: float = math.radians(5.0),
+    max_iter: int = 100,
+    on_bad: OnBad = "raise",
+) -> CorrectionEstimate:
+    """Correction procedure 1 (seed 001, eq. 7-12): two legs on different, non-opposite courses.
+
+    Model of leg ``j`` (``j = 1, 2``): ``dS_j / T_j = vs u(alpha_j + beta) + Vc`` with the same
+    current on both legs (CP1 neglects the hull's course-dependent response).
+
+    Phase 1 (eq. 7-10 with ``beta = 0``): the linear system
+    ``dS_j / T_j = s_j u(alpha_j) + Vc`` in ``(s_1, s_2, Vc)``, solved exactly. It is singular when
+    the courses are the same or opposite, which is why CP1 rejects them (for opposite courses use
+    :func:`cp2`). Its ``Vc`` and ``(s_1 + s_2) / 2`` start phase 2.
+
+    Phase 2: a descent on eq. 12 (:func:`cp1_objective`) over ``(vs, beta, Vc)`` from every starting
+    ``beta`` in ``-beta_max, -beta_max + step, ..., beta_max`` (41 starts at the paper's 20 deg
+    and 1 deg). The descent is a damped Gauss-Newton (Levenberg-Marquardt) iteration implemented
+    here in numpy and batched over runs and starts: a gradient method on the same objective that
+    does not need a hand-tuned step size (the paper's "simple gradient descent" would need one per
+    data scale and thousands of iterations). The start with the lowest ``F`` wins (the first on a
+    tie) and ``(vs, beta)`` is normalised with eq. 34.
+
+    With a shared signed ``vs`` the four equations in four unknowns always have an exact solution
+    (``F = 0``) when the courses differ: ``beta = course(dS_1/T_1 - dS_2/T_2) - (alpha_1 +
+    alpha_2)/2 - 90 deg (mod 180)``, unique with ``beta`` in [-90, 90). On noise-free data it is the
+    truth; on real data the model error (the current differs between the legs) goes into the
+    estimate.
+
+    Args:
+        delta_world_m: position errors ``S_GPS - S_DR`` accumulated over each leg (DR restarted at
+            the leg's start fix), shape (n, 2, 2) = (runs, legs, east/north), m, world; ``None``
+            when there is no fix.
+        duration_s: leg durations ``T_j``, shape (n, 2) or broadcastable, s (> 0).
+        course_rad: courses ``alpha_j`` steered on the legs, shape (n, 2) or broadcastable, rad.
+        beta_max_rad: half-width of the range of starting ``beta`` (paper: 20 deg).
+        beta_step_rad: spacing of the starting ``beta`` (paper: 1 deg).
+        min_separation_rad: courses closer than this to each other or to opposite are rejected
+            (the phase-1 system's condition number grows as ``1 / |sin(alpha_2 - alpha_1)|``).
+        max_iter: iterations of the descent.
+        on_bad: ``"raise"`` a :class:`NavInputError` on unusable input, or ``"fallback"`` to give
+            those runs the no-correction estimate (``valid`` False).
+
+    Returns:
+        The estimate; ``response`` is ``None`` (CP1's current does not depend on the course).
+
+    Raises:
+        NavInputError: no fix, a leg duration <= 0, non-finite input, or courses (named in the
+            message) the same or opposite within ``min_separation_rad`` (with ``on_bad="raise"``).
+    """
+    m, _, course, bad = _leg_inputs(delta_world_m, duration_s, course_rad, on_bad, "cp1")
+    n = m.shape[0]
+    sep = np.abs(np.sin(course[:, 1] - course[:, 0]))
+    degenerate = ~bad & (sep < math.sin(min_separation_rad))
+    if np.any(degenerate) and on_bad == "raise":
+        i = int(np.flatnonzero(degenerate)[0])
+        a1, a2 = np.degrees(course[i])
+        raise NavInputError(
+            f"cp1: courses {a1:.3f} and {a2:.3f} deg (run {i}) are the same or opposite within "
+            f"{math.degrees(min_separation_rad):g} deg: CP1 needs two legs on different, "
+            "non-opposite courses (use cp2 for opposite courses)"
+        )
+    bad = bad | degenerate
+    course = np.where(bad[:, None], np.array([0.0, np.pi / 2]), course)
+
+    # phase 1: beta = 0, dS_j/T_j = s_j u(alpha_j) + Vc (eq. 7-10)
+    u = unit_vector(course)  # (n, 2, 2)
+    A = np.stack([u[:, 0], -u[:, 1]], axis=-1)  # columns u1, -u2
+    s12 = np.linalg.solve(A, (m[:, 0] - m[:, 1])[..., None])[..., 0]
+    c0 = m[:, 0] - s12[:, :1] * u[:, 0]
+    vs0 = 0.5 * (s12[:, 0] + s12[:, 1])
+
+    # phase 2: descent on eq. 12 from every starting beta
+    n_half = math.floor(beta_max_rad / beta_step_rad + 1e-9)
+    starts = beta_step_rad * np.arange(-n_half, n_half + 1)
+    k = starts.size
+    p = np.empty((n, k, 4))
+    p[..., 0] = vs0[:, None]
+    p[..., 1] = starts[None, :]
+    p[..., 2:] = c0[:, None, :]
+    mm = np.broadcast_to(m[:, None], (n, k, 2, 2))
+    cc = np.broadcast_to(course[:, None], (n, k, 2))
+    p, F = _levenberg_marquardt(p, mm, cc, max_iter)
+
+    best = np.argmin(F, axis=1)
+    rows = np.arange(n)
+    pb, Fb = p[rows, best], F[rows, best]
+    vs_world = pb[:, 0, None] * unit_vector(course[:, 0] + pb[:, 1])
+    vs, beta = _signed_vs(vs_world, course[:, 0])
+    est = CorrectionEstimate(
+        "cp1",
+        vs,
+        beta,
+        pb[:, 2:].copy(),
+        course[:, 0].copy(),
+        None,
+        np.sqrt(Fb),
+        np.ones(n, bool),
+    )
+    return _fallback(est, bad)
+
+
+def _levenberg_marquardt(p: Array, m: Array, course: Array, max_iter: int) -> tuple[Array, Array]:
+    """Batched Levenberg-Marquardt on eq. 12; returns the parameters and ``F`` (...)."""
+    r, J = _cp1_residual_jacobian(p, m, course)
+    F = np.sum(r * r, axis=-1)
+    lam = np.full(F.shape, 1e-3)
+    eye = np.eye(4)
+    for _ in range(max_iter):
+        g = np.einsum("...ji,...j->...i", J, r)
+        H = np.einsum("...ki,...kj->...ij", J, J)
+        damp = lam[..., None, None] * (
+            eye * (np.diagonal(H, axis1=-2, axis2=-1)[..., None] + 1e-12)
+        )
+        step = np.linalg.solve(H + damp, -g[..., None])[..., 0]
+        p_new = p + step
+        r_new, J_new = _cp1_residual_jacobian(p_new, m, course)
+        F_new = np.sum(r_new * r_new, axis=-1)
+        ok = F_new < F
+        p = np.where(ok[..., None], p_new, p)
+        r = np.where(ok[..., None], r_new, r)
+        J = np.where(ok[..., None, None], J_new, J)
+        F = np.where(ok, F_new, F)
+        lam = np.clip(np.where(ok, lam / 3.0, lam * 4.0), 1e-12, 1e12)
+        small = np.max(np.abs(step), axis=-1) <= 1e-14 * (1.0 + np.max(np.abs(p), axis=-1))
+        if np.all((F <= 1e-30) | (ok & small) | (lam >= 1e12)):
+            break
+    return p, F
+
+
+# --------------------------------------------------------------------------------------------
+# CP2
+
+
+def cp2(
+    delta_world_m: ArrayLike | None,
+    duration_s: ArrayLike,
+    course_rad: ArrayLike,
+    *,
+    response: CurrentResponse | None = None,
+    opposite_tolerance_rad: float = math.radians(0.5),
+    on_bad: OnBad = "raise",
+) -> CorrectionEstimate:
+    """Correction procedure 2 (seed 001, eq. 13-21): two legs on opposite courses, closed form.
+
+    With ``alpha_2 = alpha_1 + 180 deg`` and the same current on both legs (the hull response is
+    symmetric about both vehicle axes, eq. 13-16), ``dS_1/T_1 = Vs + Vc`` and ``dS_2/T_2 = -Vs +
+    Vc`` with ``Vs = vs u(alpha_1 + beta)``, so
+
+        ``Vs = (dS_1/T_1 - dS_2/T_2) / 2``            (eq. 17, both components)
+        ``Vc = (dS_1/T_1 + dS_2/T_2) / 2``            (eq. 18 and 20)
+        ``beta = course(Vs) - alpha_1``               (eq. 19; sign of ``vs`` from eq. 34)
+
+    Eq. 19-20 as printed take ``arctan`` of the component ratio, which loses the quadrant and mixes
+    an angle from the x axis with a course; the vector form has neither problem. The current
+    estimate belongs to ``alpha_1`` (and its opposite);
+    :meth:`CorrectionEstimate.current_for_course` carries it to other courses with eq. 21 and
+    ``response.rho``.
+
+    Args:
+        delta_world_m: position errors ``S_GPS - S_DR`` of the two legs, shape (n, 2, 2), m, world;
+            ``None`` when there is no fix.
+        duration_s: leg durations, shape (n, 2) or broadcastable, s (> 0).
+        course_rad: the legs' courses ``(alpha_1, alpha_2)``, shape (n, 2) or broadcastable, rad
+            (paper: 45 and 225 deg).
+        response: the hull response for eq. 21; default :class:`CurrentResponse` ``()``.
+        opposite_tolerance_rad: how far ``alpha_2`` may be from ``alpha_1 + 180 deg``.
+        on_bad: ``"raise"`` or ``"fallback"`` (see :func:`cp1`).
+
+    Returns:
+        The estimate (``residual_m_s`` 0: the system is solved exactly).
+
+    Raises:
+        NavInputError: no fix, a leg duration <= 0, non-finite input, or courses (named) that are
+            not opposite within the tolerance (with ``on_bad="raise"``).
+    """
+    m, _, course, bad = _leg_inputs(delta_world_m, duration_s, course_rad, on_bad, "cp2")
+    n = m.shape[0]
+    off = diff_course(course[:, 1], course[:, 0] + np.pi)
+    not_opp = ~bad & (off > opposite_tolerance_rad)
+    if np.any(not_opp) and on_bad == "raise":
+        i = int(np.flatnonzero(not_opp)[0])
+        a1, a2 = np.degrees(course[i])
+        raise NavInputError(
+            f"cp2: courses {a1:.3f} and {a2:.3f} deg (run {i}) are not opposite within "
+            f"{math.degrees(opposite_tolerance_rad):g} deg: CP2 needs the second leg on the "
+            "reverse of the first (paper: 45 then 225 deg); use cp1 otherwise"
+        )
+    bad = bad | not_opp
+    vs_world = 0.5 * (m[:, 0] - m[:, 1])
+    current = 0.5 * (m[:, 0] + m[:, 1])
+    vs, beta = _signed_vs(vs_world, course[:, 0])
+    est = CorrectionEstimate(
+        "cp2",
+        vs,
+        beta,
+        current,
+        course[:, 0].copy(),
+        response if response is not None else CurrentResponse(),
+        np.zeros(n),
+        np.ones(n, bool),
+    )
+    return _fallback(est, bad)
+
+
+# --------------------------------------------------------------------------------------------
+# Baseline
+
+
+def baseline(
+    gps_world_m: ArrayLike | None,
+    dr_world_m: ArrayLike,
+    elapsed_s: ArrayLike,
+    *,
+    on_bad: OnBad = "raise",
+) -> CorrectionEstimate:
+    """The simple published current estimator: ``Vc = (GPS fix - DR position) / time since the
+    last fix`` (LSTS DUNE; ``../shared/notes/navigation.md``), with no vehicle error.
+
+    Everything the DR missed over the leg is attributed to the current, so a systematic vehicle
+    error is carried into later legs as a current fixed in the world (wrong as soon as the course
+    changes); separating the two needs two legs on different courses (CP1, CP2).
+
+    Args:
+        gps_world_m: the GPS fix at surfacing, shape (n, 2), m, world; ``None`` when there is none.
+        dr_world_m: the DR position at the same moment, DR restarted at the previous fix, shape
+            (n, 2), m, world.
+        elapsed_s: time since the previous fix, shape (n,) or scalar, s (> 0).
+        on_bad: ``"raise"`` or ``"fallback"`` (see :func:`cp1`).
+
+    Returns:
+        The estimate (``vs = 0``, ``response`` ``None``).
+
+    Raises:
+        NavInputError: no fix, elapsed time <= 0, or non-finite input (with ``on_bad="raise"``).
+    """
+    if gps_world_m is None:
+        raise NavInputError(
+            "baseline: no GPS fix available: the current is (GPS fix - DR position) / time since "
+            "the last fix"
+        )
+    g = np.asarray(gps_world_m, dtype=float)
+    d = np.asarray(dr_world_m, dtype=float)
+    if g.ndim != 2 or g.shape[1] != 2 or d.shape != g.shape:
+        raise NavInputError(
+            f"baseline: gps_world_m {g.shape} and dr_world_m {d.shape} must both be (n, 2)"
+        )
+    n = g.shape[0]
+    T = np.broadcast_to(np.asarray(elapsed_s, dtype=float), (n,))
+    no_fix = ~np.all(np.isfinite(g), axis=1)
+    _bad_rows("baseline: no GPS fix available (non-finite fix)", no_fix, on_bad)
+    bad_T = ~(np.isfinite(T) & (T > 0.0))
+    _bad_rows(
+        f"baseline: time since the last fix must be finite and > 0 s, got {T[bad_T][:1].tolist()}",
+        bad_T,
+        on_bad,
+    )
+    bad_d = ~np.all(np.isfinite(d), axis=1)
+    _bad_rows("baseline: DR position must be finite", bad_d, on_bad)
+    bad = no_fix | bad_T | bad_d
+    current = np.where(bad[:, None], 0.0, g - d) / np.where(bad, 1.0, T)[:, None]
+    z = np.zeros(n)
+    est = CorrectionEstimate(
+        "baseline", z, z.copy(), current, z.copy(), None, z.copy(), np.ones(n, bool)
+    )
+    return _fallback(est, bad)
+
+
+# --------------------------------------------------------------------------------------------
+# Dead reckoning
+
+
+def dr_velocity(
+    course_rad: ArrayLike, speed_m_s: ArrayLike, estimate: CorrectionEstimate | None = None
+) -> Array:
+    """The velocity dead reckoning integrates.
+
+    Uncorrected (eq. 30-31): ``|Va| u(alpha)``. Corrected (eq. 32-33):
+    ``|Va| u(alpha) + vs u(alpha + beta) + Vc(alpha)`` with the estimate's ``Vc`` carried to
+    ``alpha`` by eq. 21 (CP2).
+
+    Args:
+        course_rad: compass courses, shape (n,) or (n, k), rad.
+        speed_m_s: odometry speed ``|Va|``, broadcastable with ``course_rad``, m/s.
+        estimate: a correction estimate for the ``n`` runs, or ``None`` for uncorrected DR.
+
+    Returns:
+        Velocity (east, north), shape ``course_rad.shape + (2,)``, m/s, world.
+    """
+    course = np.asarray(course_rad, dtype=float)
+    v = np.asarray(speed_m_s, dtype=float)[..., None] * unit_vector(course)
+    if estimate is None:
+        return v
+    return v + estimate.velocity_error(course)
+
+
+def dr_track(start_world_m: ArrayLike, velocity_world_m_s: ArrayLike, dt_s: float) -> Array:
+    """Integrate DR velocities from a start fix (eq. 30-33 as sums over steps).
+
+    Args:
+        start_world_m: positions at the start (the last fix), shape (n, 2), m, world.
+        velocity_world_m_s: velocity of each step, shape (n, k, 2), m/s, world; step ``i`` moves
+            from sample ``i`` to ``i + 1``.
+        dt_s: step duration, s (> 0).
+
+    Returns:
+        Positions at samples ``0..k``, shape (n, k + 1, 2), m, world.
+
+    Raises:
+        NavInputError: if ``dt_s`` is not > 0.
+    """
+    if not (math.isfinite(dt_s) and dt_s > 0):
+        raise NavInputError(f"dt_s = {dt_s}: must be finite and > 0")
+    s = np.asarray(start_world_m, dtype=float)
+    v = np.asarray(velocity_world_m_s, dtype=float)
+    out = np.empty((v.shape[0], v.shape[1] + 1, 2))
+    out[:, 0] = s
+    out[:, 1:] = s[:, None, :] + np.cumsum(v * dt_s, axis=1)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Course to a way-point that compensates the estimated current and vehicle error
+
+
+@dataclass(frozen=True)
+class CourseSolution:
+    """A compensated course for a batch of runs.
+
+    Attributes:
+        course_rad: the course to steer ``alpha`` (eq. 25-26), shape (n,), rad in [0, 2 pi).
+        speed_along_m_s: the predicted speed over ground along the desired course ``nu``, shape
+            (n,), m/s (> 0 when feasible).
+        feasible: whether some course makes the predicted track follow ``nu`` with progress
+            (False: see :func:`course_through_current` for the fallback), shape (n,).
+    """
+
+    course_rad: Array
+    speed_along_m_s: Array
+    feasible: NDArray[np.bool_]
+
+
+def course_through_current(
+    desired_course_rad: ArrayLike,
+    speed_m_s: ArrayLike,
+    vs_m_s: ArrayLike,
+    beta_rad: ArrayLike,
+    current_world_m_s: ArrayLike,
+) -> CourseSolution:
+    """One solve of eq. 22-26: the course whose predicted ground track follows ``nu``.
+
+    The vehicle's velocity through water on course ``alpha`` is
+    ``W = |Va| u(alpha) + vs u(alpha + beta)``: magnitude
+    ``R = |(|Va| + vs cos beta, vs sin beta)|`` (eq. 24, printed without the square root)
+    at the angle ``delta = atan2(vs sin beta, |Va| + vs cos beta)`` from the course (eq. 26's
+    ``getCourse180(U1, U2)``, whose printed ``U2`` omits ``|Va|`` and whose ``U1, U2`` name
+    ``|Vc,CP|`` for ``|Vs,CP|``; printed literally it would subtract ``beta`` itself, 15 deg too
+    much at ``|Vs| = 0.3``, ``beta = 20``: the exact angle of ``W`` is used).
+    Eq. 22-23 ask for ``W`` with ``|W| = R`` and ``W + Vc`` along ``nu``: ``W = lam u(nu) - Vc``,
+
+        ``lam = u(nu).Vc +- sqrt(R^2 - (u(nu) x Vc)^2)``.
+
+    The paper's form, with ``tan(theta(nu))`` folding ``nu`` into [0, 90] deg and both equations
+    squared, has four solutions: these two roots on the line along ``nu`` and two on its mirror
+    line, whose resulting velocity is not along ``nu``. The paper keeps the one "which leads the
+    vehicle along the course nu with the highest resulting velocity": ``lam+``. Then
+    ``alpha = getCourse360(W) - delta`` (eq. 25-26). No course is special (the paper's footnote 2
+    treats ``nu`` in {0, 90, 180, 270} separately because ``tan`` is 0 or infinite there).
+
+    Fallbacks (``feasible`` False, never NaN): if the current across ``nu`` exceeds ``R``, the
+    course that cancels as much of it as possible (``W = -R`` times the unit cross-track current);
+    if even ``lam+ <= 0`` (the current against ``nu`` exceeds what the vehicle makes good), ``lam+``
+    is kept (the track stays on the line, drifting back); if ``R = 0``, ``alpha = nu``.
+
+    Args:
+        desired_course_rad: direct course ``nu`` to the way-point, shape (n,), rad.
+        speed_m_s: odometry speed ``|Va|``, shape (n,) or scalar, m/s.
+        vs_m_s: signed ``|Vs|`` (eq. 34), shape (n,) or scalar, m/s.
+        beta_rad: deviation of ``Vs`` from the course, shape (n,) or scalar, rad.
+        current_world_m_s: the current to compensate, shape (n, 2), m/s, world.
+
+    Returns:
+        The solution.
+    """
+    nu = np.asarray(desired_course_rad, dtype=float)
+    c = np.asarray(current_world_m_s, dtype=float)
+    n = nu.shape[0]
+    va = np.broadcast_to(np.asarray(speed_m_s, dtype=float), (n,))
+    vs = np.broadcast_to(np.asarray(vs_m_s, dtype=float), (n,))
+    beta = np.broadcast_to(np.asarray(beta_rad, dtype=float), (n,))
+    along_x = va + vs * np.cos(beta)
+    along_y = vs * np.sin(beta)
+    R = np.hypot(along_x, along_y)
+    delta = np.arctan2(along_y, along_x)
+    u = unit_vector(nu)
+    c_along = np.sum(u * c, axis=-1)
+    c_cross_vec = c - c_along[:, None] * u
+    disc = R * R - np.sum(c_cross_vec * c_cross_vec, axis=-1)
+    lam = c_along + np.sqrt(np.maximum(disc, 0.0))
+    W = lam[:, None] * u - c
+    cross_mag = np.hypot(c_cross_vec[:, 0], c_cross_vec[:, 1])
+    too_strong = disc < 0.0
+    safe = np.where(cross_mag > 0.0, cross_mag, 1.0)
+    W_fb = -R[:, None] * c_cross_vec / safe[:, None]
+    W = np.where(too_strong[:, None], W_fb, W)
+    resulting = W + c
+    speed_along = np.sum(resulting * u, axis=-1)
+    alpha = np.where(R > 0.0, course_of(W) - delta, nu) % (2.0 * np.pi)
+    feasible = ~too_strong & (speed_along > 0.0) & (R > 0.0)
+    return CourseSolution(alpha, speed_along, feasible)
+
+
+def compensated_course(
+    desired_course_rad: ArrayLike,
+    speed_m_s: ArrayLike,
+    estimate: CorrectionEstimate,
+    *,
+    reference_course_rad: ArrayLike | None = None,
+) -> CourseSolution:
+    """The course to a way-point that compensates an estimate (seed 001, section 3.5).
+
+    Without a hull response (CP1, baseline) one solve of eq. 22-26
+    (:func:`course_through_current`). With one (CP2) the current depends on the course it is meant
+    to determine, so the paper's three phases: (1) solve with the current estimated for the
+    reference course (45 deg); (2) rescale the current to that solution's course with eq. 21;
+    (3) solve again with the rescaled current.
+
+    Args:
+        desired_course_rad: direct course ``nu`` to the way-point, shape (n,), rad.
+        speed_m_s: odometry speed ``|Va|``, shape (n,) or scalar, m/s.
+        estimate: the correction estimate for the ``n`` runs.
+        reference_course_rad: the course of phase 1's current, shape (n,); default the estimate's
+            ``reference_course_rad``.
+
+    Returns:
+        The solution.
+    """
+    nu = np.asarray(desired_course_rad, dtype=float)
+    if nu.shape != (estimate.n,):
+        raise NavInputError(
+            f"desired_course_rad has shape {nu.shape}: expected ({estimate.n},) runs"
+        )
+    if estimate.response is None:
+        return course_through_current(
+            nu, speed_m_s, estimate.vs_m_s, estimate.beta_rad, estimate.current_world_m_s
+        )
+    ref = estimate.reference_course_rad if reference_course_rad is None else reference_course_rad
+    phase1 = course_through_current(
+        nu, speed_m_s, estimate.vs_m_s, estimate.beta_rad, estimate.current_for_course(ref)
+    )
+    current = estimate.current_for_course(phase1.course_rad)
+    return course_through_current(nu, speed_m_s, estimate.vs_m_s, estimate.beta_rad, current)
