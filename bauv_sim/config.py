@@ -24,7 +24,13 @@ C = TypeVar("C", bound="Config")
 
 
 class Config(BaseModel):
-    """Base of every configuration model: frozen, no unknown fields, finite numbers only."""
+    """Base of every configuration model: frozen, no unknown fields, finite numbers only.
+
+    Build scenarios with :func:`load_config`, not ``model_validate``: a partial table given to
+    ``model_validate`` replaces a sub-model whose defaults come from its parent (e.g. seed 000's
+    uniform USBL errors) by that sub-model's bare defaults, while :func:`load_config` merges it over
+    the parent's defaults.
+    """
 
     model_config = ConfigDict(
         frozen=True, extra="forbid", allow_inf_nan=False, validate_default=True

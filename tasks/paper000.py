@@ -598,6 +598,7 @@ class StraightPassageExperiment(Experiment):
     """Seed 000 test: N passages with USBL fixes every ``usbl_period_s``."""
 
     scenario_type = Paper000Scenario
+    metrics_type = Paper000Metrics
     test: str = "test-1"
 
     def block_size(self, scenario: Paper000Scenario) -> int:

@@ -82,6 +82,7 @@ class AccuracyExperiment(Experiment):
     """The analytic figures of seed 000 (one run, no randomness)."""
 
     scenario_type = AccuracyScenario
+    metrics_type = AccuracyMetrics
 
     def run_block(self, scenario: AccuracyScenario, seed: int, runs: tuple[int, ...]) -> None:
         return None

@@ -196,3 +196,37 @@ def covariance_ellipsoids(
     V[..., :, 2] *= np.sign(det)[..., None]
     half = k_sigma * np.sqrt(np.maximum(w, 0.0))
     return half, quat_wxyz_to_xyzw(quat_wxyz_from_R(V))
+
+
+def read_time_series(
+    path: Path, entity: str, component: str
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Read one temporal component of one entity back from an ``.rrd`` file.
+
+    Args:
+        path: the recording.
+        entity: entity path, e.g. ``"world/ekf/position"``.
+        component: column name, e.g. ``"Points3D:positions"`` or ``"Scalars:scalars"``.
+
+    Returns:
+        ``(t_s (k,), values (k, ...))`` sorted by ``sim_time``; each row's first instance.
+    """
+    import rerun.chunk as rc
+
+    want = "/" + entity.strip("/")
+    times, rows = [], []
+    for chunk in rc.RrdReader(str(path)).stream().to_chunks():
+        if chunk.entity_path != want or chunk.is_static:
+            continue
+        rb = chunk.to_record_batch()
+        if component not in rb.schema.names or TIMELINE not in rb.schema.names:
+            continue
+        t = rb.column(TIMELINE).cast("int64").to_numpy() * 1e-9
+        vals = rb.column(component).to_pylist()
+        times.append(t)
+        rows += [np.asarray(v[0] if isinstance(v, list) else v, dtype=float) for v in vals]
+    if not times:
+        raise KeyError(f"{entity}:{component} not in {path}")
+    t = np.concatenate(times)
+    order = np.argsort(t, kind="stable")
+    return t[order], np.asarray(rows)[order]

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
+from pydantic import BaseModel
+
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 
@@ -77,6 +79,9 @@ class Experiment:
     """
 
     scenario_type: ClassVar[type[Config]]
+    metrics_type: ClassVar[type[BaseModel] | None] = None
+    """The pydantic model of the experiment's ``metrics.json`` (its JSON Schema is kept in
+    ``docs/schemas/``)."""
 
     name: str
     summary: str

@@ -1,0 +1,174 @@
+"""The error vocabulary and the devices, against the statistics they are defined by."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bauv_sim.errors import ConfigError
+from bauv_sim.sensors import (
+    AngleErrorConfig,
+    Compass,
+    CompassConfig,
+    ErrorModel,
+    ErrorProcess,
+    LengthErrorConfig,
+    Log,
+    LogConfig,
+    Pressure,
+    PressureConfig,
+    Usbl,
+    UsblConfig,
+    check_multiple,
+    periodic_indices,
+)
+from bauv_sim.truth import Truth
+
+N, K = 400, 500  # runs x samples: 200,000 draws per statistic
+
+
+def _apply(model, x=None, ref=None, runs=N, k=K, path=("s",), seed=11):
+    p = ErrorProcess(model, seed, tuple(range(runs)), path)
+    x = np.zeros((runs, k)) if x is None else x
+    return p.apply(x, np.arange(k, dtype=float), ref)
+
+
+def test_uniform_draws_are_bounded_with_sqrt3_sigma_std():
+    v, ok = _apply(ErrorModel("uniform", sigma=0.5))
+    assert ok.all()
+    assert np.abs(v).max() <= 1.5 and np.abs(v).max() > 1.49
+    se = 0.5 * math.sqrt(3) / math.sqrt(v.size)
+    assert abs(v.mean()) < 5 * se
+    assert v.std() == pytest.approx(0.5 * math.sqrt(3), rel=0.01)
+    assert ErrorModel("uniform", sigma=0.5).noise_std == pytest.approx(0.5 * math.sqrt(3))
+
+
+def test_gaussian_bias_and_scale():
+    x = np.full((N, K), 10.0)
+    v, _ = _apply(ErrorModel("gaussian", sigma=0.2, bias=0.3, scale_factor=0.01), x)
+    assert v.mean() == pytest.approx(10.0 * 1.01 + 0.3, abs=5 * 0.2 / math.sqrt(v.size))
+    assert v.std() == pytest.approx(0.2, rel=0.01)
+
+
+def test_sector_bias_and_compass_deviation():
+    ref = np.tile(np.radians([10.0, 100.0, 190.0, 280.0]), (3, 1))
+    v, _ = _apply(ErrorModel(sector_bias=(4.0, 8.0, 0.0, 2.0)), np.zeros((3, 4)), ref, runs=3, k=4)
+    assert np.allclose(v, [4, 8, 0, 2])
+    dev = (0.1, 0.2, 0.3, 0.4, 0.5)
+    v, _ = _apply(ErrorModel(deviation=dev), np.zeros((3, 4)), ref, runs=3, k=4)
+    psi = ref
+    want = (
+        0.1 + 0.2 * np.sin(psi) + 0.3 * np.cos(psi) + 0.4 * np.sin(2 * psi) + 0.5 * np.cos(2 * psi)
+    )
+    assert np.allclose(v, want)
+
+
+def test_random_walk_variance_grows_linearly_and_continues_across_calls():
+    m = ErrorModel(random_walk=0.1)
+    p = ErrorProcess(m, 3, tuple(range(2000)), ("w",))
+    t = np.arange(1.0, 101.0)
+    v1, _ = p.apply(np.zeros((2000, 100)), t)
+    v2, _ = p.apply(np.zeros((2000, 100)), t + 100.0)
+    assert v1[:, -1].var() == pytest.approx(0.01 * 99, rel=0.1)  # first sample starts the walk
+    assert v2[:, -1].var() == pytest.approx(0.01 * 199, rel=0.1)
+
+
+def test_outliers_and_dropouts_rates_and_stream_independence():
+    base = ErrorModel("gaussian", sigma=1.0)
+    noisy, _ = _apply(base)
+    with_outliers, ok = _apply(
+        ErrorModel(
+            "gaussian",
+            sigma=1.0,
+            outlier_probability=0.05,
+            outlier_sigma=50.0,
+            dropout_probability=0.1,
+        )
+    )
+    hit = np.abs(with_outliers - noisy) > 0
+    assert hit.mean() == pytest.approx(0.05, abs=0.003)
+    assert (~ok).mean() == pytest.approx(0.1, abs=0.003)
+    # switching outliers and dropouts on leaves the noise of the other samples untouched
+    assert np.array_equal(noisy[~hit], with_outliers[~hit])
+
+
+def test_a_runs_numbers_do_not_depend_on_its_batch():
+    m = ErrorModel("uniform", sigma=1.0, outlier_probability=0.1, outlier_sigma=5)
+    whole, _ = ErrorProcess(m, 9, tuple(range(10)), ("x",)).apply(
+        np.zeros((10, 50)), np.arange(50.0)
+    )
+    part, _ = ErrorProcess(m, 9, (7, 3), ("x",)).apply(np.zeros((2, 50)), np.arange(50.0))
+    assert np.array_equal(part, whole[[7, 3]])
+
+
+def test_config_units_convert_to_si():
+    m = AngleErrorConfig(sigma_deg=3.0, bias_deg=1.0, random_walk_deg_per_sqrt_s=0.5).to_model()
+    assert m.sigma == pytest.approx(math.radians(3)) and m.bias == pytest.approx(math.radians(1))
+    assert m.random_walk == pytest.approx(math.radians(0.5))
+    assert LengthErrorConfig(sigma_m=0.2).to_model().sigma == 0.2
+
+
+def _truth(pos, vel_ground, current, heading):
+    n, T = pos.shape[:2]
+    return Truth(
+        np.arange(T, dtype=float),
+        pos,
+        vel_ground,
+        vel_ground - current,
+        heading,
+        np.zeros((n, T, 2)),
+        current,
+    )
+
+
+def test_log_reads_speed_through_water_and_is_blind_when_slow():
+    T = 5
+    vel = np.tile([0.0, 1.0, 0.0], (1, T, 1))  # north at 1 m/s over ground
+    cur = np.tile([0.0, 0.3, 0.0], (1, T, 1))  # 0.3 m/s current from astern
+    cur[0, 4] = [0.0, 0.95, 0.0]  # nearly drifting with the water
+    tr = _truth(np.zeros((1, T, 3)), vel, cur, np.zeros((1, T)))
+    s = Log(LogConfig(speed={"sigma_m_s": 0.0}, min_speed_m_s=0.1), 0, (0,)).sample(
+        tr, np.arange(T)
+    )
+    assert np.allclose(s.values[0, :4], 0.7)
+    assert s.produced[0].tolist() == [True, True, True, True, False]
+
+
+def test_compass_and_pressure_depth_change():
+    T = 4
+    pos = np.zeros((1, T, 3))
+    pos[0, :, 2] = -np.array([3.0, 3.5, 4.5, 4.0])
+    tr = _truth(pos, np.zeros((1, T, 3)), np.zeros((1, T, 3)), np.full((1, T), 6.2))
+    c = Compass(CompassConfig(heading={"sigma_deg": 0.0, "bias_deg": 10.0}), 0, (0,)).sample(
+        tr, np.arange(T)
+    )
+    assert np.allclose(c.values, (6.2 + math.radians(10)) % (2 * math.pi))
+    d = Pressure(PressureConfig(output="depth_change", depth={"sigma_m": 0.0}), 0, (0,)).sample(
+        tr, np.arange(1, T), previous=np.arange(T - 1)
+    )
+    assert np.allclose(d.values, [0.5, 1.0, -0.5])
+
+
+def test_usbl_range_limit_field_of_view_and_latency():
+    T = 4
+    pos = np.array([[[100.0, 0, -3], [600.0, 0, -3], [0.0, 50, -3], [0.0, 50, -10]]])
+    tr = _truth(pos, np.zeros((1, T, 3)), np.zeros((1, T, 3)), np.zeros((1, T)))
+    cfg = UsblConfig(
+        range={"sigma_m": 0.0},
+        azimuth={"sigma_deg": 0.0},
+        elevation={"sigma_deg": 0.0},
+        min_elevation_deg=0.0,
+        processing_delay_s=0.5,
+    )
+    s = Usbl(cfg, np.array([0.0, 0.0, -6.0]), 0, (0,)).sample(tr, np.arange(T))
+    assert s.produced[0].tolist() == [True, False, True, False]  # beyond 500 m; below the horizon
+    r = math.sqrt(100**2 + 9)
+    assert s.values[0, 0, 0] == pytest.approx(r)
+    assert s.t_arrival_s[0, 0] == pytest.approx(0.0 + r / 1500 + 0.5)
+
+
+def test_period_checks_and_indices():
+    assert check_multiple(20.0, 1.0, "usbl.period_s") == 20
+    with pytest.raises(ConfigError, match=r"usbl\.period_s = 2\.5"):
+        check_multiple(2.5, 1.0, "usbl.period_s")
+    assert periodic_indices(601, 100).tolist() == [100, 200, 300, 400, 500, 600]

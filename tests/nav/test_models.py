@@ -1,0 +1,96 @@
+"""Motion and measurement models against finite differences and the paper's formulas."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nav.accuracy import dr_step_covariance
+from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+
+RNG = np.random.default_rng(2024)
+TX = np.array([12.0, -7.0, -6.0])
+USBL = UsblMeasurement(TX, 0.2, math.radians(3), math.radians(3), min_horizontal_m=1.0)
+MOTION = CourseSpeedDepthMotion(math.radians(8), 0.257, 0.25)
+
+
+def numeric_jacobian(fn, x, eps=1e-4):
+    cols = []
+    for j in range(x.shape[-1]):
+        dx = np.zeros_like(x)
+        dx[..., j] = eps
+        diff = fn(x + dx) - fn(x - dx)
+        diff[..., 1] = (diff[..., 1] + np.pi) % (2 * np.pi) - np.pi  # azimuth wraps
+        cols.append(diff / (2 * eps))
+    return np.stack(cols, axis=-1)
+
+
+def test_usbl_jacobian_matches_finite_differences():
+    x = TX + RNG.uniform(-400, 400, (200, 3)) * np.array([1, 1, 0.02])
+    x[:, 2] = -3.0
+    H = USBL.H(x)
+    H_num = numeric_jacobian(USBL.h, x)
+    assert np.allclose(H, H_num, rtol=1e-6, atol=1e-9)
+
+
+def test_usbl_measurement_definition_matches_seed000_eq15():
+    # vehicle at depth 3 m, transceiver at depth 6 m (seed 000 Figure 7), depth positive down
+    x = np.array([[TX[0] + 30.0, TX[1] + 40.0, -3.0]])
+    r, a, b = USBL.h(x)[0]
+    dzd = 3.0 - 6.0  # z1 - z with depth coordinates
+    assert r == pytest.approx(math.sqrt(30**2 + 40**2 + dzd**2))
+    assert a == pytest.approx(math.atan2(30, 40))
+    assert b == pytest.approx(-math.atan(dzd / 50.0))
+
+
+def test_usbl_invert_round_trip_and_fix_covariance():
+    x = TX + RNG.uniform(-300, 300, (50, 3))
+    assert np.allclose(USBL.invert(USBL.h(x)), x, atol=1e-9)
+    z = USBL.h(x)
+    # first-order covariance equals J R J^T with J from finite differences of the inverse
+    eps = 1e-6
+    cols = []
+    for j in range(3):
+        dz = np.zeros_like(z)
+        dz[:, j] = eps
+        cols.append((USBL.invert(z + dz) - USBL.invert(z - dz)) / (2 * eps))
+    J = np.stack(cols, axis=-1)
+    assert np.allclose(
+        USBL.fix_covariance(z), J @ USBL.R() @ np.swapaxes(J, -1, -2), rtol=1e-5, atol=1e-8
+    )
+
+
+def test_usbl_vertical_geometry_is_finite_and_drops_azimuth():
+    above = np.array([[TX[0], TX[1], -3.0], [TX[0] + 0.3, TX[1] - 0.2, -3.0]])
+    H = USBL.H(above)
+    assert np.all(np.isfinite(H)) and np.all(np.isfinite(USBL.h(above)))
+    act = USBL.active(above)
+    assert not act[:, 1].any() and act[:, [0, 2]].all()
+    assert np.all(H[:, 1] == 0.0)
+
+
+def test_motion_increment_and_jacobians():
+    u = np.column_stack(
+        [RNG.uniform(0, 2 * np.pi, 40), RNG.uniform(0.2, 2, 40), RNG.normal(0, 0.3, 40)]
+    )
+    x = RNG.normal(0, 50, (40, 3))
+    dt = 1.5
+    fx = MOTION.f(x, u, dt)
+    assert np.allclose(fx[:, 0], x[:, 0] + dt * u[:, 1] * np.sin(u[:, 0]))  # east: S sin C
+    assert np.allclose(fx[:, 1], x[:, 1] + dt * u[:, 1] * np.cos(u[:, 0]))  # north: S cos C
+    assert np.allclose(fx[:, 2], x[:, 2] - u[:, 2])  # depth increase lowers z
+    eps = 1e-6
+    cols = []
+    for j in range(3):
+        du = np.zeros_like(u)
+        du[:, j] = eps
+        cols.append((MOTION.f(x, u + du, dt) - MOTION.f(x, u - du, dt)) / (2 * eps))
+    assert np.allclose(MOTION.G(u, dt), np.stack(cols, -1), atol=1e-7)
+
+
+def test_process_noise_horizontal_block_is_seed000_eq10():
+    u = np.column_stack([RNG.uniform(0, 2 * np.pi, 30), RNG.uniform(0.2, 2, 30), np.zeros(30)])
+    Q = MOTION.Q(u, 1.0)
+    P10 = dr_step_covariance(u[:, 0], u[:, 1], 1.0, MOTION.sigma_course_rad, MOTION.sigma_speed_m_s)
+    assert np.allclose(Q[:, :2, :2], P10, rtol=1e-12, atol=1e-15)
+    assert np.allclose(Q[:, 2, 2], 0.25**2) and np.allclose(Q[:, :2, 2], 0)

@@ -1,0 +1,64 @@
+"""Bad input: one clear line, exit status 2, no traceback, no folder left looking complete."""
+
+import subprocess
+import sys
+
+import pytest
+
+from tasks import cli
+
+
+def bauv(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "tasks.cli", *args], capture_output=True, text=True, cwd=cwd
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "pattern"),
+    [
+        (["--set", "sensors.usbl.bogus=1"], "unknown field 'sensors.usbl.bogus'"),
+        (["--set", "sensors.usbl.range.sigma_m=-0.2"], "sensors.usbl.range.sigma_m = -0.2"),
+        (["--set", "sensors.usbl.period_s=7.5"], "sensors.usbl.period_s = 7.5: must be a whole"),
+        (["--set", "filter.sigma_range_m=nan"], "filter.sigma_range_m = nan"),
+        (["--runs", "0"], "runs = 0"),
+        (["--set", "report.record_run=10", "--runs", "5"], "report.record_run = 10"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(args, pattern, tmp_path):
+    out = tmp_path / "out"
+    res = bauv("run", "paper-000/test-1", "--out", str(out), *args, cwd=tmp_path)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and pattern in lines[0], res.stderr
+    assert "Traceback" not in res.stderr
+    assert not out.exists() and not (tmp_path / "runs").exists()
+
+
+def test_unknown_experiment(tmp_path):
+    res = bauv("run", "paper-000/test-7", cwd=tmp_path)
+    assert res.returncode == 2 and "unknown experiment 'paper-000/test-7'" in res.stderr
+    assert "paper-000/test-1" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_existing_folder_is_not_overwritten(tmp_path):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "keep.txt").write_text("x")
+    res = bauv("run", "paper-000/accuracy", "--out", str(tmp_path / "out"))
+    assert res.returncode == 2 and "--resume" in res.stderr
+    assert (tmp_path / "out" / "keep.txt").read_text() == "x"
+
+
+def test_list_and_show():
+    res = bauv("list")
+    assert res.returncode == 0
+    for name in ["paper-000/test-1", "paper-000/test-2", "paper-000/test-3", "paper-000/accuracy"]:
+        assert name in res.stdout
+    res = bauv("show", "paper-000/test-3")
+    assert res.returncode == 0 and "period_s = 100.0" in res.stdout
+
+
+def test_web_viewer_binds_loopback_only(tmp_path):
+    cmd = cli.view_command(tmp_path / "recording.rrd", web=True, web_port=9191, grpc_port=9877)
+    assert cmd[cmd.index("--bind") + 1] == "127.0.0.1"
+    assert "--serve-web" in cmd and cmd[cmd.index("--web-viewer-port") + 1] == "9191"

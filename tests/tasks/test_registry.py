@@ -1,0 +1,26 @@
+"""Contract tests over every registered experiment and mission."""
+
+import json
+
+import pytest
+
+from bauv_sim.config import load_config, to_plain
+from tasks import registry
+from tasks.schemas import schema_files
+
+NAMES = registry.names()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_defaults_validate_and_round_trip(name):
+    exp = registry.get(name)
+    scn = load_config(exp.scenario_type, exp.preset)
+    again = load_config(exp.scenario_type, to_plain(scn))
+    assert again == scn
+    assert exp.summary and exp.default_runs >= 1
+
+
+def test_metrics_schemas_are_current():
+    for path, text in schema_files().items():
+        assert path.is_file(), f"{path} missing: run python -m tasks.schemas"
+        assert json.loads(path.read_text()) == json.loads(text), f"{path} stale"
