@@ -81,7 +81,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     args = [
         "paper-000/test-1",
         "--runs",
-        "1500",
+        "600",
         "--seed",
         "2",
         "--quiet",
