@@ -540,12 +540,20 @@ def cp1(
 
 
 def _levenberg_marquardt(p: Array, m: Array, course: Array, max_iter: int) -> tuple[Array, Array]:
-    """Batched Levenberg-Marquardt on eq. 12; returns the parameters and ``F`` (...)."""
+    """Batched Levenberg-Marquardt on eq. 12; returns the parameters and ``F`` (...).
+
+    Each element (run, start) stops on its own test (``F`` below 1e-30, a negligible accepted step,
+    or saturated damping) and is frozen from then on, so its result never depends on which other
+    runs share the batch (results are identical for any block grouping).
+    """
     r, J = _cp1_residual_jacobian(p, m, course)
     F = np.sum(r * r, axis=-1)
     lam = np.full(F.shape, 1e-3)
+    active = F > 1e-30
     eye = np.eye(4)
     for _ in range(max_iter):
+        if not np.any(active):
+            break
         g = np.einsum("...ji,...j->...i", J, r)
         H = np.einsum("...ki,...kj->...ij", J, J)
         damp = lam[..., None, None] * (
@@ -555,15 +563,14 @@ def _levenberg_marquardt(p: Array, m: Array, course: Array, max_iter: int) -> tu
         p_new = p + step
         r_new, J_new = _cp1_residual_jacobian(p_new, m, course)
         F_new = np.sum(r_new * r_new, axis=-1)
-        ok = F_new < F
+        ok = active & (F_new < F)
         p = np.where(ok[..., None], p_new, p)
         r = np.where(ok[..., None], r_new, r)
         J = np.where(ok[..., None, None], J_new, J)
         F = np.where(ok, F_new, F)
-        lam = np.clip(np.where(ok, lam / 3.0, lam * 4.0), 1e-12, 1e12)
+        lam = np.where(active, np.clip(np.where(ok, lam / 3.0, lam * 4.0), 1e-12, 1e12), lam)
         small = np.max(np.abs(step), axis=-1) <= 1e-14 * (1.0 + np.max(np.abs(p), axis=-1))
-        if np.all((F <= 1e-30) | (ok & small) | (lam >= 1e12)):
-            break
+        active = active & ~((F <= 1e-30) | (ok & small) | (lam >= 1e12))
     return p, F
 
 
