@@ -311,23 +311,41 @@ def _hold_last(values: NDArray[np.float64], produced: NDArray[np.bool_], what: s
     return np.take_along_axis(values, idx, axis=1)
 
 
-def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -> Passages:
-    """Simulate measurements and run DR, the EKF and USBL-only fixes for some runs.
+@dataclass(frozen=True)
+class PassageInputs:
+    """What the estimators of some passages receive (no truth except the start for DR/EKF).
+
+    Attributes:
+        truth: the reference motion (run axis 1), for scoring only.
+        u: DR inputs (course rad, speed m/s, depth change m) of each step, shape (n, T, 3).
+        fix_tick: tick index of each USBL fix, shape (k,).
+        z: USBL measurements (r, alpha, beta), shape (n, k, 3).
+        z_produced: shape (n, k).
+        x0: initial estimates, shape (n, 3), m, world.
+        P0: initial covariance, shape (3, 3), m^2.
+        motion: the filter's motion model.
+        usbl: the filter's USBL model.
+    """
+
+    truth: Truth
+    u: NDArray[np.float64]
+    fix_tick: NDArray[np.intp]
+    z: NDArray[np.float64]
+    z_produced: NDArray[np.bool_]
+    x0: NDArray[np.float64]
+    P0: NDArray[np.float64]
+    motion: CourseSpeedDepthMotion
+    usbl: UsblMeasurement
+
+
+def measure_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -> PassageInputs:
+    """Sample the sensors along the reference passage for some runs (seed 000 section 6).
 
     Every run draws from its own streams, so a run's numbers do not depend on the other runs.
-
-    Args:
-        scn: the scenario.
-        seed: batch seed.
-        runs: run indices.
-
-    Returns:
-        The passages.
     """
     truth = straight_passage(scn.passage, scn.transceiver)
     n, n_ticks, tick = len(runs), scn.passage.n_ticks, scn.passage.tick_s
-    T = n_ticks - 1
-    steps = np.arange(T)
+    steps = np.arange(n_ticks - 1)
     s = scn.sensors
     course = Compass(s.ins, seed, runs, "ins").sample(truth, steps)
     speed = Log(s.log, seed, runs, "log").sample(truth, steps)
@@ -343,7 +361,6 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
     tx = scn.transceiver.position_world_m()
     fix_tick = periodic_indices(n_ticks, round(s.usbl.period_s / tick))
     fixes = Usbl(s.usbl, tx, seed, runs, "usbl").sample(truth, fix_tick)
-
     f = scn.filter
     motion = CourseSpeedDepthMotion(
         math.radians(f.sigma_course_deg), f.sigma_speed_m_s, f.sigma_depth_change_m
@@ -361,38 +378,65 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
         L = np.linalg.cholesky(P0)
         draws = np.stack([rng_mod.generator(seed, r, "initial").standard_normal(3) for r in runs])
         x0 = x0 + draws @ L.T
+    return PassageInputs(
+        truth, u, fix_tick, fixes.values, fixes.produced, x0, P0, motion, usbl_model
+    )
 
-    dr, _ = dead_reckon(x0, u, tick, motion)
-    ekf = BatchEKF(x0, P0)
-    xs = np.empty((n, n_ticks, 3))
-    Ps = np.empty((n, n_ticks, 3, 3))
+
+def run_ekf(
+    inp: PassageInputs, tick_s: float, gate_probability: float | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+    """The EKF of eq. 15-23 over the passages, batched over runs.
+
+    Returns:
+        ``(x (n, T + 1, 3), P (n, T + 1, 3, 3), nis (n, k), gate_rejected (n, k))``.
+    """
+    n, T, _ = inp.u.shape
+    ekf = BatchEKF(inp.x0, inp.P0)
+    xs = np.empty((n, T + 1, 3))
+    Ps = np.empty((n, T + 1, 3, 3))
     xs[:, 0], Ps[:, 0] = ekf.x, ekf.P
-    k_fix = len(fix_tick)
-    nis = np.full((n, k_fix), np.nan)
-    rejected = np.zeros((n, k_fix), dtype=bool)
-    fix_at = {int(t): j for j, t in enumerate(fix_tick)}
+    nis = np.full(inp.z_produced.shape, np.nan)
+    rejected = np.zeros(inp.z_produced.shape, dtype=bool)
+    fix_at = {int(t): j for j, t in enumerate(inp.fix_tick)}
     for k in range(T):
-        ekf.predict(motion, u[:, k], tick)
+        ekf.predict(inp.motion, inp.u[:, k], tick_s)
         j = fix_at.get(k + 1)
         if j is not None:
-            info = ekf.update(
-                usbl_model, fixes.values[:, j], fixes.produced[:, j], f.gate_probability
-            )
+            info = ekf.update(inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability)
             nis[:, j] = info.nis
             rejected[:, j] = info.rejected
         xs[:, k + 1], Ps[:, k + 1] = ekf.x, ekf.P
-    ekf.check(float(truth.t_s[-1]))
-    usbl_pos = usbl_model.invert(fixes.values)
+    ekf.check(T * tick_s)
+    return xs, Ps, nis, rejected
+
+
+def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -> Passages:
+    """Simulate measurements and run DR, the EKF and USBL-only fixes for some runs.
+
+    Args:
+        scn: the scenario.
+        seed: batch seed.
+        runs: run indices.
+
+    Returns:
+        The passages.
+    """
+    inp = measure_passages(scn, seed, runs)
+    tick = scn.passage.tick_s
+    dr, _ = dead_reckon(inp.x0, inp.u, tick, inp.motion)
+    xs, Ps, nis, rejected = run_ekf(inp, tick, scn.filter.gate_probability)
+    truth = inp.truth
     return Passages(
         runs,
         truth,
-        truth.t_s[fix_tick],
-        fix_tick,
+        truth.t_s[inp.fix_tick],
+        inp.fix_tick,
         xs,
         Ps,
         dr,
-        usbl_pos,
-        fixes.produced,
+        inp.usbl.invert(inp.z),
+        inp.z_produced,
         nis,
         rejected,
     )
