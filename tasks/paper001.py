@@ -560,7 +560,7 @@ def _figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> 
     files: list[str] = []
     T = scenario.world.leg_duration_s
     for tr in block.tracks:
-        fig, ax = plt.subplots(figsize=(7.5, 7.0))
+        fig, ax = plt.subplots(figsize=(10.5, 6.5))
         truth = np.concatenate(tr["truth"])
         ax.plot(truth[:, 0], truth[:, 1], "k-", lw=1.8, label="truth")
         fixes = np.array([tr["truth"][0][0], tr["truth"][0][-1], tr["truth"][1][-1]])
@@ -575,7 +575,7 @@ def _figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> 
             label="GPS fixes",
         )
         styles = {
-            "nocp": ("tab:red", "uncorrected DR"),
+            "nocp": ("tab:red", "uncorrected DR (ends at way-point 3)"),
             "cp": ("tab:blue", f"{tr['procedure'].upper()}-corrected DR"),
             "baseline": ("tab:orange", "baseline-corrected DR"),
         }
@@ -586,18 +586,31 @@ def _figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> 
         ax.plot(tr["truth"][2][-1, 0], tr["truth"][2][-1, 1], "ks", ms=6)
         wp = tr["waypoint3"]
         ax.plot(wp[0], wp[1], "*", color="tab:purple", ms=14, label="way-point 3")
-        # current arrows (drift over one leg, m)
-        base = fixes[2] + np.array([-30.0, -30.0])
-        for vec, col, lab in (
-            (tr["current_true"], "k", "true current (x T)"),
-            (tr["current_est"], "tab:blue", f"{tr['procedure'].upper()} current estimate (x T)"),
-            (tr["current_baseline"], "tab:orange", "baseline current estimate (x T)"),
-        ):
-            d = vec * T
-            ax.annotate(
-                "", xy=base + d, xytext=base, arrowprops={"arrowstyle": "->", "color": col, "lw": 2}
-            )
-            ax.plot([], [], "-", color=col, lw=2, label=lab)
+        # current vectors in an inset (m/s, from a common origin)
+        ins = ax.inset_axes((1.06, 0.0, 0.38, 0.38))
+        vecs = (
+            (tr["current_true"], "k", 6.0, 0.35, "true mean current, leg 3"),
+            (tr["current_baseline"], "tab:orange", 2.0, 1.0, "baseline estimate"),
+            (tr["current_est"], "tab:blue", 2.0, 1.0, f"{tr['procedure'].upper()} estimate"),
+        )
+        lim = 1.25 * max(float(np.hypot(*v)) for v, *_ in vecs) + 1e-3
+        for vec, col, lw, alpha, lab in vecs:
+            x, y = float(vec[0]), float(vec[1])
+            if lw > 3:  # the truth: a wide band with a dot at its tip, under the estimates
+                ins.plot([0, x], [0, y], "-", color=col, lw=lw, alpha=alpha, solid_capstyle="butt")
+                ins.plot([x], [y], "o", color=col, alpha=alpha, ms=lw)
+            else:
+                ins.quiver(
+                    0, 0, x, y, angles="xy", scale_units="xy", scale=1.0, color=col, width=0.012
+                )
+            ax.plot([], [], "-", color=col, lw=lw, alpha=alpha, label=f"current: {lab}")
+        ins.set_xlim(-lim, lim)
+        ins.set_ylim(-lim, lim)
+        ins.set_aspect("equal")
+        ins.axhline(0, color="0.8", lw=0.5)
+        ins.axvline(0, color="0.8", lw=0.5)
+        ins.tick_params(labelsize=6)
+        ins.set_title("current [m/s]", fontsize=7)
         vg, vc, b = tr["cell"]
         ax.set_title(
             f"Seed 001 {tr['procedure'].upper()} mission {tr['run']}: |Vg|={vg:g} m/s, "
@@ -608,7 +621,7 @@ def _figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> 
         ax.set_ylabel("north [m]")
         ax.set_aspect("equal", adjustable="datalim")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
         name = f"tracks-{tr['procedure']}-mission{tr['run']}.png"
         fig.savefig(out_dir / name, dpi=110, bbox_inches="tight")
         plt.close(fig)
@@ -649,7 +662,8 @@ def _figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> 
         )
         ax.plot(wp[0], wp[1], "*", color="tab:purple", ms=14)
         ax.set_title(
-            f"Seed 001 Table 3, {tr['procedure'].upper()} mission {tr['run']}: true leg-3 tracks"
+            f"Seed 001 Table 3, {tr['procedure'].upper()} mission {tr['run']}: true leg-3 tracks\n"
+            f"(each leg lasts {T:g} s; a faster track runs past the way-point)"
         )
         ax.set_xlabel("east [m]")
         ax.set_ylabel("north [m]")
