@@ -181,3 +181,69 @@ class UsblMeasurement:
         )
         J[..., 2, :] = np.stack([np.sin(b), np.zeros_like(r), r * np.cos(b)], -1)
         return J @ self.R() @ np.swapaxes(J, -1, -2)
+
+
+@dataclass(frozen=True)
+class HorizontalPositionMeasurement:
+    """A horizontal position fix (GPS at the surface): ``h(x) = (east, north)``, linear.
+
+    Attributes:
+        sigma_m: standard deviation of each coordinate, m.
+    """
+
+    sigma_m: float
+
+    def h(self, x: Array) -> Array:
+        """Predicted fix, shape (n, 2), m."""
+        return np.asarray(x, dtype=float)[..., :2]
+
+    def H(self, x: Array) -> Array:
+        """Jacobian, shape (n, 2, 3)."""
+        H = np.zeros((*np.shape(x)[:-1], 2, 3))
+        H[..., 0, 0] = H[..., 1, 1] = 1.0
+        return H
+
+    def R(self) -> Array:
+        """Noise, shape (2, 2), m^2."""
+        return np.eye(2) * self.sigma_m**2
+
+    def residual(self, z: Array, hx: Array) -> Array:
+        """``z - h(x)``."""
+        return np.asarray(z, dtype=float) - hx
+
+    def active(self, x: Array) -> NDArray[np.bool_]:
+        """Both components, shape (n, 2)."""
+        return np.ones((*np.shape(x)[:-1], 2), dtype=bool)
+
+
+@dataclass(frozen=True)
+class DepthMeasurement:
+    """A pressure depth: ``h(x) = -up`` (depth positive down), linear.
+
+    Attributes:
+        sigma_m: standard deviation, m.
+    """
+
+    sigma_m: float
+
+    def h(self, x: Array) -> Array:
+        """Predicted depth, shape (n, 1), m."""
+        return -np.asarray(x, dtype=float)[..., 2:3]
+
+    def H(self, x: Array) -> Array:
+        """Jacobian, shape (n, 1, 3)."""
+        H = np.zeros((*np.shape(x)[:-1], 1, 3))
+        H[..., 0, 2] = -1.0
+        return H
+
+    def R(self) -> Array:
+        """Noise, shape (1, 1), m^2."""
+        return np.array([[self.sigma_m**2]])
+
+    def residual(self, z: Array, hx: Array) -> Array:
+        """``z - h(x)``."""
+        return np.asarray(z, dtype=float) - hx
+
+    def active(self, x: Array) -> NDArray[np.bool_]:
+        """Shape (n, 1)."""
+        return np.ones((*np.shape(x)[:-1], 1), dtype=bool)

@@ -10,7 +10,9 @@ from bauv_sim.sensors.errors import (
     LengthErrorConfig,
     SpeedErrorConfig,
 )
+from bauv_sim.sensors.gps import Gps, GpsConfig
 from bauv_sim.sensors.log import Log, LogConfig
+from bauv_sim.sensors.odometry import Odometry, OdometryConfig
 from bauv_sim.sensors.pressure import Pressure, PressureConfig
 from bauv_sim.sensors.usbl import Usbl, UsblConfig
 
@@ -20,9 +22,13 @@ __all__ = [
     "CompassConfig",
     "ErrorModel",
     "ErrorProcess",
+    "Gps",
+    "GpsConfig",
     "LengthErrorConfig",
     "Log",
     "LogConfig",
+    "Odometry",
+    "OdometryConfig",
     "Pressure",
     "PressureConfig",
     "SensorSamples",

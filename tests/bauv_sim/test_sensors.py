@@ -172,3 +172,31 @@ def test_period_checks_and_indices():
     with pytest.raises(ConfigError, match=r"usbl\.period_s = 2\.5"):
         check_multiple(2.5, 1.0, "usbl.period_s")
     assert periodic_indices(601, 100).tolist() == [100, 200, 300, 400, 500, 600]
+
+
+def test_gps_only_at_the_surface_after_acquisition():
+    from bauv_sim.sensors import Gps, GpsConfig
+
+    T = 12
+    pos = np.zeros((1, T, 3))
+    pos[0, :, 2] = [-2, -1, 0.1, 0.1, 0.1, 0.1, 0.1, -0.5, 0.1, 0.1, 0.1, 0.1]
+    tr = _truth(pos, np.zeros((1, T, 3)), np.zeros((1, T, 3)), np.zeros((1, T)))
+    g = Gps(GpsConfig(position={"sigma_m": 0.0}, acquisition_s=2.0), 0, (0,))
+    s1 = g.sample(tr, np.arange(6))
+    s2 = g.sample(tr, np.arange(6, T))  # consecutive call keeps the acquisition clock
+    produced = np.concatenate([s1.produced[0], s2.produced[0]]).tolist()
+    # surfaced at t=2: fixes from t=4; dived at t=7; surfaced again at t=8: fixes from t=10
+    assert produced == [False] * 4 + [True] * 3 + [False] * 3 + [True] * 2
+    assert np.allclose(s1.values[0, 4], [0.0, 0.0])
+
+
+def test_odometry_reads_the_calibration_not_the_motion():
+    from bauv_sim.sensors import Odometry, OdometryConfig
+
+    cfg = OdometryConfig(
+        frequency_hz=(0.0, 1.0, 2.0), speed_m_s=(0.0, 0.6, 1.0), speed={"scale_factor": 0.1}
+    )
+    s = Odometry(cfg, 0, (0, 1)).sample(np.arange(3.0), np.array([[0.5, 1.5, 3.0]] * 2))
+    assert np.allclose(s.values, [[0.33, 0.88, 1.1]] * 2)
+    with pytest.raises(Exception, match="strictly increasing"):
+        OdometryConfig(frequency_hz=(1.0, 0.5), speed_m_s=(0.0, 1.0))
