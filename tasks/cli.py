@@ -176,7 +176,11 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
         raise ConfigError(f"run_dir = {run_dir!r}: no recording.rrd in it")
     cmd = view_command(rec, web, web_port, grpc_port)
     if web:
-        click.echo(f"serving {rec} at http://127.0.0.1:{web_port} (Ctrl-C to stop)")
+        grpc = f"rerun%2Bhttp%3A%2F%2F127.0.0.1%3A{grpc_port}%2Fproxy"
+        click.echo(
+            f"serving {rec} on 127.0.0.1 only: open http://127.0.0.1:{web_port}/?url={grpc}"
+            " (Ctrl-C to stop)"
+        )
     try:
         code = subprocess.call(cmd)
     except KeyboardInterrupt:

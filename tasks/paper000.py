@@ -937,10 +937,10 @@ def record_passage(exp: Experiment, scn: Paper000Scenario, seed: int, run: int, 
     ok = p.usbl_produced[0]
     rec.fixes("usbl", p.t_fix_s[ok], p.usbl_m[0][ok], COLORS["usbl"])
     d = p.distances()
-    rec.scalars("distance/ekf", t, d["EKF"][0])
-    rec.scalars("distance/dr", t, d["DR"][0])
-    rec.scalars("distance/usbl", p.t_fix_s[ok], d["USBL"][0][ok])
-    rec.scalars("consistency/nees_ekf", t, p.ekf_nees()[0])
+    rec.scalars("distance/ekf", t, d["EKF"][0], COLORS["ekf"], "EKF (horizontal)")
+    rec.scalars("distance/dr", t, d["DR"][0], COLORS["dr"], "DR (horizontal)")
+    rec.scalars("distance/usbl", p.t_fix_s[ok], d["USBL"][0][ok], COLORS["usbl"], "USBL (3-D)")
+    rec.scalars("consistency/nees_ekf", t, p.ekf_nees()[0], COLORS["ekf"], "EKF NEES (dim 3)")
     rec.blueprint("distance", "consistency")
     rec.close()
     return "recording.rrd"

@@ -138,8 +138,24 @@ class Recording:
             static=True,
         )
 
-    def scalars(self, entity: str, t_s: NDArray[np.float64], values: NDArray[np.float64]) -> None:
-        """A time series (a plot line), e.g. ``distance/ekf``."""
+    def scalars(
+        self,
+        entity: str,
+        t_s: NDArray[np.float64],
+        values: NDArray[np.float64],
+        color: Color | None = None,
+        name: str | None = None,
+    ) -> None:
+        """A time series (a plot line), e.g. ``distance/ekf``; NaN samples are left out."""
+        if color is not None or name is not None:
+            self.rec.log(
+                entity,
+                rr.SeriesLines(
+                    colors=None if color is None else [color],
+                    names=None if name is None else [name],
+                ),
+                static=True,
+            )
         v = np.asarray(values, dtype=float)
         keep = np.isfinite(v)
         self.rec.send_columns(

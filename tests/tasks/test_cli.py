@@ -62,3 +62,57 @@ def test_web_viewer_binds_loopback_only(tmp_path):
     cmd = cli.view_command(tmp_path / "recording.rrd", web=True, web_port=9191, grpc_port=9877)
     assert cmd[cmd.index("--bind") + 1] == "127.0.0.1"
     assert "--serve-web" in cmd and cmd[cmd.index("--web-viewer-port") + 1] == "9191"
+
+
+def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
+    """Start `bauv view --web` on a recording and fetch the page over HTTP."""
+    import socket
+    import time
+    import urllib.request
+
+    from tasks.recording import Recording
+
+    rec = Recording(tmp_path / "recording.rrd", "test", "test")
+    rec.point("x", [0.0, 0.0, 0.0], (0, 0, 0), "x")
+    rec.close()
+
+    def free_port():
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            return s.getsockname()[1]
+
+    web, grpc = free_port(), free_port()
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "tasks.cli",
+            "view",
+            str(tmp_path),
+            "--web",
+            "--web-port",
+            str(web),
+            "--grpc-port",
+            str(grpc),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    try:
+        html = None
+        for _ in range(150):
+            try:
+                html = urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=1).read()
+                break
+            except OSError:
+                time.sleep(0.2)
+        assert html is not None and b"re_viewer" in html
+        # nothing answers on the machine's other addresses
+        host_ip = socket.gethostbyname(socket.gethostname())
+        if not host_ip.startswith("127."):
+            with pytest.raises(OSError):
+                socket.create_connection((host_ip, web), timeout=1).close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
