@@ -547,6 +547,53 @@ def paper_tables(block: MissionBlock, scenario: Paper001Scenario) -> list[Table]
     return tables
 
 
+def paper_log_ratios(block: MissionBlock) -> Array:
+    """``log(ours / paper)`` for every mean the paper prints in Tables 1 and 3 (the without-CP,
+    CP1 and CP2 rows; 40 values) that the block's grid covers."""
+    out = []
+    for t, pattern in (("table1", "end_error_{}_m"), ("table3", "deviation_{}_deg")):
+        for (method, beta), paper in PAPER[t].items():
+            for (vg, vc), pv in zip(PAPER_COLUMNS, paper, strict=True):
+                if method == "nocp":
+                    kind = "nocp" if t == "table1" else "direct"
+                    vals = _pooled(block, pattern.format(kind), vg, vc, [0, 1])
+                elif (vg, vc, beta) in block.cells:
+                    ci = block.cells.index((vg, vc, beta))
+                    proc = [0] if method == "cp1" else [1]
+                    vals = block.data[pattern.format("cp")][:, ci, proc].ravel()
+                else:
+                    continue
+                if vals.size:
+                    out.append(math.log(float(np.mean(vals)) / pv))
+    return np.array(out)
+
+
+def paper_fit_objective(
+    scenario: Paper001Scenario, seeds: tuple[int, ...], n_missions: int = 30
+) -> float:
+    """RMS over the paper's Table 1 and 3 means of ``log(ours / paper)``, each averaged over seeds.
+
+    This is how the default hull response ``rho_s`` was chosen (see
+    :class:`nav.correction.CurrentResponse`)::
+
+        for a1, a2 in itertools.product(np.arange(0, 0.26, 0.05), repeat=2):
+            sc = load_config(Paper001Scenario, {}, (), ["world.step_s=0.02",
+                             f"world.rho_s_cos_coeffs=[1.0, {a1}, {a2}]"])
+            print(a1, a2, paper_fit_objective(sc, (101, 102, 103)))
+
+    Args:
+        scenario: the experiment (its grid should contain the paper's).
+        seeds: batch seeds to average over.
+        n_missions: missions per seed.
+
+    Returns:
+        The RMS log ratio (0 when every mean equals the paper's).
+    """
+    runs = tuple(range(n_missions))
+    logs = [paper_log_ratios(merge_blocks([simulate_block(scenario, s, runs)])) for s in seeds]
+    return float(np.sqrt(np.mean(np.mean(logs, axis=0) ** 2)))
+
+
 # --------------------------------------------------------------------------------------------
 # Figures
 

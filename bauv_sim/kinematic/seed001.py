@@ -104,7 +104,7 @@ class Seed001WorldConfig(Config):
         0.001, gt=0, description="duration of one hold step (the paper's t), s"
     )
     rho_s_cos_coeffs: tuple[float, ...] = Field(
-        (1.0, 0.1, 0.1),
+        (1.0, 0.2, 0.15),
         min_length=1,
         description="rho_s(gamma) = sum_k a_k cos(k gamma), the hull response of eq. 29 "
         "(see nav.correction.CurrentResponse for the default)",

@@ -61,6 +61,7 @@ def test_rho_s_is_the_navigation_series():
     g = np.linspace(-4, 4, 50)
     coeffs = (1.0, 0.1, 0.1, -0.05)
     assert np.allclose(kin.rho_s(g, coeffs), corr.CurrentResponse(coeffs).rho_s(g))
+    assert kin.Seed001WorldConfig().rho_s_cos_coeffs == corr.DEFAULT_RHO_S_COS_COEFFS
 
 
 def test_config_defaults_and_validation():

@@ -86,8 +86,9 @@ def test_current_response_symmetries_and_validation():
     explicit = 1.0 + 0.15 * np.cos(g) + 0.1 * np.cos(2 * g) + 0.05 * np.cos(3 * g)
     assert np.allclose(r.rho_s(g), explicit)
     d = corr.CurrentResponse()
-    assert d.cos_coeffs == (1.0, 0.1, 0.1)
-    assert d.rho_s(0.0) == pytest.approx(1.2) and d.rho_s(math.pi / 2) == pytest.approx(0.9)
+    assert d.cos_coeffs == (1.0, 0.2, 0.15)
+    assert d.rho_s(0.0) == pytest.approx(1.35) and d.rho_s(math.pi / 2) == pytest.approx(0.85)
+    assert d.rho_s(math.pi) == pytest.approx(0.95) and d.rho(0.0) == pytest.approx(1.15)
     with pytest.raises(NavInputError, match="positive"):
         corr.CurrentResponse((1.0, 1.2))
     with pytest.raises(NavInputError):

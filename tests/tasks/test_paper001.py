@@ -125,3 +125,13 @@ def test_paper_values_lookup():
     assert paper001.paper_value("table3", "nocp", 20.0, 0.3, 0.5) == 16.52
     assert paper001.paper_value("table2", "cp1", 10.0, 0.3, 0.5) is None
     assert paper001.paper_value("table1", "cp1", 5.0, 0.2, 0.5) is None
+
+
+def test_fit_objective_prefers_the_default_hull_response():
+    """The default rho_s was fitted to the paper's Tables 1 and 3 (nav.correction.CurrentResponse);
+    on a seed outside the fit it still beats a hull without angle dependence."""
+    fitted = paper001.paper_fit_objective(scenario(*COARSE, "report.figures=false"), (7,))
+    flat = paper001.paper_fit_objective(
+        scenario(*COARSE, "report.figures=false", "world.rho_s_cos_coeffs=[1.0]"), (7,)
+    )
+    assert fitted < 0.45 < flat
