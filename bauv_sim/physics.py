@@ -1,0 +1,704 @@
+"""The physics facade: the BAUV in MuJoCo, with named accessors and actuation.
+
+:class:`BauvPhysics` is a :class:`dm_control.mjcf.Physics` (so ``dm_control.rl.control``
+environments and :mod:`dm_control.mjcf` binding work) and the **only** code in the project that
+indexes MuJoCo's state arrays (``qpos``, ``qvel``, ``act``, ``ctrl``, ``actuator_force``,
+``site_xpos``, ``qfrc_*``). Everything else calls its accessors, whose names carry units and frames:
+
+* frames: world ENU (x east, y north, z up), body FLU (x forward, y port, z up), heading clockwise
+  from north (:mod:`bauv_sim.frames`); the vehicle's reference point is the hull body's origin;
+* one scene may hold several vehicles (``leader``, ``follower``): every accessor and setter takes
+  ``vehicle=None`` (the first vehicle) or a vehicle name from :meth:`BauvPhysics.vehicle_names`.
+
+Time advances in control ticks (:meth:`BauvPhysics.advance`): at the start of each tick the sea
+current is evaluated at every vehicle and applied (MuJoCo ``option wind``, plus a per-vehicle
+correction force when vehicles sit in different water), then the physics runs the tick's
+``n`` steps of ``timestep``. The control tick is an integer multiple of the timestep, checked.
+Divergence, non-finite state and any MuJoCo warning raise :class:`~bauv_sim.errors.PhysicsError`
+with the simulation time of the step where it happened (auto-reset is disabled in the model).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from dm_control import mjcf
+from numpy.typing import ArrayLike, NDArray
+
+from bauv_sim import frames, hydro
+from bauv_sim.currents import CurrentField
+from bauv_sim.errors import ConfigError, PhysicsError
+
+DEFAULT_CONTROL_TICK_S = 0.1
+"""Default control tick, s (50 physics steps of 2 ms)."""
+
+SENSOR_SITES: tuple[str, ...] = (
+    "camera", "echo_forward", "usbl_transponder", "modem", "echo_up", "sonar", "echo_down",
+    "em_log", "pressure", "ins", "gps_antenna", "caudal_tip",
+)
+"""Named sites of the vehicle (unprefixed), see ``models/bauv/bauv.xml``."""
+
+_JOINTS = ("tail_yaw", "caudal_fin_yaw", "crank", "fin_port_pitch", "fin_starboard_pitch",
+           "battery_slide", "tail_bias_slide")
+_ACTUATORS = ("motor", "tail_bias", "fin_port", "fin_starboard", "battery")
+_WARNING_NAMES = {int(v): k for k, v in mujoco.mjtWarning.__members__.items()
+                  if k.startswith("mjWARN")}
+
+
+@dataclass(frozen=True)
+class VehicleTruth:
+    """The true state of one vehicle at one instant (what sensors may read).
+
+    Attributes:
+        t_s: simulation time, s.
+        position_world_m: reference point, shape (3,), m, world ENU.
+        quat_wxyz: attitude, body to world, shape (4,).
+        roll_pitch_heading_rad: shape (3,), rad (roll starboard-down +, pitch nose-up +, heading
+            clockwise from north in [0, 2 pi)).
+        depth_m: depth of the reference point below the surface z = 0, m (positive down).
+        velocity_world_m_s: velocity over ground, shape (3,), m/s, world.
+        velocity_through_water_world_m_s: velocity relative to the water, shape (3,), m/s, world.
+        current_world_m_s: water velocity at the vehicle, shape (3,), m/s, world.
+        angular_velocity_body_rad_s: shape (3,), rad/s, body FLU.
+    """
+
+    t_s: float
+    position_world_m: NDArray[np.float64]
+    quat_wxyz: NDArray[np.float64]
+    roll_pitch_heading_rad: NDArray[np.float64]
+    depth_m: float
+    velocity_world_m_s: NDArray[np.float64]
+    velocity_through_water_world_m_s: NDArray[np.float64]
+    current_world_m_s: NDArray[np.float64]
+    angular_velocity_body_rad_s: NDArray[np.float64]
+
+
+@dataclass
+class _Vehicle:
+    """Index tables of one vehicle (built once from names)."""
+
+    name: str
+    prefix: str
+    hull_body: int
+    qpos_adr: int
+    dof_adr: int
+    dofs: NDArray[np.int_]
+    bodies: NDArray[np.int_]
+    jnt_qpos: dict[str, int]
+    jnt_dof: dict[str, int]
+    act: dict[str, int]
+    act_state: dict[str, int]
+    sites: dict[str, int]
+    lever_m: float
+    crank_m: float
+    current_world: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    correction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+
+
+class BauvPhysics(mjcf.Physics):
+    """MuJoCo physics of one or more BAUVs, with named accessors and actuation.
+
+    Build it with :func:`bauv_sim.build.build_physics` (``dm_control.mjcf`` scenes, several
+    vehicles) or :meth:`from_scene_xml` (the plain ``models/bauv/scene.xml``). On every (re)load the
+    model is prepared by :func:`bauv_sim.hydro.prepare_model` (added-mass artefact removed).
+    """
+
+    _control_tick_s: float = DEFAULT_CONTROL_TICK_S
+    _current: CurrentField | None = None
+
+    # ----------------------------------------------------------------------------------------
+    # construction
+
+    @classmethod
+    def from_scene_xml(cls, path: str | Path | None = None,
+                       control_tick_s: float = DEFAULT_CONTROL_TICK_S) -> BauvPhysics:
+        """Load a scene file (default ``models/bauv/scene.xml``) with plain MuJoCo.
+
+        Args:
+            path: MJCF file.
+            control_tick_s: control tick, s (an integer multiple of the model's timestep).
+
+        Returns:
+            The physics, reset to the model's defaults.
+        """
+        from bauv_sim.hull import MODEL_DIR
+
+        phys = cls.from_xml_path(str(path if path is not None else MODEL_DIR / "scene.xml"))
+        phys.set_control_tick(control_tick_s)
+        return phys
+
+    def _reload_from_data(self, data) -> None:
+        hydro.prepare_model(data.model.ptr)
+        self._vehicles: dict[str, _Vehicle] = {}
+        super()._reload_from_data(data)
+        self._index_vehicles()
+        self._check_options()
+        self._energy_j = {name: 0.0 for name in self._vehicles}
+        self._energy_window_s = 0.0
+        self._state_buf = np.empty(
+            mujoco.mj_stateSize(self.model.ptr, mujoco.mjtState.mjSTATE_INTEGRATION))
+        self.set_control_tick(self._control_tick_s)
+
+    def _check_options(self) -> None:
+        m = self.model.ptr
+        if not m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_AUTORESET:
+            raise ConfigError("model option flag autoreset must be disabled "
+                              "(a divergence would silently restart the simulation)")
+        if m.opt.integrator != mujoco.mjtIntegrator.mjINT_IMPLICITFAST:
+            raise ConfigError("model integrator must be implicitfast "
+                              f"(got {mujoco.mjtIntegrator(m.opt.integrator).name})")
+
+    def _index_vehicles(self) -> None:
+        m = self.model.ptr
+        for b in range(m.nbody):
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or ""
+            if name.rsplit("/", 1)[-1] != "hull":
+                continue
+            prefix = name[: -len("hull")]
+            vname = prefix.rstrip("/") or "bauv"
+            self._vehicles[vname] = self._index_one(vname, prefix, b)
+        if not self._vehicles:
+            raise ConfigError("model has no vehicle: no body named 'hull' or '<name>/hull'")
+
+    def _index_one(self, vname: str, prefix: str, hull: int) -> _Vehicle:
+        m = self.model.ptr
+
+        def oid(kind: mujoco.mjtObj, name: str) -> int:
+            i = mujoco.mj_name2id(m, kind, prefix + name)
+            if i < 0:
+                raise ConfigError(f"vehicle {vname!r}: {kind.name[6:].lower()} "
+                                  f"{prefix + name!r} missing from the model")
+            return i
+
+        # the free joint: on the hull, or on an attachment frame that carries the hull at identity
+        free_body = hull
+        while m.body_jntnum[free_body] == 0 and m.body_parentid[free_body] != 0:
+            if np.any(m.body_pos[free_body] != 0) or np.any(m.body_quat[free_body] != [1, 0, 0, 0]):
+                raise ConfigError(f"vehicle {vname!r}: hull is offset from its free body")
+            free_body = int(m.body_parentid[free_body])
+        j = int(m.body_jntadr[free_body])
+        if j < 0 or m.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE:
+            raise ConfigError(f"vehicle {vname!r}: the hull has no free joint")
+        bodies = hydro.subtree_bodies(m, free_body)
+        dofs = np.flatnonzero(np.isin(m.dof_bodyid, bodies))
+        jq = {n: int(m.jnt_qposadr[oid(mujoco.mjtObj.mjOBJ_JOINT, n)]) for n in _JOINTS}
+        jd = {n: int(m.jnt_dofadr[oid(mujoco.mjtObj.mjOBJ_JOINT, n)]) for n in _JOINTS}
+        act = {n: oid(mujoco.mjtObj.mjOBJ_ACTUATOR, n) for n in _ACTUATORS}
+        act_state = {n: int(m.actuator_actadr[i]) for n, i in act.items()}
+        sites = {n: oid(mujoco.mjtObj.mjOBJ_SITE, n) for n in SENSOR_SITES}
+        # crank-rocker geometry from the model: lever = anchor on the peduncle (body2 frame),
+        # crank radius = the rod's pin offset on the crank
+        eq = oid(mujoco.mjtObj.mjOBJ_EQUALITY, "tail_linkage")
+        lever = float(np.linalg.norm(m.eq_data[eq, 3:6]))
+        crank = float(np.linalg.norm(m.body_pos[oid(mujoco.mjtObj.mjOBJ_BODY, "rod")]))
+        return _Vehicle(vname, prefix, hull, int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j]), dofs,
+                        bodies, jq, jd, act, act_state, sites, lever, crank,
+                        correction=np.zeros(dofs.size))
+
+    def set_control_tick(self, control_tick_s: float) -> None:
+        """Set the control tick.
+
+        Args:
+            control_tick_s: tick, s; must be a positive integer multiple of the timestep.
+
+        Raises:
+            ConfigError: if it is not.
+        """
+        dt = float(self.model.opt.timestep)
+        n = round(control_tick_s / dt)
+        if n < 1 or abs(n * dt - control_tick_s) > 1e-9 * max(1.0, control_tick_s):
+            raise ConfigError(f"control tick = {control_tick_s} s: must be a positive integer "
+                              f"multiple of the physics timestep {dt} s")
+        self._control_tick_s = float(control_tick_s)
+        self._steps_per_tick = int(n)
+
+    @property
+    def control_tick_s(self) -> float:
+        """Control tick, s."""
+        return self._control_tick_s
+
+    @property
+    def steps_per_tick(self) -> int:
+        """Physics steps per control tick."""
+        return self._steps_per_tick
+
+    def vehicle_names(self) -> list[str]:
+        """Names of the vehicles in the scene (``["bauv"]`` for the plain scene file)."""
+        return list(self._vehicles)
+
+    def _v(self, vehicle: str | None) -> _Vehicle:
+        if vehicle is None:
+            return next(iter(self._vehicles.values()))
+        try:
+            return self._vehicles[vehicle]
+        except KeyError:
+            raise ConfigError(f"vehicle {vehicle!r}: not in the scene "
+                              f"(have {', '.join(self._vehicles)})") from None
+
+    def set_const(self) -> None:
+        """Run ``mj_setConst``, then re-apply :func:`hydro.prepare_model` (which it undoes)."""
+        mujoco.mj_setConst(self.model.ptr, self.data.ptr)
+        hydro.prepare_model(self.model.ptr)
+
+    # ----------------------------------------------------------------------------------------
+    # pose and motion of the vehicle
+
+    def position_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Reference point (hull origin, on the hull axis 0.80 m aft of the nose), shape (3,), m,
+        world ENU."""
+        v = self._v(vehicle)
+        return np.array(self.data.qpos[v.qpos_adr:v.qpos_adr + 3])
+
+    def quat_wxyz(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Attitude quaternion (w, x, y, z), body FLU to world ENU, unit norm, shape (4,)."""
+        v = self._v(vehicle)
+        q = np.array(self.data.qpos[v.qpos_adr + 3:v.qpos_adr + 7])
+        return q / np.linalg.norm(q)
+
+    def R_world_from_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Rotation matrix body FLU -> world ENU, shape (3, 3)."""
+        return frames.R_from_quat_wxyz(self.quat_wxyz(vehicle))
+
+    def roll_pitch_heading(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """(roll, pitch, heading), shape (3,), rad: roll starboard-down positive in [-pi, pi),
+        pitch nose-up positive, heading clockwise from north in [0, 2 pi)."""
+        return frames.roll_pitch_heading_from_R(self.R_world_from_body(vehicle))
+
+    def heading_rad(self, vehicle: str | None = None) -> float:
+        """Heading of the body x axis, clockwise from north, in [0, 2 pi), rad."""
+        return float(self.roll_pitch_heading(vehicle)[2])
+
+    def depth_m(self, vehicle: str | None = None) -> float:
+        """Depth of the reference point below the surface z = 0, m (positive down)."""
+        return float(frames.depth_from_z(self.position_world(vehicle)[2]))
+
+    def velocity_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Velocity over ground of the reference point, shape (3,), m/s, world ENU."""
+        v = self._v(vehicle)
+        return np.array(self.data.qvel[v.dof_adr:v.dof_adr + 3])
+
+    def velocity_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Velocity over ground of the reference point, shape (3,), m/s, body FLU."""
+        return frames.body_from_world(self.R_world_from_body(vehicle), self.velocity_world(vehicle))
+
+    def current_at_vehicle_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Water velocity applied to the vehicle during the current control tick (the current field
+        evaluated at the vehicle at the start of the tick), shape (3,), m/s, world ENU."""
+        return self._v(vehicle).current_world.copy()
+
+    def velocity_through_water_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Velocity of the reference point relative to the water, shape (3,), m/s, world ENU."""
+        return self.velocity_world(vehicle) - self.current_at_vehicle_world(vehicle)
+
+    def speed_through_water_m_s(self, vehicle: str | None = None) -> float:
+        """Norm of :meth:`velocity_through_water_world`, m/s."""
+        return float(np.linalg.norm(self.velocity_through_water_world(vehicle)))
+
+    def angular_velocity_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Angular velocity, shape (3,), rad/s, body FLU (roll rate about x, ...)."""
+        v = self._v(vehicle)
+        return np.array(self.data.qvel[v.dof_adr + 3:v.dof_adr + 6])
+
+    def angular_velocity_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Angular velocity, shape (3,), rad/s, world ENU."""
+        return frames.world_from_body(self.R_world_from_body(vehicle),
+                                      self.angular_velocity_body(vehicle))
+
+    def site_position_world(self, name: str, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Position of a named sensor site (see :data:`SENSOR_SITES`), shape (3,), m, world ENU.
+
+        Args:
+            name: unprefixed site name, e.g. ``"usbl_transponder"``.
+            vehicle: vehicle name or None for the first.
+        """
+        v = self._v(vehicle)
+        if name not in v.sites:
+            raise ConfigError(f"site {name!r}: not a sensor site (have {', '.join(SENSOR_SITES)})")
+        self._ensure_kinematics()
+        return np.array(self.data.site_xpos[v.sites[name]])
+
+    def site_axis_world(self, name: str, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Unit sensing direction (the site's z axis) of a named sensor site, shape (3,), world."""
+        v = self._v(vehicle)
+        if name not in v.sites:
+            raise ConfigError(f"site {name!r}: not a sensor site (have {', '.join(SENSOR_SITES)})")
+        self._ensure_kinematics()
+        return np.array(self.data.site_xmat[v.sites[name]].reshape(3, 3)[:, 2])
+
+    def _ensure_kinematics(self) -> None:
+        if self._kinematics_stale:
+            mujoco.mj_kinematics(self.model.ptr, self.data.ptr)
+            self._kinematics_stale = False
+
+    _kinematics_stale: bool = True
+
+    def truth(self, vehicle: str | None = None) -> VehicleTruth:
+        """The true state of a vehicle now (see :class:`VehicleTruth`)."""
+        q = self.quat_wxyz(vehicle)
+        pos = self.position_world(vehicle)
+        vel = self.velocity_world(vehicle)
+        cur = self.current_at_vehicle_world(vehicle)
+        rph = frames.roll_pitch_heading_from_R(frames.R_from_quat_wxyz(q))
+        return VehicleTruth(float(self.data.time), pos, q, rph, float(-pos[2]), vel, vel - cur,
+                            cur, self.angular_velocity_body(vehicle))
+
+    def hydrostatics(self, vehicle: str | None = None) -> hydro.Hydrostatics:
+        """Weight, buoyancy, centres and BG of a vehicle now (see :func:`hydro.hydrostatics`)."""
+        v = self._v(vehicle)
+        self._ensure_kinematics()
+        return hydro.hydrostatics(self.model.ptr, self.data.ptr, int(v.bodies[0]))
+
+    def fluid_force_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Total fluid force on the vehicle (MuJoCo ``qfrc_fluid`` on the free joint's translation),
+        shape (3,), N, world ENU, at the current state (forward dynamics are recomputed)."""
+        v = self._v(vehicle)
+        mujoco.mj_forward(self.model.ptr, self.data.ptr)
+        return np.array(self.data.qfrc_fluid[v.dof_adr:v.dof_adr + 3])
+
+    # ----------------------------------------------------------------------------------------
+    # fins, tail, motor, battery
+
+    def motor_speed_rad_s(self, vehicle: str | None = None) -> float:
+        """Crank (gearbox output) speed, rad/s; tail-beat frequency = this / (2 pi)."""
+        v = self._v(vehicle)
+        return float(self.data.qvel[v.jnt_dof["crank"]])
+
+    def tail_beat_frequency_hz(self, vehicle: str | None = None) -> float:
+        """Instantaneous tail-beat frequency from the crank speed, Hz."""
+        return self.motor_speed_rad_s(vehicle) / (2.0 * math.pi)
+
+    def motor_torque_nm(self, vehicle: str | None = None) -> float:
+        """Torque of the motor on the crank (after the gearbox), N m."""
+        v = self._v(vehicle)
+        return float(self.data.actuator_force[v.act["motor"]])
+
+    def motor_power_w(self, vehicle: str | None = None) -> float:
+        """Instantaneous mechanical power of the motor at the crank, torque x speed, W."""
+        return self.motor_torque_nm(vehicle) * self.motor_speed_rad_s(vehicle)
+
+    def mean_motor_power_w(self, vehicle: str | None = None) -> float:
+        """Mean motor power since the last :meth:`reset_energy` (sum of torque x speed x dt over the
+        steps taken), W."""
+        name = self._v(vehicle).name
+        if self._energy_window_s <= 0:
+            return 0.0
+        return self._energy_j[name] / self._energy_window_s
+
+    def motor_energy_j(self, vehicle: str | None = None) -> float:
+        """Motor energy since the last :meth:`reset_energy`, J."""
+        return self._energy_j[self._v(vehicle).name]
+
+    def reset_energy(self) -> None:
+        """Restart the motor-energy accounting of all vehicles."""
+        for k in self._energy_j:
+            self._energy_j[k] = 0.0
+        self._energy_window_s = 0.0
+
+    def tail_angles_rad(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """(segment 1 angle to the hull, segment 2 angle to segment 1), shape (2,), rad; positive
+        swings the tail to port (counter-clockwise seen from above)."""
+        v = self._v(vehicle)
+        return np.array([self.data.qpos[v.jnt_qpos["tail_yaw"]],
+                         self.data.qpos[v.jnt_qpos["caudal_fin_yaw"]]])
+
+    def crank_angle_rad(self, vehicle: str | None = None) -> float:
+        """Crank angle (unwrapped), rad."""
+        v = self._v(vehicle)
+        return float(self.data.qpos[v.jnt_qpos["crank"]])
+
+    def lateral_fin_angles_rad(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """(port, starboard) lateral-fin pitch angles, shape (2,), rad (leading edge up > 0)."""
+        v = self._v(vehicle)
+        return np.array([self.data.qpos[v.jnt_qpos["fin_port_pitch"]],
+                         self.data.qpos[v.jnt_qpos["fin_starboard_pitch"]]])
+
+    def battery_position_m(self, vehicle: str | None = None) -> float:
+        """Battery position along the body x axis from its neutral place, m (positive forward)."""
+        v = self._v(vehicle)
+        return float(self.data.qpos[v.jnt_qpos["battery_slide"]])
+
+    def tail_bias_rad(self, vehicle: str | None = None) -> float:
+        """Tail bias set by the crank carriage's position, -asin(offset / lever), rad (the mean
+        segment-1 angle it gives, to first order)."""
+        v = self._v(vehicle)
+        off = float(self.data.qpos[v.jnt_qpos["tail_bias_slide"]])
+        return -math.asin(max(-1.0, min(1.0, off / v.lever_m)))
+
+    def tail_amplitude_rad(self, vehicle: str | None = None) -> float:
+        """Design amplitude of segment 1, asin(crank radius / lever), rad."""
+        v = self._v(vehicle)
+        return math.asin(v.crank_m / v.lever_m)
+
+    def _set_ctrl(self, v: _Vehicle, name: str, value: float, what: str, unit: str) -> None:
+        i = v.act[name]
+        lo, hi = self.model.ptr.actuator_ctrlrange[i]
+        if not (math.isfinite(value) and lo - 1e-12 <= value <= hi + 1e-12):
+            raise ConfigError(f"{what} = {value:.6g} {unit}: must be within [{lo:.6g}, {hi:.6g}]")
+        self.data.ctrl[i] = value
+
+    def set_tail_beat_frequency_hz(self, frequency_hz: float, vehicle: str | None = None) -> None:
+        """Command the tail-beat frequency (the motor's crank speed 2 pi f).
+
+        Args:
+            frequency_hz: tail-beat frequency, Hz (0 stops the tail where it is).
+            vehicle: vehicle name or None for the first.
+
+        Raises:
+            ConfigError: if outside the motor's range.
+        """
+        v = self._v(vehicle)
+        i = v.act["motor"]
+        hi = self.model.ptr.actuator_ctrlrange[i][1] / (2.0 * math.pi)
+        if not (math.isfinite(frequency_hz) and 0.0 <= frequency_hz <= hi + 1e-12):
+            raise ConfigError(f"tail-beat frequency = {frequency_hz:.6g} Hz: must be within "
+                              f"[0, {hi:.6g}]")
+        self.data.ctrl[i] = 2.0 * math.pi * frequency_hz
+
+    def set_tail_bias_rad(self, bias_rad: float, vehicle: str | None = None) -> None:
+        """Command the tail bias (the mean segment-1 angle; positive = tail to port, which turns the
+        vehicle to starboard), by moving the crank carriage by -lever sin(bias).
+
+        Args:
+            bias_rad: bias, rad.
+            vehicle: vehicle name or None for the first.
+        """
+        v = self._v(vehicle)
+        if not math.isfinite(bias_rad) or abs(bias_rad) >= math.pi / 2:
+            raise ConfigError(f"tail bias = {bias_rad!r} rad: must be finite and within +-pi/2")
+        lo, hi = self.model.ptr.actuator_ctrlrange[v.act["tail_bias"]]
+        off = -v.lever_m * math.sin(bias_rad)
+        if not lo - 1e-12 <= off <= hi + 1e-12:
+            lim = math.asin(min(abs(lo), abs(hi)) / v.lever_m)
+            raise ConfigError(f"tail bias = {bias_rad:.6g} rad: must be within +-{lim:.6g} rad")
+        self.data.ctrl[v.act["tail_bias"]] = off
+
+    def max_tail_bias_rad(self, vehicle: str | None = None) -> float:
+        """Largest tail bias the carriage allows, rad."""
+        v = self._v(vehicle)
+        lo, hi = self.model.ptr.actuator_ctrlrange[v.act["tail_bias"]]
+        return math.asin(min(abs(lo), abs(hi)) / v.lever_m)
+
+    def set_lateral_fins_rad(self, port_rad: float, starboard_rad: float,
+                             vehicle: str | None = None) -> None:
+        """Command the lateral-fin pitch angles (positive = leading edge up; together: lift for
+        depth and pitch; differentially: roll).
+
+        Args:
+            port_rad: port fin, rad.
+            starboard_rad: starboard fin, rad.
+            vehicle: vehicle name or None for the first.
+        """
+        v = self._v(vehicle)
+        self._set_ctrl(v, "fin_port", float(port_rad), "port fin angle", "rad")
+        self._set_ctrl(v, "fin_starboard", float(starboard_rad), "starboard fin angle", "rad")
+
+    def set_battery_position_m(self, position_m: float, vehicle: str | None = None) -> None:
+        """Command the battery position along the body x axis (positive forward: nose down), m."""
+        self._set_ctrl(self._v(vehicle), "battery", float(position_m), "battery position", "m")
+
+    def commands(self, vehicle: str | None = None) -> dict[str, float]:
+        """The current commands of a vehicle, in the setters' units."""
+        v = self._v(vehicle)
+        c = self.data.ctrl
+        return {
+            "tail_beat_frequency_hz": float(c[v.act["motor"]]) / (2.0 * math.pi),
+            "tail_bias_rad": -math.asin(float(c[v.act["tail_bias"]]) / v.lever_m),
+            "fin_port_rad": float(c[v.act["fin_port"]]),
+            "fin_starboard_rad": float(c[v.act["fin_starboard"]]),
+            "battery_position_m": float(c[v.act["battery"]]),
+        }
+
+    # ----------------------------------------------------------------------------------------
+    # initial state
+
+    def set_pose(self, position_world_m: ArrayLike, roll_pitch_heading_rad: ArrayLike = (0, 0, 0),
+                 velocity_world_m_s: ArrayLike = (0, 0, 0), vehicle: str | None = None) -> None:
+        """Place a vehicle (its joints keep their state).
+
+        Args:
+            position_world_m: reference point, shape (3,), m, world ENU.
+            roll_pitch_heading_rad: attitude, shape (3,), rad.
+            velocity_world_m_s: velocity over ground, shape (3,), m/s, world ENU.
+            vehicle: vehicle name or None for the first.
+        """
+        v = self._v(vehicle)
+        p = np.asarray(position_world_m, dtype=float)
+        a = np.asarray(roll_pitch_heading_rad, dtype=float)
+        u = np.asarray(velocity_world_m_s, dtype=float)
+        if p.shape != (3,) or a.shape != (3,) or u.shape != (3,) or not np.all(
+                np.isfinite(np.r_[p, a, u])):
+            raise ConfigError("set_pose: position, attitude and velocity must be 3 finite numbers "
+                              "each")
+        self.data.qpos[v.qpos_adr:v.qpos_adr + 3] = p
+        self.data.qpos[v.qpos_adr + 3:v.qpos_adr + 7] = frames.quat_wxyz_from_roll_pitch_heading(*a)
+        self.data.qvel[v.dof_adr:v.dof_adr + 3] = u
+        self.data.qvel[v.dof_adr + 3:v.dof_adr + 6] = 0.0
+        mujoco.mj_forward(self.model.ptr, self.data.ptr)
+        self._kinematics_stale = False
+
+    def reset_to_keyframe(self, name: str) -> None:
+        """Reset the simulation to a named keyframe (``home`` or ``trim`` of the plain scene).
+
+        Args:
+            name: keyframe name.
+        """
+        k = mujoco.mj_name2id(self.model.ptr, mujoco.mjtObj.mjOBJ_KEY, name)
+        if k < 0:
+            raise ConfigError(f"keyframe {name!r}: not in the model")
+        self.reset(keyframe_id=k)
+        self._kinematics_stale = False
+        self.reset_energy()
+
+    # ----------------------------------------------------------------------------------------
+    # current
+
+    def set_current(self, current: CurrentField | None) -> None:
+        """Use a current field (None: still water). It is evaluated at every vehicle at the start
+        of each control tick of :meth:`advance`, and now."""
+        self._current = current
+        self._apply_current()
+
+    @property
+    def current_field(self) -> CurrentField | None:
+        """The current field in use, or None."""
+        return self._current
+
+    def _apply_current(self) -> None:
+        m, d = self.model.ptr, self.data.ptr
+        vs = list(self._vehicles.values())
+        if self._current is None:
+            for v in vs:
+                v.current_world[:] = 0.0
+                v.correction[:] = 0.0
+            hydro.set_water_velocity(m, np.zeros(3))
+            self._apply_corrections()
+            return
+        t = float(d.time)
+        for v in vs:
+            v.current_world[:] = np.asarray(
+                self._current.velocity_world(t, self.position_world(v.name)), dtype=float)
+        ref = vs[0].current_world
+        hydro.set_water_velocity(m, ref)
+        # other vehicles in different water: correction = fluid force in their water minus the
+        # fluid force in the reference water, held for the tick (MuJoCo's wind is global)
+        for v in vs[1:]:
+            if np.array_equal(v.current_world, ref):
+                v.correction[:] = 0.0
+                continue
+            hydro.set_water_velocity(m, v.current_world)
+            mujoco.mj_fwdPosition(m, d)
+            mujoco.mj_fwdVelocity(m, d)
+            own = np.array(d.qfrc_fluid[v.dofs])
+            hydro.set_water_velocity(m, ref)
+            mujoco.mj_fwdVelocity(m, d)
+            v.correction[:] = own - d.qfrc_fluid[v.dofs]
+        self._apply_corrections()
+
+    def _apply_corrections(self) -> None:
+        for v in self._vehicles.values():
+            self.data.qfrc_applied[v.dofs] = v.correction
+
+    # ----------------------------------------------------------------------------------------
+    # stepping
+
+    def step(self, nstep: int = 1) -> None:
+        """Advance ``nstep`` physics steps with the current commands (no current update), keeping
+        the motor-energy accounts and checking the state.
+
+        Args:
+            nstep: number of steps.
+
+        Raises:
+            PhysicsError: on a MuJoCo warning, a non-finite state or a time that did not advance,
+                naming the simulation time of the first bad step.
+        """
+        m, d = self.model.ptr, self.data.ptr
+        mujoco.mj_getState(m, d, self._state_buf, mujoco.mjtState.mjSTATE_INTEGRATION)
+        warn0 = [int(w.number) for w in d.warning]
+        t0 = float(d.time)
+        dt = float(m.opt.timestep)
+        force, vel = d.actuator_force, d.actuator_velocity
+        acc = [(v.name, v.act["motor"]) for v in self._vehicles.values()]
+        energy = self._energy_j
+        step = mujoco.mj_step
+        for _ in range(int(nstep)):
+            step(m, d)
+            for name, i in acc:
+                energy[name] += force[i] * vel[i] * dt
+        self._energy_window_s += nstep * dt
+        self._kinematics_stale = True
+        if (any(int(w.number) != n0 for w, n0 in zip(d.warning, warn0, strict=True))
+                or not (np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all()
+                        and np.isfinite(d.act).all())
+                or not d.time > t0):
+            self._diagnose(t0, int(nstep), warn0)
+
+    def _diagnose(self, t0: float, nstep: int, warn0: list[int]) -> None:
+        """Replay the failed steps one by one from the saved state; raise at the first bad one."""
+        m, d = self.model.ptr, self.data.ptr
+        ctrl = np.array(d.ctrl)
+        mujoco.mj_setState(m, d, self._state_buf, mujoco.mjtState.mjSTATE_INTEGRATION)
+        d.ctrl[:] = ctrl
+        for w in d.warning:
+            w.number = 0
+        for k in range(nstep):
+            t_before = float(d.time)
+            mujoco.mj_step(m, d)
+            msgs = []
+            for i, w in enumerate(d.warning):
+                if w.number > 0:
+                    msgs.append(f"MuJoCo warning {_WARNING_NAMES.get(i, i)} "
+                                f"({_warning_detail(m, i, int(w.lastinfo))})")
+            if not np.isfinite(d.qpos).all() or not np.isfinite(d.qvel).all():
+                bad = np.flatnonzero(~np.isfinite(d.qvel))
+                msgs.append("non-finite state" + (f" at dof {_dof_name(m, int(bad[0]))}"
+                                                   if bad.size else ""))
+            if not d.time > t_before:
+                msgs.append(f"time did not advance (it is {d.time} s)")
+            if msgs:
+                raise PhysicsError(f"physics failed at t = {t_before + m.opt.timestep:.4f} s "
+                                   f"(step {k + 1} of {nstep} from t = {t0:.4f} s): "
+                                   + "; ".join(msgs))
+        raise PhysicsError(f"physics failed between t = {t0:.4f} s and "
+                           f"{t0 + nstep * m.opt.timestep:.4f} s, but not on replay "
+                           f"(warning counters before: {warn0})")
+
+    def advance(self, duration_s: float) -> None:
+        """Advance the simulation by whole control ticks, applying the current at every vehicle at
+        the start of each tick.
+
+        Args:
+            duration_s: time to simulate, s; a non-negative integer multiple of the control tick.
+
+        Raises:
+            ConfigError: if ``duration_s`` is not a whole number of ticks.
+            PhysicsError: as :meth:`step`.
+        """
+        n = round(duration_s / self._control_tick_s)
+        if n < 0 or abs(n * self._control_tick_s - duration_s) > 1e-9 * max(1.0, duration_s):
+            raise ConfigError(f"duration = {duration_s} s: must be a non-negative whole number of "
+                              f"control ticks of {self._control_tick_s} s")
+        for _ in range(n):
+            self._apply_current()
+            self.step(self._steps_per_tick)
+
+    def time_s(self) -> float:
+        """Simulation time, s."""
+        return float(self.data.time)
+
+
+def _dof_name(m: mujoco.MjModel, dof: int) -> str:
+    j = int(m.dof_jntid[dof])
+    return f"{dof} ({mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) or 'free joint'})"
+
+
+def _warning_detail(m: mujoco.MjModel, warning: int, info: int) -> str:
+    if warning in (int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQVEL),
+                   int(mujoco.mjtWarning.mjWARN_BADQPOS)) and 0 <= info < m.nv:
+        return f"dof {_dof_name(m, info)}"
+    return f"info {info}"
+
