@@ -769,6 +769,7 @@ class Paper001Replica(Experiment):
     """Seed 001 Tables 1-3 in the kinematic world."""
 
     scenario_type: ClassVar[type[Config]] = Paper001Scenario
+    metrics_type: ClassVar[type[BaseModel] | None] = Paper001Metrics
 
     def block_size(self, scenario: Config) -> int:
         assert isinstance(scenario, Paper001Scenario)
