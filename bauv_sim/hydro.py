@@ -721,13 +721,20 @@ class SpeedTable:
         u = np.concatenate([[0.0], self.speed_m_s])
         return np.interp(np.asarray(frequency_hz, dtype=float), f, u)
 
+    @property
+    def max_speed_m_s(self) -> float:
+        """Largest steady speed in the table, m/s."""
+        return float(np.max(self.speed_m_s))
+
     def frequency_for(self, speed_m_s: ArrayLike) -> NDArray[np.float64]:
         """Tail-beat frequency (Hz) that gives a steady speed through water (m/s): the inverse of
-        :meth:`speed_at` (speeds beyond the table are clamped to its last row)."""
-        f = np.concatenate([[0.0], self.frequency_hz])
-        u = np.concatenate([[0.0], self.speed_m_s])
+        :meth:`speed_at` on the rows up to the fastest one (beyond it a higher frequency no longer
+        makes the vehicle faster); larger speeds are clamped to that row."""
+        k = int(np.argmax(self.speed_m_s)) + 1
+        f = np.concatenate([[0.0], self.frequency_hz[:k]])
+        u = np.concatenate([[0.0], self.speed_m_s[:k]])
         if np.any(np.diff(u) <= 0):
-            raise ConfigError("speed table: speed must increase with frequency to be inverted")
+            raise ConfigError("speed table: speed must increase with frequency up to its maximum")
         return np.interp(np.asarray(speed_m_s, dtype=float), u, f)
 
 

@@ -148,7 +148,7 @@ def straight_swim(physics: BauvPhysics, frequency_hz: float, settle_s: float = 3
     sub = max(1, int(steps_per_beat // max(20, samples_per_beat)))
     n_steps = round(beats * steps_per_beat)
     n_steps -= n_steps % sub
-    physics.reset_energy()
+    physics.set_energy_tracking(True)
     t0 = physics.time_s()
     p0 = physics.position_world()
     ground = np.zeros(3)
@@ -178,7 +178,7 @@ def straight_swim(physics: BauvPhysics, frequency_hz: float, settle_s: float = 3
     amp = _tip_amplitude(np.asarray(tips), np.asarray(hulls), through, beats)
     head = np.unwrap(np.asarray(heads))
     yaw = float(np.mean(np.ptp(head[: (head.size // beats) * beats].reshape(beats, -1), axis=1)))
-    return StraightSwimResult(
+    result = StraightSwimResult(
         frequency_hz=frequency_hz, speed_through_water_m_s=u_tw,
         speed_over_ground_m_s=float(np.linalg.norm(ground)),
         mean_motor_power_w=physics.mean_motor_power_w(),
@@ -186,6 +186,8 @@ def straight_swim(physics: BauvPhysics, frequency_hz: float, settle_s: float = 3
         tail_tip_amplitude_m=amp, strouhal=frequency_hz * amp / u_tw if u_tw > 0 else math.inf,
         mean_pitch_rad=float(np.mean(pitches)), mean_fin_rad=float(np.mean(fins)),
         yaw_amplitude_rad=yaw, depth_change_m=float(-(p1[2] - p0[2])), window_s=window)
+    physics.set_energy_tracking(False)
+    return result
 
 
 def _tip_amplitude(tips: NDArray[np.float64], hulls: NDArray[np.float64],
@@ -563,11 +565,13 @@ class CurrentSwimResult:
 
 def swim_in_current(make_physics, field: currents.CurrentField, frequency_hz: float,
                     settle_s: float = 30.0, measure_s: float = 30.0) -> CurrentSwimResult:
-    """Swim with a fixed tail-beat frequency and fixed depth-hold fins, once in still water and
-    once in a current, from the same start; compare velocities over the same window.
+    """Swim with a fixed tail-beat frequency and level fins, once in still water and once in a
+    current, from the same state relative to the water (in the current the vehicle starts moving
+    with the water at its start point); compare velocities over the same window.
 
-    The velocity through water must not depend on the current (the fluid forces see only the
-    velocity relative to the water), so ground velocity = still-water velocity + current.
+    The fluid forces see only the velocity relative to the water, so in a uniform current the
+    motion relative to the water is the same and ground velocity = still-water velocity + current;
+    in a spatially varying current this holds as far as the current is uniform along the path.
 
     Args:
         make_physics: callable returning a fresh physics in the starting state.
@@ -582,6 +586,9 @@ def swim_in_current(make_physics, field: currents.CurrentField, frequency_hz: fl
     results = []
     for fld in (None, field):
         phys = make_physics()
+        phys.set_current(fld)
+        phys.set_pose(phys.position_world(), phys.roll_pitch_heading(),
+                      phys.velocity_world() + phys.current_at_vehicle_world())
         phys.set_current(fld)
         phys.set_tail_beat_frequency_hz(frequency_hz)
         tick = phys.control_tick_s

@@ -1,0 +1,81 @@
+"""Short versions of the acceptance experiments (the full ones: ``tasks/vehicle_checks.py``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bauv_sim import currents, hull, manoeuvres
+
+
+def test_cruise_speed_power_and_strouhal():
+    phys = manoeuvres.open_water_scene(speed_m_s=1.0)
+    r = manoeuvres.straight_swim(phys, 1.2, settle_s=15.0, measure_s=6.0)
+    assert 0.9 <= r.speed_through_water_m_s <= 1.15
+    assert 0.0 < r.mean_motor_power_w <= 250.0
+    assert 0.2 <= r.strouhal <= 0.5
+    # the caudal tip swings at least as far as segment 1's end does by the crank alone
+    seg1_tip = 2 * (hull.HULL.hinge_x_m - hull.HULL.end_x_m) * math.sin(phys.tail_amplitude_rad())
+    assert r.tail_tip_amplitude_m > 0.8 * seg1_tip
+    assert r.window_s == pytest.approx(round(6.0 * 1.2) / 1.2, abs=0.01)
+
+
+def test_tail_bias_turns_the_way_it_says():
+    for bias, sign in [(math.radians(15.0), 1.0), (math.radians(-15.0), -1.0)]:
+        phys = manoeuvres.open_water_scene(speed_m_s=1.0)
+        r = manoeuvres.heading_change(phys, 1.2, bias, approach_s=5.0, turn_s=20.0)
+        # positive bias (tail to port) turns to starboard: heading increases (clockwise)
+        assert sign * r.turn_rate_rad_s > 0.1
+        assert 2.0 < r.turning_radius_m < 15.0
+        # a steady turn: radius = speed / rate
+        assert r.turning_radius_m == pytest.approx(r.speed_through_water_m_s
+                                                   / abs(r.turn_rate_rad_s), rel=0.1)
+
+
+def test_fins_change_depth_the_way_they_say():
+    up = manoeuvres.depth_change(manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, 0.2,
+                                 approach_s=5.0, step_s=10.0)
+    down = manoeuvres.depth_change(manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, -0.2,
+                                   approach_s=5.0, step_s=10.0)
+    assert up.depth_rate_m_s < -0.03 and down.depth_rate_m_s > 0.03
+
+
+def test_idle_vehicle_hovers_and_rights_itself():
+    phys = manoeuvres.open_water_scene()
+    z0 = phys.depth_m()
+    phys.advance(30.0)
+    assert abs(phys.depth_m() - z0) / 0.5 < 0.1  # m/min
+    r = manoeuvres.roll_recovery(manoeuvres.open_water_scene(), math.radians(20.0), 6.0)
+    assert r.settle_time_s < 5.0
+    assert r.period_s == pytest.approx(0.9, abs=0.2)
+
+
+def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
+    """Galilean invariance: the idle vehicle released at rest in a current c moves, relative to the
+    water, exactly as the same vehicle coasting in still water from velocity -c."""
+    c = currents.UniformCurrent(0.5, math.radians(20.0))
+    cw = c.velocity_world(0.0, np.zeros(3))
+    drift = manoeuvres.open_water_scene()
+    drift.set_current(c)
+    coast = manoeuvres.open_water_scene()
+    coast.set_pose(coast.position_world(), coast.roll_pitch_heading(), -cw)
+    for _ in range(50):
+        drift.advance(0.1)
+        coast.advance(0.1)
+    assert np.allclose(drift.velocity_world() - cw, coast.velocity_world(), atol=1e-9)
+    assert np.allclose(drift.position_world() - 5.0 * cw, coast.position_world(), atol=1e-9)
+    # and the relative speed decays as quadratic drag says: dv = dv0 / (1 + k dv0 t)
+    k = manoeuvres.tow_test(manoeuvres.open_water_scene(), [0.5], 1.0)[0].drag_n / 0.25
+    k /= float(drift.model.body_subtreemass[1])
+    expected = 0.5 / (1.0 + k * 0.5 * 5.0)
+    assert np.linalg.norm(coast.velocity_world()) == pytest.approx(expected, rel=0.05)
+
+
+def test_swimming_in_a_current_adds_the_current():
+    field = currents.UniformCurrent(0.4, math.radians(200.0))
+    r = manoeuvres.swim_in_current(lambda: manoeuvres.open_water_scene(heading_deg=90.0), field,
+                                   1.2, settle_s=5.0, measure_s=5.0)
+    assert r.relative_error < 1e-9
+    assert np.allclose(r.mean_current_m_s, field.velocity_world(0.0, np.zeros(3)))

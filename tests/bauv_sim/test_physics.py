@@ -1,0 +1,284 @@
+"""The physics facade: accessors against frames and finite differences, actuation, the drive's
+kinematics, errors, currents, several vehicles, determinism, dm_control compatibility."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from bauv_sim import build, currents, frames
+from bauv_sim.errors import ConfigError, PhysicsError
+from bauv_sim.physics import SENSOR_SITES, BauvPhysics
+
+
+@pytest.fixture
+def phys() -> BauvPhysics:
+    return BauvPhysics.from_scene_xml()
+
+
+def test_pose_round_trip_through_the_accessors(phys):
+    pos = np.array([12.0, -3.5, -4.25])
+    rph = np.array([0.2, -0.15, 4.0])
+    vel = np.array([0.3, -0.2, 0.05])
+    phys.set_pose(pos, rph, vel)
+    assert np.allclose(phys.position_world(), pos)
+    assert np.allclose(phys.roll_pitch_heading(), rph, atol=1e-12)
+    assert phys.heading_rad() == pytest.approx(4.0)
+    assert phys.depth_m() == pytest.approx(4.25)
+    assert np.allclose(phys.velocity_world(), vel)
+    R = frames.R_from_roll_pitch_heading(*rph)
+    assert np.allclose(phys.R_world_from_body(), R, atol=1e-12)
+    assert np.allclose(phys.velocity_body(), R.T @ vel)
+    assert np.allclose(frames.R_from_quat_wxyz(phys.quat_wxyz()), R, atol=1e-12)
+
+
+def test_velocities_match_finite_differences(phys):
+    phys.set_pose([0, 0, -3], [0.1, 0.05, 1.0], [0.4, 0.3, -0.1])
+    phys.data.qvel[3:6] = [0.2, -0.3, 0.5]  # test-only write: a spinning start
+    mujoco.mj_forward(phys.model.ptr, phys.data.ptr)
+    p0, R0 = phys.position_world(), phys.R_world_from_body()
+    v0, w0 = phys.velocity_world(), phys.angular_velocity_body()
+    phys.step(1)
+    dt = phys.timestep()
+    p1, R1 = phys.position_world(), phys.R_world_from_body()
+    assert np.allclose((p1 - p0) / dt, v0, atol=0.01)
+    # body angular velocity: R0^T dR/dt is the skew matrix of w_body
+    W = R0.T @ (R1 - R0) / dt
+    w_fd = np.array([W[2, 1], W[0, 2], W[1, 0]])
+    assert np.allclose(w_fd, w0, atol=0.02)
+    assert np.allclose(phys.angular_velocity_world(), R1 @ phys.angular_velocity_body(),
+                       atol=1e-12)
+
+
+def test_sensor_sites_move_rigidly_with_the_hull(phys):
+    phys.set_pose([0, 0, 0], [0, 0, math.pi / 2])  # body axes = world axes (heading east)
+    offsets = {n: phys.site_position_world(n) for n in SENSOR_SITES if n != "caudal_tip"}
+    pos = np.array([5.0, 7.0, -9.0])
+    rph = np.array([0.3, -0.2, 0.7])
+    phys.set_pose(pos, rph)
+    R = frames.R_from_roll_pitch_heading(*rph)
+    for name, off in offsets.items():
+        assert np.allclose(phys.site_position_world(name), pos + R @ off, atol=1e-9), name
+    # the GPS antenna is the highest point, the sonar looks down, the USBL transponder on top
+    assert offsets["gps_antenna"][2] == max(o[2] for o in offsets.values())
+    assert np.allclose(phys.site_axis_world("echo_down"), R @ [0, 0, -1], atol=1e-9)
+    with pytest.raises(ConfigError):
+        phys.site_position_world("nonexistent")
+
+
+def test_control_tick_must_be_a_multiple_of_the_timestep(phys):
+    assert phys.steps_per_tick == 50
+    with pytest.raises(ConfigError):
+        phys.set_control_tick(0.003)
+    with pytest.raises(ConfigError):
+        phys.advance(0.15)
+    phys.set_control_tick(0.02)
+    phys.advance(0.06)
+    assert phys.time_s() == pytest.approx(0.06)
+
+
+def test_actuation_ranges_are_checked(phys):
+    with pytest.raises(ConfigError):
+        phys.set_tail_beat_frequency_hz(3.5)
+    with pytest.raises(ConfigError):
+        phys.set_tail_beat_frequency_hz(-0.1)
+    with pytest.raises(ConfigError):
+        phys.set_lateral_fins_rad(0.7, 0.0)
+    with pytest.raises(ConfigError):
+        phys.set_battery_position_m(0.2)
+    with pytest.raises(ConfigError):
+        phys.set_tail_bias_rad(phys.max_tail_bias_rad() + 0.01)
+    phys.set_tail_bias_rad(0.2)
+    phys.set_lateral_fins_rad(0.1, -0.1)
+    phys.set_battery_position_m(0.02)
+    phys.set_tail_beat_frequency_hz(1.5)
+    c = phys.commands()
+    assert c["tail_bias_rad"] == pytest.approx(0.2)
+    assert c["tail_beat_frequency_hz"] == pytest.approx(1.5)
+    assert (c["fin_port_rad"], c["fin_starboard_rad"]) == (0.1, -0.1)
+
+
+def test_tail_beat_frequency_is_the_motor_speed_and_the_amplitude_is_the_cranks():
+    phys = BauvPhysics.from_scene_xml()
+    f = 1.5
+    phys.set_tail_beat_frequency_hz(f)
+    phys.advance(4.0)
+    dt = phys.timestep()
+    n = round(4.0 / f / dt)  # four whole beats
+    c0 = phys.crank_angle_rad()
+    tail = []
+    for _ in range(n):
+        phys.step(1)
+        tail.append(phys.tail_angles_rad()[0])
+    # mean crank speed over whole beats: exactly 2 pi f (integrated-velocity servo)
+    assert (phys.crank_angle_rad() - c0) / (n * dt) == pytest.approx(2 * math.pi * f, rel=1e-3)
+    tail = np.array(tail)
+    crossings = np.flatnonzero(np.sign(tail[1:]) != np.sign(tail[:-1]))
+    assert len(crossings) == 8  # two per beat
+    # segment-1 amplitude = asin(crank / lever) (the finite rod adds a small second harmonic)
+    assert 0.5 * np.ptp(tail) == pytest.approx(phys.tail_amplitude_rad(), rel=0.03)
+    assert phys.tail_amplitude_rad() == pytest.approx(math.asin(0.012 / 0.045), rel=1e-9)
+
+
+def test_tail_bias_shifts_the_mean_tail_angle():
+    phys = BauvPhysics.from_scene_xml()
+    phys.set_tail_beat_frequency_hz(1.0)
+    phys.set_tail_bias_rad(math.radians(12.0))
+    phys.advance(3.0)
+    tail = []
+    for _ in range(500):  # one beat
+        phys.step(1)
+        tail.append(phys.tail_angles_rad()[0])
+    # the carriage's lead screw yields 0.1 mm under the rod load: bias within 0.2 deg
+    assert phys.tail_bias_rad() == pytest.approx(math.radians(12.0), abs=math.radians(0.2))
+    assert np.mean(tail) == pytest.approx(math.radians(12.0), abs=math.radians(1.5))
+
+
+def test_motor_power_is_torque_times_speed_and_energy_is_its_sum():
+    phys = BauvPhysics.from_scene_xml()
+    phys.set_tail_beat_frequency_hz(1.2)
+    phys.advance(2.0)
+    with pytest.raises(ConfigError, match="not tracked"):
+        phys.mean_motor_power_w()
+    phys.set_energy_tracking(True)
+    e = 0.0
+    for _ in range(400):
+        speed_before = phys.motor_speed_rad_s()
+        phys.step(1)
+        # torque and speed of the step are those at its start (MuJoCo's forward pass)
+        assert phys.motor_power_w() == pytest.approx(phys.motor_torque_nm() * speed_before)
+        e += phys.motor_power_w() * phys.timestep()
+    assert phys.motor_energy_j() == pytest.approx(e, rel=1e-9)
+    assert phys.mean_motor_power_w() == pytest.approx(e / 0.8, rel=1e-9)
+    assert phys.mean_motor_power_w() > 0
+
+
+def test_divergence_raises_with_time_and_cause(phys):
+    phys.advance(0.2)
+    phys.data.ctrl[:] = np.nan  # test-only write: what a broken controller would send
+    with pytest.raises(PhysicsError, match=r"t = 0\.2020 s .*mjWARN_BADCTRL"):
+        phys.step(10)
+    phys2 = BauvPhysics.from_scene_xml()
+    phys2.data.qvel[7] = 1e12  # test-only write: an absurd joint speed
+    with pytest.raises(PhysicsError, match=r"t = 0\.0020 s"):
+        phys2.advance(0.1)
+
+
+def test_model_without_disabled_autoreset_is_refused():
+    from bauv_sim.hull import MODEL_DIR
+
+    spec = mujoco.MjSpec.from_file(str(MODEL_DIR / "scene.xml"))
+    spec.option.disableflags = 0
+    with pytest.raises(ConfigError, match="autoreset"):
+        BauvPhysics.from_model(_wrap(spec.compile()))
+
+
+def _wrap(m: mujoco.MjModel):
+    from dm_control.mujoco.wrapper import MjModel
+
+    return MjModel(m)
+
+
+def test_current_is_applied_and_velocity_through_water_is_ground_minus_current(phys):
+    field = currents.UniformCurrent(0.5, math.radians(30))
+    phys.set_current(field)
+    cur = field.velocity_world(0.0, np.zeros(3))
+    assert np.allclose(phys.current_at_vehicle_world(), cur)
+    assert np.allclose(phys.model.opt.wind, cur)
+    phys.set_pose([0, 0, -3], [0, 0, 0], cur)  # moving with the water
+    phys.advance(1.0)
+    assert np.allclose(phys.velocity_world(), cur, atol=1e-6)
+    assert np.allclose(phys.velocity_through_water_world(),
+                       phys.velocity_world() - phys.current_at_vehicle_world())
+    assert phys.truth().current_world_m_s == pytest.approx(cur)
+
+
+def test_each_vehicle_feels_the_current_at_its_own_position():
+    """Two vehicles in a gyre: the fluid force on each equals the force on a lone vehicle in the
+    same state whose water has that vehicle's current (the per-vehicle correction is exact at the
+    tick start)."""
+    gyre = currents.GyreCurrent((0.0, 0.0), 50.0, 0.4)
+    cfg = build.SceneConfig(vehicles=(
+        build.VehicleSpec(name="a", east_m=60.0, depth_m=3.0),
+        build.VehicleSpec(name="b", east_m=-40.0, north_m=10.0, depth_m=3.0, heading_deg=40.0,
+                          speed_m_s=0.8)))
+    two = build.build_physics(cfg)
+    two.set_current(gyre)
+    ca, cb = two.current_at_vehicle_world("a"), two.current_at_vehicle_world("b")
+    assert not np.allclose(ca, cb)
+    mujoco.mj_forward(two.model.ptr, two.data.ptr)
+    v = two._vehicles["b"]
+    total_b = (two.data.qfrc_fluid + two.data.qfrc_applied)[v.dof_adr:v.dof_adr + 3]
+    lone = BauvPhysics.from_scene_xml()
+    lone.set_current(currents.UniformCurrent(float(np.hypot(*cb[:2])),
+                                             math.atan2(cb[0], cb[1])))
+    lone.set_pose([-40.0, 10.0, -3.0], [0.0, 0.0, math.radians(40.0)],
+                  two.velocity_world("b"))
+    assert np.allclose(lone.fluid_force_world(), total_b, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("energy", [False, True])
+def test_same_commands_give_bit_identical_trajectories(energy):
+    """Also: stepping one step at a time (energy accounts on) or in MuJoCo's loop gives the same
+    bits."""
+
+    def run(track: bool) -> np.ndarray:
+        p = BauvPhysics.from_scene_xml()
+        p.set_energy_tracking(track)
+        p.set_current(currents.make_current(
+            currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
+            np.random.default_rng(7)))
+        rows = []
+        for k in range(30):
+            p.set_tail_beat_frequency_hz(0.5 + 0.05 * k)
+            p.set_tail_bias_rad(0.2 * math.sin(k))
+            p.set_lateral_fins_rad(0.1 * math.cos(k), -0.05)
+            p.advance(0.1)
+            rows.append(np.r_[p.data.qpos, p.data.qvel])
+        return np.array(rows)
+
+    assert np.array_equal(run(energy), run(energy))
+    assert np.array_equal(run(energy), run(not energy))
+
+
+def test_dm_control_environment_steps_the_facade():
+    from dm_control.rl import control
+    from dm_env import specs
+
+    class Swim(control.Task):
+        def initialize_episode(self, physics):
+            physics.reset_to_keyframe("trim")
+
+        def before_step(self, action, physics):
+            physics.set_tail_beat_frequency_hz(float(action[0]))
+
+        def action_spec(self, physics):
+            return specs.BoundedArray((1,), float, [0.0], [3.0])
+
+        def get_observation(self, physics):
+            return {"position": physics.position_world()}
+
+        def get_reward(self, physics):
+            return 0.0
+
+    phys = BauvPhysics.from_scene_xml()
+    env = control.Environment(phys, Swim(), n_sub_steps=phys.steps_per_tick)
+    env.reset()
+    for _ in range(5):
+        ts = env.step(np.array([1.2]))
+    assert phys.time_s() == pytest.approx(0.5)
+    assert ts.observation["position"][0] > 0.4  # started at 1 m/s heading east
+
+
+def test_keyframes(phys):
+    phys.reset_to_keyframe("home")
+    assert np.allclose(phys.position_world(), [0, 0, -3])
+    assert np.allclose(phys.velocity_world(), 0)
+    phys.reset_to_keyframe("trim")
+    assert phys.velocity_world()[0] == pytest.approx(1.0, abs=0.05)
+    assert phys.commands()["tail_beat_frequency_hz"] > 0.5
+    with pytest.raises(ConfigError):
+        phys.reset_to_keyframe("nope")
