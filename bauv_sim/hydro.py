@@ -594,24 +594,24 @@ class Hydrostatics:
         return float(self.bg_world_m[2])
 
 
-def hydrostatics(model: mujoco.MjModel, data: mujoco.MjData, root_body: int) -> Hydrostatics:
-    """Weight and buoyancy of the subtree of ``root_body`` from body masses and gravcomp.
-
-    Needs current kinematics (``data.xipos``): call after ``mj_forward`` or ``mj_kinematics``.
+def hydrostatics(mass_kg: ArrayLike, gravcomp: ArrayLike, com_world_m: ArrayLike,
+                 gravity_m_s2: float) -> Hydrostatics:
+    """Weight and buoyancy of a set of bodies from their masses, gravity compensations and centres
+    of mass (MuJoCo applies ``gravcomp * m * g`` upwards at each body's centre of mass).
 
     Args:
-        model: compiled model.
-        data: data with kinematics computed.
-        root_body: id of the vehicle's root body.
+        mass_kg: body masses, shape (n,), kg.
+        gravcomp: their ``gravcomp`` factors, shape (n,).
+        com_world_m: their centres of mass, shape (n, 3), m, world frame.
+        gravity_m_s2: magnitude of gravity, m/s^2.
 
     Returns:
-        The vehicle's :class:`Hydrostatics`.
+        The :class:`Hydrostatics` of the set.
     """
-    ids = subtree_bodies(model, root_body)
-    g = float(np.linalg.norm(model.opt.gravity))
-    m = model.body_mass[ids]
-    gc = model.body_gravcomp[ids]
-    r = data.xipos[ids]
+    m = np.asarray(mass_kg, dtype=float)
+    gc = np.asarray(gravcomp, dtype=float)
+    r = np.asarray(com_world_m, dtype=float)
+    g = float(gravity_m_s2)
     weight = float(m.sum()) * g
     buoy = float((gc * m).sum()) * g
     cg = (m[:, None] * r).sum(axis=0) / m.sum()

@@ -272,7 +272,7 @@ def tow_test(physics: BauvPhysics, speeds_m_s: list[float], reference_area_m2: f
     Returns:
         One :class:`TowPoint` per speed.
     """
-    rho = float(physics.model.opt.density)
+    rho = physics.water_density_kg_m3()
     out = []
     physics.reset()
     physics.set_current(currents.UniformCurrent(current_m_s, 0.0) if current_m_s else None)

@@ -330,6 +330,32 @@ class BauvPhysics(mjcf.Physics):
         self._ensure_kinematics()
         return np.array(self.data.site_xmat[v.sites[name]].reshape(3, 3)[:, 2])
 
+    def scene_site_world(self, name: str) -> NDArray[np.float64]:
+        """Position of a site of the scene (not of a vehicle), e.g. ``"usbl_transceiver"`` or
+        ``"beacon_0"``, shape (3,), m, world ENU."""
+        i = mujoco.mj_name2id(self.model.ptr, mujoco.mjtObj.mjOBJ_SITE, name)
+        if i < 0:
+            raise ConfigError(f"site {name!r}: not in the scene")
+        self._ensure_kinematics()
+        return np.array(self.data.site_xpos[i])
+
+    def transceiver_world(self) -> NDArray[np.float64]:
+        """Position of the USBL transceiver on the seabed (site ``usbl_transceiver``), shape (3,),
+        m, world ENU."""
+        return self.scene_site_world("usbl_transceiver")
+
+    def beacons_world(self) -> dict[str, NDArray[np.float64]]:
+        """Positions of the acoustic beacons (scene sites ``beacon_*``) by name, each shape (3,),
+        m, world ENU."""
+        m = self.model.ptr
+        names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, i) or "" for i in range(m.nsite)]
+        return {n: self.scene_site_world(n) for n in names if n.startswith("beacon_")}
+
+    def inject_fault(self) -> None:
+        """Corrupt the simulation on purpose (a NaN motor command), so that the next step raises
+        :class:`~bauv_sim.errors.PhysicsError`: for tests of a mission's error handling."""
+        self.data.ctrl[self._v(None).act["motor"]] = np.nan
+
     def _ensure_kinematics(self) -> None:
         if self._kinematics_stale:
             mujoco.mj_kinematics(self.model.ptr, self.data.ptr)
@@ -351,7 +377,26 @@ class BauvPhysics(mjcf.Physics):
         """Weight, buoyancy, centres and BG of a vehicle now (see :func:`hydro.hydrostatics`)."""
         v = self._v(vehicle)
         self._ensure_kinematics()
-        return hydro.hydrostatics(self.model.ptr, self.data.ptr, int(v.bodies[0]))
+        m = self.model.ptr
+        return hydro.hydrostatics(m.body_mass[v.bodies], m.body_gravcomp[v.bodies],
+                                  self.data.xipos[v.bodies], float(np.linalg.norm(m.opt.gravity)))
+
+    def mass_kg(self, vehicle: str | None = None) -> float:
+        """Total mass of a vehicle (all its bodies), kg."""
+        return float(self.model.ptr.body_mass[self._v(vehicle).bodies].sum())
+
+    def water_density_kg_m3(self) -> float:
+        """Density of the water (MuJoCo ``option density``), kg/m^3."""
+        return float(self.model.ptr.opt.density)
+
+    def gravity_m_s2(self) -> float:
+        """Magnitude of gravity, m/s^2."""
+        return float(np.linalg.norm(self.model.ptr.opt.gravity))
+
+    def warning_count(self) -> int:
+        """Number of MuJoCo warnings raised so far (any would also have raised PhysicsError in
+        :meth:`step`)."""
+        return int(self.data.ptr.warning.number.sum())
 
     def fluid_force_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Total fluid force on the vehicle (MuJoCo ``qfrc_fluid`` on the free joint's translation),
@@ -583,14 +628,23 @@ class BauvPhysics(mjcf.Physics):
         """Use a current field (None: still water). It is evaluated at every vehicle at the start
         of each control tick of :meth:`advance`, and now."""
         self._current = current
-        self._apply_current()
+        self.apply_current()
 
     @property
     def current_field(self) -> CurrentField | None:
         """The current field in use, or None."""
         return self._current
 
-    def _apply_current(self) -> None:
+    def apply_current(self) -> None:
+        """Evaluate the current field at every vehicle now and apply it until the next call.
+
+        :meth:`advance` calls this at the start of every control tick; a ``dm_control`` task that
+        steps the physics through ``control.Environment`` calls it in ``before_step``. The first
+        vehicle's water velocity becomes MuJoCo's ``option wind``; every other vehicle whose water
+        differs gets the difference of the fluid forces in its own water and in the first
+        vehicle's, computed now and held as an applied force (``qfrc_applied``) until the next
+        call.
+        """
         m, d = self.model.ptr, self.data.ptr
         vs = list(self._vehicles.values())
         if self._current is None:
@@ -709,7 +763,7 @@ class BauvPhysics(mjcf.Physics):
             raise ConfigError(f"duration = {duration_s} s: must be a non-negative whole number of "
                               f"control ticks of {self._control_tick_s} s")
         for _ in range(n):
-            self._apply_current()
+            self.apply_current()
             self.step(self._steps_per_tick)
 
     def time_s(self) -> float:

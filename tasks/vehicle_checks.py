@@ -155,7 +155,7 @@ def check_ten_minute_swim(seed: int = 3, duration_s: float = 600.0,
             pitches.append(abs(pt))
             if phys.time_s() > 15.0:
                 late.append(abs(pt))
-    warnings = int(sum(w.number for w in phys.data.ptr.warning))
+    warnings = phys.warning_count()
     return LongSwimResult(phys.time_s(), len(cmds), dist, min(depths), max(depths), max(speeds),
                           math.degrees(max(rolls)), math.degrees(max(pitches)),
                           math.degrees(max(late)), warnings,
@@ -191,7 +191,7 @@ def check_buoyancy(idle_s: float = 300.0) -> BuoyancyResult:
     hs = phys.hydrostatics()
     dorsal = hull.dorsal_fin_mesh().volume
     v_mesh = float(hull_mesh(HULL).volume + dorsal)
-    g = float(np.linalg.norm(phys.model.opt.gravity))
+    g = phys.gravity_m_s2()
     # the self-neutral parts (tail, lateral fins) carry their own displacement: count it too
     ped = hull.peduncle_mesh(HULL).volume
     fin = hull.caudal_fin_mesh(hull.TAIL).volume
@@ -322,7 +322,7 @@ def check_current(frequency_hz: float | None = None, long_s: float = 1500.0) -> 
     # relative speed decays as dv/dt = -k dv^2 with k = D(1 m/s) / m (quadratic drag, no added
     # mass in MuJoCo): dv(t) = dv0 / (1 + k dv0 t)
     phys = _scene()
-    mass = float(phys.model.body_subtreemass[1])
+    mass = phys.mass_kg()
     k = manoeuvres.tow_test(_scene(), [1.0], 1.0)[0].drag_n / mass
     expected = 1.0 / (1.0 + k * 0.5 * 120.0)
     # time until the drift is within 3 %

@@ -64,10 +64,8 @@ def test_centre_of_buoyancy_is_the_mesh_centroid(model):
         SEAWATER_DENSITY_KG_M3 * v, rel=1e-7)
 
 
-def test_vehicle_is_level_and_self_righting(model):
-    d = mujoco.MjData(model)
-    mujoco.mj_forward(model, d)
-    hs = hydro.hydrostatics(model, d, 1)
+def test_vehicle_is_level_and_self_righting():
+    hs = BauvPhysics.from_scene_xml().hydrostatics()
     assert abs(hs.net_up_n) < 1e-4
     assert abs(hs.bg_world_m[0]) < 1e-5 and abs(hs.bg_world_m[1]) < 1e-5  # CG under CB
     assert 0.03 < hs.metacentric_height_m() < 0.07
@@ -96,10 +94,9 @@ def test_fluid_coefficients_in_the_model_are_the_derived_ones():
 
 
 def test_crossflow_damper_reproduces_the_strip_theory_constants(model):
-    d = mujoco.MjData(model)
-    mujoco.mj_forward(model, d)
-    hs = hydro.hydrostatics(model, d, 1)
-    k = hydro.crossflow_damping_constants(hs.cg_world_m - d.xpos[1])
+    phys = BauvPhysics.from_scene_xml()
+    hs = phys.hydrostatics()
+    k = hydro.crossflow_damping_constants(hs.cg_world_m - phys.position_world())
     g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "crossflow_damper")
     size = model.geom_size[g]
     assert np.allclose(size, hydro.damper_semi_axes(k), rtol=1e-3)

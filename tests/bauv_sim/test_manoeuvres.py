@@ -68,7 +68,7 @@ def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
     assert np.allclose(drift.position_world() - 5.0 * cw, coast.position_world(), atol=1e-9)
     # and the relative speed decays as quadratic drag says: dv = dv0 / (1 + k dv0 t)
     k = manoeuvres.tow_test(manoeuvres.open_water_scene(), [0.5], 1.0)[0].drag_n / 0.25
-    k /= float(drift.model.body_subtreemass[1])
+    k /= drift.mass_kg()
     expected = 0.5 / (1.0 + k * 0.5 * 5.0)
     assert np.linalg.norm(coast.velocity_world()) == pytest.approx(expected, rel=0.05)
 

@@ -167,6 +167,28 @@ def test_divergence_raises_with_time_and_cause(phys):
         phys2.advance(0.1)
 
 
+def test_scene_sites_and_injected_fault(phys):
+    assert np.allclose(phys.transceiver_world(), [0.0, 0.0, -6.0], atol=1e-6)
+    beacons = phys.beacons_world()
+    assert sorted(beacons) == ["beacon_0", "beacon_1", "beacon_2", "beacon_3"]
+    assert np.allclose(beacons["beacon_1"][:2], [-300.0, 300.0])
+    phys.advance(0.1)
+    phys.inject_fault()
+    with pytest.raises(PhysicsError, match=r"t = 0\.1020 s"):
+        phys.advance(0.1)
+
+
+def test_apply_current_for_an_environment_that_steps_by_itself(phys):
+    phys.set_current(currents.GyreCurrent((0.0, 0.0), 10.0, 0.3))
+    phys.set_pose([10.0, 0.0, -3.0])
+    first = phys.current_at_vehicle_world()
+    phys.set_pose([0.0, 10.0, -3.0])
+    phys.step(5)
+    assert np.allclose(phys.current_at_vehicle_world(), first)  # held until applied again
+    phys.apply_current()
+    assert np.allclose(phys.current_at_vehicle_world(), [0.3, 0.0, 0.0], atol=1e-12)
+
+
 def test_model_without_disabled_autoreset_is_refused():
     from bauv_sim.hull import MODEL_DIR
 
