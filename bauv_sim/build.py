@@ -19,14 +19,13 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from dm_control import mjcf
 from pydantic import Field, field_validator, model_validator
 
 from bauv_sim import seabed as sb
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError, GeometryError
 from bauv_sim.hull import MODEL_DIR
-from bauv_sim.physics import DEFAULT_CONTROL_TICK_S, BauvPhysics
+from bauv_sim.physics import DEFAULT_CONTROL_TICK_S, BauvPhysics, mjcf
 
 VEHICLE_XML = MODEL_DIR / "bauv.xml"
 """The vehicle model file."""

@@ -21,13 +21,19 @@ with the simulation time of the step where it happened (auto-reset is disabled i
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
 import numpy as np
-from dm_control import mjcf
 from numpy.typing import ArrayLike, NDArray
+
+with warnings.catch_warnings():
+    # dm_control tries GLFW at import; without a display it warns on stderr, although nothing
+    # here renders through it (offscreen rendering: MUJOCO_GL=egl or osmesa)
+    warnings.filterwarnings("ignore", message=".*DISPLAY environment variable is missing.*")
+    from dm_control import mjcf
 
 from bauv_sim import frames, hydro
 from bauv_sim.currents import CurrentField

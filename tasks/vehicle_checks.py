@@ -17,20 +17,43 @@ from __future__ import annotations
 
 import argparse
 import csv
+import importlib
 import math
 import re
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bauv_sim import currents, hydro, manoeuvres
-from bauv_sim.hull import HULL, MODEL_DIR, SEAWATER_DENSITY_KG_M3, hull_mesh
-from bauv_sim.physics import BauvPhysics
-from bauv_sim.rng import generator
+if TYPE_CHECKING:
+    from bauv_sim.physics import BauvPhysics
 
+
+class _Lazy:
+    """A module imported on first use: the experiment registry imports every ``tasks/vehicle*``
+    module when the CLI starts, and MuJoCo, dm_control and trimesh need not load for that."""
+
+    def __init__(self, name: str) -> None:
+        self._name = name
+        self._module: ModuleType | None = None
+
+    def __getattr__(self, attr: str) -> Any:
+        if self._module is None:
+            self._module = importlib.import_module(self._name)
+        return getattr(self._module, attr)
+
+
+currents = _Lazy("bauv_sim.currents")
+hydro = _Lazy("bauv_sim.hydro")
+manoeuvres = _Lazy("bauv_sim.manoeuvres")
+hull = _Lazy("bauv_sim.hull")
+rng = _Lazy("bauv_sim.rng")
+
+MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "bauv"
 README = MODEL_DIR / "README.md"
 SPEED_TABLE = MODEL_DIR / "speed_table.csv"
 VEHICLE_XML = MODEL_DIR / "bauv.xml"
@@ -84,15 +107,15 @@ def varied_commands(seed: int, duration_s: float, hold_s: float = 20.0) -> list[
     [0.3, 2.8] Hz, tail bias uniform on +-18 deg, battery uniform on +-0.06 m, a depth target
     uniform on [20, 60] m (held by the fins' :class:`~bauv_sim.manoeuvres.DepthHold`) and a fin
     offset uniform on +-0.1 rad on top of it."""
-    rng = generator(seed, 0, "vehicle_checks", "commands")
+    gen = rng.generator(seed, 0, "vehicle_checks", "commands")
     out = []
     for _ in range(math.ceil(duration_s / hold_s)):
         out.append({
-            "frequency_hz": float(rng.uniform(0.3, 2.8)),
-            "bias_rad": float(rng.uniform(-1.0, 1.0) * math.radians(18.0)),
-            "battery_m": float(rng.uniform(-0.06, 0.06)),
-            "depth_m": float(rng.uniform(20.0, 60.0)),
-            "fin_offset_rad": float(rng.uniform(-0.1, 0.1)),
+            "frequency_hz": float(gen.uniform(0.3, 2.8)),
+            "bias_rad": float(gen.uniform(-1.0, 1.0) * math.radians(18.0)),
+            "battery_m": float(gen.uniform(-0.06, 0.06)),
+            "depth_m": float(gen.uniform(20.0, 60.0)),
+            "fin_offset_rad": float(gen.uniform(-0.1, 0.1)),
         })
     return out
 
@@ -185,18 +208,16 @@ class BuoyancyResult:
 
 def check_buoyancy(idle_s: float = 300.0) -> BuoyancyResult:
     """Archimedes from the meshes, the model's forces, an idle hover and the roll decay."""
-    from bauv_sim import hull
-
     phys = _scene(depth_m=20.0)
     hs = phys.hydrostatics()
     dorsal = hull.dorsal_fin_mesh().volume
-    v_mesh = float(hull_mesh(HULL).volume + dorsal)
+    v_mesh = float(hull.hull_mesh(hull.HULL).volume + dorsal)
     g = phys.gravity_m_s2()
     # the self-neutral parts (tail, lateral fins) carry their own displacement: count it too
-    ped = hull.peduncle_mesh(HULL).volume
+    ped = hull.peduncle_mesh(hull.HULL).volume
     fin = hull.caudal_fin_mesh(hull.TAIL).volume
     lat = 2 * hull.lateral_fin_mesh().volume
-    archimedes = SEAWATER_DENSITY_KG_M3 * g * (v_mesh + ped + fin + lat)
+    archimedes = hull.SEAWATER_DENSITY_KG_M3 * g * (v_mesh + ped + fin + lat)
     z0 = phys.depth_m()
     phys.advance(idle_s)
     rate = (phys.depth_m() - z0) / (idle_s / 60.0)
@@ -223,7 +244,7 @@ class TowResult:
 
 def check_tow(speeds: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)) -> TowResult:
     """Drag vs speed from ``qfrc_fluid``, tail straight; also repeated in a 0.5 m/s current."""
-    area = HULL.frontal_area_m2()
+    area = hull.HULL.frontal_area_m2()
     pts = manoeuvres.tow_test(_scene(), list(speeds), area)
     in_current = manoeuvres.tow_test(_scene(), list(speeds), area, current_m_s=0.5)
     same = all(abs(a.drag_n - b.drag_n) <= 1e-9 * max(1.0, a.drag_n)
@@ -399,7 +420,7 @@ def check_determinism(seed: int = 11, duration_s: float = 60.0) -> DeterminismRe
     for _ in range(2):
         phys = _scene(depth_m=40.0)
         cfg = currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1)
-        phys.set_current(currents.make_current(cfg, generator(seed, 0, "current")))
+        phys.set_current(currents.make_current(cfg, rng.generator(seed, 0, "current")))
         runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0,
                                  record=True))
     a, b = runs
@@ -596,6 +617,8 @@ def render_png(path: Path = MODEL_DIR / "bauv.png", width: int = 1280, height: i
     """
     import mujoco
     from PIL import Image
+
+    from bauv_sim.physics import BauvPhysics
 
     phys = BauvPhysics.from_scene_xml()
     phys.reset_to_keyframe("trim")
