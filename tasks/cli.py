@@ -13,7 +13,10 @@ interrupted (finished blocks are kept; ``--resume`` completes the batch).
 
 from __future__ import annotations
 
+import contextlib
+import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -164,6 +167,31 @@ def view_command(
     return [*cmd, str(recording)]
 
 
+def run_viewer(cmd: list[str]) -> int:
+    """Run the viewer in its own process group and take the whole group down with us.
+
+    The ``rerun`` launcher starts the viewer binary as a child; stopping only the launcher (or
+    this process) would leave the server running. SIGINT, SIGTERM and normal exit all stop the
+    group.
+    """
+    proc = subprocess.Popen(cmd, start_new_session=True)
+
+    def stop(*_: object) -> None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGTERM)
+
+    previous = signal.signal(signal.SIGTERM, lambda *_: (stop(), sys.exit(0)))
+    try:
+        return proc.wait()
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        stop()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(timeout=5)
+        signal.signal(signal.SIGTERM, previous)
+
+
 @cli.command("view")
 @click.argument("run_dir", type=click.Path(exists=True, file_okay=False))
 @click.option("--web", is_flag=True, help="Serve the web viewer on 127.0.0.1 instead.")
@@ -181,10 +209,7 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
             f"serving {rec} on 127.0.0.1 only: open http://127.0.0.1:{web_port}/?url={grpc}"
             " (Ctrl-C to stop)"
         )
-    try:
-        code = subprocess.call(cmd)
-    except KeyboardInterrupt:
-        code = 0
+    code = run_viewer(cmd)
     if code != 0 and not web:
         click.echo("the native viewer needs a display; try: bauv view RUN_DIR --web", err=True)
     sys.exit(code)

@@ -116,3 +116,7 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     finally:
         proc.terminate()
         proc.wait(timeout=10)
+    # stopping bauv view stops the rerun server it started (no leaked process)
+    time.sleep(1.0)
+    left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
+    assert f"--web-viewer-port {web}" not in left
