@@ -50,7 +50,8 @@ def _horizontal(vel_en: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 class UniformCurrent:
-    """The same horizontal velocity everywhere and always.
+    """The same horizontal velocity everywhere and always (``steady_uniform``: a world may apply
+    it once instead of at every tick).
 
     Args:
         speed_m_s: current speed, m/s, >= 0.
@@ -61,6 +62,8 @@ class UniformCurrent:
         self.speed_m_s = float(speed_m_s)
         self.direction_rad = float(direction_rad)
         self._v = _horizontal(velocity_from_course_speed(self.direction_rad, self.speed_m_s))
+
+    steady_uniform = True
 
     def velocity_world(self, t_s: ArrayLike, pos_world_m: ArrayLike) -> NDArray[np.float64]:
         p = _as_pos(pos_world_m)

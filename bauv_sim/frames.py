@@ -270,6 +270,30 @@ def roll_pitch_heading_from_R(R: ArrayLike) -> NDArray[np.float64]:
     return np.stack([wrap_pi(roll), pitch, heading], axis=-1)
 
 
+def roll_pitch_heading_from_quat_wxyz(quat_wxyz: ArrayLike) -> NDArray[np.float64]:
+    """Navigation attitude angles straight from a unit quaternion (same result as
+    ``roll_pitch_heading_from_R(R_from_quat_wxyz(q))``, without building the matrix).
+
+    Args:
+        quat_wxyz: unit quaternion(s) (w, x, y, z), body to world, shape (..., 4).
+
+    Returns:
+        ``(roll, pitch, heading)``, shape (..., 3), rad, ranged as in
+        :func:`roll_pitch_heading_from_R`.
+    """
+    q = np.asarray(quat_wxyz, dtype=float)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r00 = 1 - 2 * (y * y + z * z)
+    r10 = 2 * (x * y + w * z)
+    r20 = 2 * (x * z - w * y)
+    r21 = 2 * (y * z + w * x)
+    r22 = 1 - 2 * (x * x + y * y)
+    pitch = np.arcsin(np.clip(r20, -1.0, 1.0))
+    heading = wrap_2pi(np.arctan2(r00, r10))
+    roll = wrap_pi(np.arctan2(r21, r22))
+    return np.stack([roll, pitch, heading], axis=-1)
+
+
 def quat_wxyz_from_roll_pitch_heading(
     roll_rad: ArrayLike, pitch_rad: ArrayLike, heading_rad: ArrayLike
 ) -> NDArray[np.float64]:

@@ -43,16 +43,34 @@ DEFAULT_CONTROL_TICK_S = 0.1
 """Default control tick, s (50 physics steps of 2 ms)."""
 
 SENSOR_SITES: tuple[str, ...] = (
-    "camera", "echo_forward", "usbl_transponder", "modem", "echo_up", "sonar", "echo_down",
-    "em_log", "pressure", "ins", "gps_antenna", "caudal_tip",
+    "camera",
+    "echo_forward",
+    "usbl_transponder",
+    "modem",
+    "echo_up",
+    "sonar",
+    "echo_down",
+    "em_log",
+    "pressure",
+    "ins",
+    "gps_antenna",
+    "caudal_tip",
 )
 """Named sites of the vehicle (unprefixed), see ``models/bauv/bauv.xml``."""
 
-_JOINTS = ("tail_yaw", "caudal_fin_yaw", "crank", "fin_port_pitch", "fin_starboard_pitch",
-           "battery_slide", "tail_bias_slide")
+_JOINTS = (
+    "tail_yaw",
+    "caudal_fin_yaw",
+    "crank",
+    "fin_port_pitch",
+    "fin_starboard_pitch",
+    "battery_slide",
+    "tail_bias_slide",
+)
 _ACTUATORS = ("motor", "tail_bias", "fin_port", "fin_starboard", "battery")
-_WARNING_NAMES = {int(v): k for k, v in mujoco.mjtWarning.__members__.items()
-                  if k.startswith("mjWARN")}
+_WARNING_NAMES = {
+    int(v): k for k, v in mujoco.mjtWarning.__members__.items() if k.startswith("mjWARN")
+}
 
 
 @dataclass(frozen=True)
@@ -115,14 +133,16 @@ class BauvPhysics(mjcf.Physics):
 
     _control_tick_s: float = DEFAULT_CONTROL_TICK_S
     _current: CurrentField | None = None
+    _applied_field: CurrentField | None = None
     _track_energy: bool = False
 
     # ----------------------------------------------------------------------------------------
     # construction
 
     @classmethod
-    def from_scene_xml(cls, path: str | Path | None = None,
-                       control_tick_s: float = DEFAULT_CONTROL_TICK_S) -> BauvPhysics:
+    def from_scene_xml(
+        cls, path: str | Path | None = None, control_tick_s: float = DEFAULT_CONTROL_TICK_S
+    ) -> BauvPhysics:
         """Load a scene file (default ``models/bauv/scene.xml``) with plain MuJoCo.
 
         Args:
@@ -140,6 +160,7 @@ class BauvPhysics(mjcf.Physics):
 
     def _reload_from_data(self, data) -> None:
         hydro.prepare_model(data.model.ptr)
+        self._applied_field = None
         self._vehicles: dict[str, _Vehicle] = {}
         super()._reload_from_data(data)
         self._index_vehicles()
@@ -147,17 +168,22 @@ class BauvPhysics(mjcf.Physics):
         self._energy_j = {name: 0.0 for name in self._vehicles}
         self._energy_window_s = 0.0
         self._state_buf = np.empty(
-            mujoco.mj_stateSize(self.model.ptr, mujoco.mjtState.mjSTATE_INTEGRATION))
+            mujoco.mj_stateSize(self.model.ptr, mujoco.mjtState.mjSTATE_INTEGRATION)
+        )
         self.set_control_tick(self._control_tick_s)
 
     def _check_options(self) -> None:
         m = self.model.ptr
         if not m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_AUTORESET:
-            raise ConfigError("model option flag autoreset must be disabled "
-                              "(a divergence would silently restart the simulation)")
+            raise ConfigError(
+                "model option flag autoreset must be disabled "
+                "(a divergence would silently restart the simulation)"
+            )
         if m.opt.integrator != mujoco.mjtIntegrator.mjINT_IMPLICITFAST:
-            raise ConfigError("model integrator must be implicitfast "
-                              f"(got {mujoco.mjtIntegrator(m.opt.integrator).name})")
+            raise ConfigError(
+                "model integrator must be implicitfast "
+                f"(got {mujoco.mjtIntegrator(m.opt.integrator).name})"
+            )
 
     def _index_vehicles(self) -> None:
         m = self.model.ptr
@@ -177,8 +203,10 @@ class BauvPhysics(mjcf.Physics):
         def oid(kind: mujoco.mjtObj, name: str) -> int:
             i = mujoco.mj_name2id(m, kind, prefix + name)
             if i < 0:
-                raise ConfigError(f"vehicle {vname!r}: {kind.name[6:].lower()} "
-                                  f"{prefix + name!r} missing from the model")
+                raise ConfigError(
+                    f"vehicle {vname!r}: {kind.name[6:].lower()} "
+                    f"{prefix + name!r} missing from the model"
+                )
             return i
 
         # the free joint: on the hull, or on an attachment frame that carries the hull at identity
@@ -202,9 +230,23 @@ class BauvPhysics(mjcf.Physics):
         eq = oid(mujoco.mjtObj.mjOBJ_EQUALITY, "tail_linkage")
         lever = float(np.linalg.norm(m.eq_data[eq, 3:6]))
         crank = float(np.linalg.norm(m.body_pos[oid(mujoco.mjtObj.mjOBJ_BODY, "rod")]))
-        return _Vehicle(vname, prefix, hull, int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j]), dofs,
-                        bodies, jq, jd, act, act_state, sites, lever, crank,
-                        correction=np.zeros(dofs.size))
+        return _Vehicle(
+            vname,
+            prefix,
+            hull,
+            int(m.jnt_qposadr[j]),
+            int(m.jnt_dofadr[j]),
+            dofs,
+            bodies,
+            jq,
+            jd,
+            act,
+            act_state,
+            sites,
+            lever,
+            crank,
+            correction=np.zeros(dofs.size),
+        )
 
     def set_control_tick(self, control_tick_s: float) -> None:
         """Set the control tick.
@@ -218,8 +260,10 @@ class BauvPhysics(mjcf.Physics):
         dt = float(self.model.opt.timestep)
         n = round(control_tick_s / dt)
         if n < 1 or abs(n * dt - control_tick_s) > 1e-9 * max(1.0, control_tick_s):
-            raise ConfigError(f"control tick = {control_tick_s} s: must be a positive integer "
-                              f"multiple of the physics timestep {dt} s")
+            raise ConfigError(
+                f"control tick = {control_tick_s} s: must be a positive integer "
+                f"multiple of the physics timestep {dt} s"
+            )
         self._control_tick_s = float(control_tick_s)
         self._steps_per_tick = int(n)
 
@@ -243,8 +287,9 @@ class BauvPhysics(mjcf.Physics):
         try:
             return self._vehicles[vehicle]
         except KeyError:
-            raise ConfigError(f"vehicle {vehicle!r}: not in the scene "
-                              f"(have {', '.join(self._vehicles)})") from None
+            raise ConfigError(
+                f"vehicle {vehicle!r}: not in the scene (have {', '.join(self._vehicles)})"
+            ) from None
 
     def set_const(self) -> None:
         """Run ``mj_setConst``, then re-apply :func:`hydro.prepare_model` (which it undoes)."""
@@ -258,12 +303,12 @@ class BauvPhysics(mjcf.Physics):
         """Reference point (hull origin, on the hull axis 0.80 m aft of the nose), shape (3,), m,
         world ENU."""
         v = self._v(vehicle)
-        return np.array(self.data.qpos[v.qpos_adr:v.qpos_adr + 3])
+        return np.array(self.data.qpos[v.qpos_adr : v.qpos_adr + 3])
 
     def quat_wxyz(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Attitude quaternion (w, x, y, z), body FLU to world ENU, unit norm, shape (4,)."""
         v = self._v(vehicle)
-        q = np.array(self.data.qpos[v.qpos_adr + 3:v.qpos_adr + 7])
+        q = np.array(self.data.qpos[v.qpos_adr + 3 : v.qpos_adr + 7])
         return q / np.linalg.norm(q)
 
     def R_world_from_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
@@ -286,7 +331,7 @@ class BauvPhysics(mjcf.Physics):
     def velocity_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Velocity over ground of the reference point, shape (3,), m/s, world ENU."""
         v = self._v(vehicle)
-        return np.array(self.data.qvel[v.dof_adr:v.dof_adr + 3])
+        return np.array(self.data.qvel[v.dof_adr : v.dof_adr + 3])
 
     def velocity_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Velocity over ground of the reference point, shape (3,), m/s, body FLU."""
@@ -308,12 +353,13 @@ class BauvPhysics(mjcf.Physics):
     def angular_velocity_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Angular velocity, shape (3,), rad/s, body FLU (roll rate about x, ...)."""
         v = self._v(vehicle)
-        return np.array(self.data.qvel[v.dof_adr + 3:v.dof_adr + 6])
+        return np.array(self.data.qvel[v.dof_adr + 3 : v.dof_adr + 6])
 
     def angular_velocity_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Angular velocity, shape (3,), rad/s, world ENU."""
-        return frames.world_from_body(self.R_world_from_body(vehicle),
-                                      self.angular_velocity_body(vehicle))
+        return frames.world_from_body(
+            self.R_world_from_body(vehicle), self.angular_velocity_body(vehicle)
+        )
 
     def site_position_world(self, name: str, vehicle: str | None = None) -> NDArray[np.float64]:
         """Position of a named sensor site (see :data:`SENSOR_SITES`), shape (3,), m, world ENU.
@@ -370,22 +416,51 @@ class BauvPhysics(mjcf.Physics):
     _kinematics_stale: bool = True
 
     def truth(self, vehicle: str | None = None) -> VehicleTruth:
-        """The true state of a vehicle now (see :class:`VehicleTruth`)."""
-        q = self.quat_wxyz(vehicle)
-        pos = self.position_world(vehicle)
-        vel = self.velocity_world(vehicle)
-        cur = self.current_at_vehicle_world(vehicle)
-        rph = frames.roll_pitch_heading_from_R(frames.R_from_quat_wxyz(q))
-        return VehicleTruth(float(self.data.time), pos, q, rph, float(-pos[2]), vel, vel - cur,
-                            cur, self.angular_velocity_body(vehicle))
+        """The true state of a vehicle now (see :class:`VehicleTruth`).
+
+        Called at every control tick, so it reads ``qpos``/``qvel`` once and computes the
+        attitude with scalar arithmetic (the same formulas as
+        :func:`bauv_sim.frames.roll_pitch_heading_from_quat_wxyz`).
+        """
+        v = self._v(vehicle)
+        d = self.data.ptr
+        x, y, z, qw, qx, qy, qz = d.qpos[v.qpos_adr : v.qpos_adr + 7].tolist()
+        vx, vy, vz, wx, wy, wz = d.qvel[v.dof_adr : v.dof_adr + 6].tolist()
+        n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+        qw, qx, qy, qz = qw / n, qx / n, qy / n, qz / n
+        r00 = 1 - 2 * (qy * qy + qz * qz)
+        r10 = 2 * (qx * qy + qw * qz)
+        r20 = 2 * (qx * qz - qw * qy)
+        r21 = 2 * (qy * qz + qw * qx)
+        r22 = 1 - 2 * (qx * qx + qy * qy)
+        roll = (math.atan2(r21, r22) + math.pi) % (2 * math.pi) - math.pi
+        pitch = math.asin(min(1.0, max(-1.0, r20)))
+        heading = math.atan2(r00, r10) % (2 * math.pi)
+        cur = v.current_world.copy()
+        vel = np.array([vx, vy, vz])
+        return VehicleTruth(
+            float(d.time),
+            np.array([x, y, z]),
+            np.array([qw, qx, qy, qz]),
+            np.array([roll, pitch, heading]),
+            -z,
+            vel,
+            vel - cur,
+            cur,
+            np.array([wx, wy, wz]),
+        )
 
     def hydrostatics(self, vehicle: str | None = None) -> hydro.Hydrostatics:
         """Weight, buoyancy, centres and BG of a vehicle now (see :func:`hydro.hydrostatics`)."""
         v = self._v(vehicle)
         self._ensure_kinematics()
         m = self.model.ptr
-        return hydro.hydrostatics(m.body_mass[v.bodies], m.body_gravcomp[v.bodies],
-                                  self.data.xipos[v.bodies], float(np.linalg.norm(m.opt.gravity)))
+        return hydro.hydrostatics(
+            m.body_mass[v.bodies],
+            m.body_gravcomp[v.bodies],
+            self.data.xipos[v.bodies],
+            float(np.linalg.norm(m.opt.gravity)),
+        )
 
     def mass_kg(self, vehicle: str | None = None) -> float:
         """Total mass of a vehicle (all its bodies), kg."""
@@ -409,7 +484,7 @@ class BauvPhysics(mjcf.Physics):
         shape (3,), N, world ENU, at the current state (forward dynamics are recomputed)."""
         v = self._v(vehicle)
         mujoco.mj_forward(self.model.ptr, self.data.ptr)
-        return np.array(self.data.qfrc_fluid[v.dof_adr:v.dof_adr + 3])
+        return np.array(self.data.qfrc_fluid[v.dof_adr : v.dof_adr + 3])
 
     # ----------------------------------------------------------------------------------------
     # fins, tail, motor, battery
@@ -476,8 +551,9 @@ class BauvPhysics(mjcf.Physics):
         """(segment 1 angle to the hull, segment 2 angle to segment 1), shape (2,), rad; positive
         swings the tail to port (counter-clockwise seen from above)."""
         v = self._v(vehicle)
-        return np.array([self.data.qpos[v.jnt_qpos["tail_yaw"]],
-                         self.data.qpos[v.jnt_qpos["caudal_fin_yaw"]]])
+        return np.array(
+            [self.data.qpos[v.jnt_qpos["tail_yaw"]], self.data.qpos[v.jnt_qpos["caudal_fin_yaw"]]]
+        )
 
     def crank_angle_rad(self, vehicle: str | None = None) -> float:
         """Crank angle (unwrapped), rad."""
@@ -487,8 +563,12 @@ class BauvPhysics(mjcf.Physics):
     def lateral_fin_angles_rad(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """(port, starboard) lateral-fin pitch angles, shape (2,), rad (leading edge up > 0)."""
         v = self._v(vehicle)
-        return np.array([self.data.qpos[v.jnt_qpos["fin_port_pitch"]],
-                         self.data.qpos[v.jnt_qpos["fin_starboard_pitch"]]])
+        return np.array(
+            [
+                self.data.qpos[v.jnt_qpos["fin_port_pitch"]],
+                self.data.qpos[v.jnt_qpos["fin_starboard_pitch"]],
+            ]
+        )
 
     def battery_position_m(self, vehicle: str | None = None) -> float:
         """Battery position along the body x axis from its neutral place, m (positive forward)."""
@@ -528,8 +608,9 @@ class BauvPhysics(mjcf.Physics):
         i = v.act["motor"]
         hi = self.model.ptr.actuator_ctrlrange[i][1] / (2.0 * math.pi)
         if not (math.isfinite(frequency_hz) and 0.0 <= frequency_hz <= hi + 1e-12):
-            raise ConfigError(f"tail-beat frequency = {frequency_hz:.6g} Hz: must be within "
-                              f"[0, {hi:.6g}]")
+            raise ConfigError(
+                f"tail-beat frequency = {frequency_hz:.6g} Hz: must be within [0, {hi:.6g}]"
+            )
         self.data.ctrl[i] = 2.0 * math.pi * frequency_hz
 
     def set_tail_bias_rad(self, bias_rad: float, vehicle: str | None = None) -> None:
@@ -556,8 +637,9 @@ class BauvPhysics(mjcf.Physics):
         lo, hi = self.model.ptr.actuator_ctrlrange[v.act["tail_bias"]]
         return math.asin(min(abs(lo), abs(hi)) / v.lever_m)
 
-    def set_lateral_fins_rad(self, port_rad: float, starboard_rad: float,
-                             vehicle: str | None = None) -> None:
+    def set_lateral_fins_rad(
+        self, port_rad: float, starboard_rad: float, vehicle: str | None = None
+    ) -> None:
         """Command the lateral-fin pitch angles (positive = leading edge up; together: lift for
         depth and pitch; differentially: roll).
 
@@ -586,11 +668,32 @@ class BauvPhysics(mjcf.Physics):
             "battery_position_m": float(c[v.act["battery"]]),
         }
 
+    def command_limits(self, vehicle: str | None = None) -> dict[str, tuple[float, float]]:
+        """The range of every command, in the setters' units (same keys as :meth:`commands`)."""
+        v = self._v(vehicle)
+        r = self.model.ptr.actuator_ctrlrange
+        bias = self.max_tail_bias_rad(vehicle)
+        return {
+            "tail_beat_frequency_hz": (0.0, float(r[v.act["motor"]][1]) / (2.0 * math.pi)),
+            "tail_bias_rad": (-bias, bias),
+            "fin_port_rad": (float(r[v.act["fin_port"]][0]), float(r[v.act["fin_port"]][1])),
+            "fin_starboard_rad": (
+                float(r[v.act["fin_starboard"]][0]),
+                float(r[v.act["fin_starboard"]][1]),
+            ),
+            "battery_position_m": (float(r[v.act["battery"]][0]), float(r[v.act["battery"]][1])),
+        }
+
     # ----------------------------------------------------------------------------------------
     # initial state
 
-    def set_pose(self, position_world_m: ArrayLike, roll_pitch_heading_rad: ArrayLike = (0, 0, 0),
-                 velocity_world_m_s: ArrayLike = (0, 0, 0), vehicle: str | None = None) -> None:
+    def set_pose(
+        self,
+        position_world_m: ArrayLike,
+        roll_pitch_heading_rad: ArrayLike = (0, 0, 0),
+        velocity_world_m_s: ArrayLike = (0, 0, 0),
+        vehicle: str | None = None,
+    ) -> None:
         """Place a vehicle (its joints keep their state).
 
         Args:
@@ -603,14 +706,21 @@ class BauvPhysics(mjcf.Physics):
         p = np.asarray(position_world_m, dtype=float)
         a = np.asarray(roll_pitch_heading_rad, dtype=float)
         u = np.asarray(velocity_world_m_s, dtype=float)
-        if p.shape != (3,) or a.shape != (3,) or u.shape != (3,) or not np.all(
-                np.isfinite(np.r_[p, a, u])):
-            raise ConfigError("set_pose: position, attitude and velocity must be 3 finite numbers "
-                              "each")
-        self.data.qpos[v.qpos_adr:v.qpos_adr + 3] = p
-        self.data.qpos[v.qpos_adr + 3:v.qpos_adr + 7] = frames.quat_wxyz_from_roll_pitch_heading(*a)
-        self.data.qvel[v.dof_adr:v.dof_adr + 3] = u
-        self.data.qvel[v.dof_adr + 3:v.dof_adr + 6] = 0.0
+        if (
+            p.shape != (3,)
+            or a.shape != (3,)
+            or u.shape != (3,)
+            or not np.all(np.isfinite(np.r_[p, a, u]))
+        ):
+            raise ConfigError(
+                "set_pose: position, attitude and velocity must be 3 finite numbers each"
+            )
+        self.data.qpos[v.qpos_adr : v.qpos_adr + 3] = p
+        self.data.qpos[v.qpos_adr + 3 : v.qpos_adr + 7] = frames.quat_wxyz_from_roll_pitch_heading(
+            *a
+        )
+        self.data.qvel[v.dof_adr : v.dof_adr + 3] = u
+        self.data.qvel[v.dof_adr + 3 : v.dof_adr + 6] = 0.0
         mujoco.mj_forward(self.model.ptr, self.data.ptr)
         self._kinematics_stale = False
 
@@ -634,6 +744,7 @@ class BauvPhysics(mjcf.Physics):
         """Use a current field (None: still water). It is evaluated at every vehicle at the start
         of each control tick of :meth:`advance`, and now."""
         self._current = current
+        self._applied_field = None
         self.apply_current()
 
     @property
@@ -652,6 +763,12 @@ class BauvPhysics(mjcf.Physics):
         call.
         """
         m, d = self.model.ptr, self.data.ptr
+        if self._current is not None and getattr(self._current, "steady_uniform", False):
+            if self._applied_field is self._current:
+                return  # the same water everywhere and always: nothing changes between ticks
+            self._applied_field = self._current
+        else:
+            self._applied_field = None
         vs = list(self._vehicles.values())
         if self._current is None:
             for v in vs:
@@ -663,7 +780,8 @@ class BauvPhysics(mjcf.Physics):
         t = float(d.time)
         for v in vs:
             v.current_world[:] = np.asarray(
-                self._current.velocity_world(t, self.position_world(v.name)), dtype=float)
+                self._current.velocity_world(t, self.position_world(v.name)), dtype=float
+            )
         ref = vs[0].current_world
         hydro.set_water_velocity(m, ref)
         # other vehicles in different water: correction = fluid force in their water minus the
@@ -717,10 +835,13 @@ class BauvPhysics(mjcf.Physics):
         else:
             mujoco.mj_step(m, d, int(nstep))
         self._kinematics_stale = True
-        if (np.any(d.warning.number != warn0)
-                or not (np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all()
-                        and np.isfinite(d.act).all())
-                or not d.time > t0):
+        if (
+            np.any(d.warning.number != warn0)
+            or not (
+                np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all() and np.isfinite(d.act).all()
+            )
+            or not d.time > t0
+        ):
             self._diagnose(t0, int(nstep), warn0.tolist())
 
     def _diagnose(self, t0: float, nstep: int, warn0: list[int]) -> None:
@@ -737,21 +858,28 @@ class BauvPhysics(mjcf.Physics):
             msgs = []
             for i, w in enumerate(d.warning):
                 if w.number > 0:
-                    msgs.append(f"MuJoCo warning {_WARNING_NAMES.get(i, i)} "
-                                f"({_warning_detail(m, i, int(w.lastinfo))})")
+                    msgs.append(
+                        f"MuJoCo warning {_WARNING_NAMES.get(i, i)} "
+                        f"({_warning_detail(m, i, int(w.lastinfo))})"
+                    )
             if not np.isfinite(d.qpos).all() or not np.isfinite(d.qvel).all():
                 bad = np.flatnonzero(~np.isfinite(d.qvel))
-                msgs.append("non-finite state" + (f" at dof {_dof_name(m, int(bad[0]))}"
-                                                   if bad.size else ""))
+                msgs.append(
+                    "non-finite state"
+                    + (f" at dof {_dof_name(m, int(bad[0]))}" if bad.size else "")
+                )
             if not d.time > t_before:
                 msgs.append(f"time did not advance (it is {d.time} s)")
             if msgs:
-                raise PhysicsError(f"physics failed at t = {t_before + m.opt.timestep:.4f} s "
-                                   f"(step {k + 1} of {nstep} from t = {t0:.4f} s): "
-                                   + "; ".join(msgs))
-        raise PhysicsError(f"physics failed between t = {t0:.4f} s and "
-                           f"{t0 + nstep * m.opt.timestep:.4f} s, but not on replay "
-                           f"(warning counters before: {warn0})")
+                raise PhysicsError(
+                    f"physics failed at t = {t_before + m.opt.timestep:.4f} s "
+                    f"(step {k + 1} of {nstep} from t = {t0:.4f} s): " + "; ".join(msgs)
+                )
+        raise PhysicsError(
+            f"physics failed between t = {t0:.4f} s and "
+            f"{t0 + nstep * m.opt.timestep:.4f} s, but not on replay "
+            f"(warning counters before: {warn0})"
+        )
 
     def advance(self, duration_s: float) -> None:
         """Advance the simulation by whole control ticks, applying the current at every vehicle at
@@ -766,8 +894,10 @@ class BauvPhysics(mjcf.Physics):
         """
         n = round(duration_s / self._control_tick_s)
         if n < 0 or abs(n * self._control_tick_s - duration_s) > 1e-9 * max(1.0, duration_s):
-            raise ConfigError(f"duration = {duration_s} s: must be a non-negative whole number of "
-                              f"control ticks of {self._control_tick_s} s")
+            raise ConfigError(
+                f"duration = {duration_s} s: must be a non-negative whole number of "
+                f"control ticks of {self._control_tick_s} s"
+            )
         for _ in range(n):
             self.apply_current()
             self.step(self._steps_per_tick)
@@ -783,8 +913,14 @@ def _dof_name(m: mujoco.MjModel, dof: int) -> str:
 
 
 def _warning_detail(m: mujoco.MjModel, warning: int, info: int) -> str:
-    if warning in (int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQVEL),
-                   int(mujoco.mjtWarning.mjWARN_BADQPOS)) and 0 <= info < m.nv:
+    if (
+        warning
+        in (
+            int(mujoco.mjtWarning.mjWARN_BADQACC),
+            int(mujoco.mjtWarning.mjWARN_BADQVEL),
+            int(mujoco.mjtWarning.mjWARN_BADQPOS),
+        )
+        and 0 <= info < m.nv
+    ):
         return f"dof {_dof_name(m, info)}"
     return f"info {info}"
-

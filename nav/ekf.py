@@ -14,6 +14,7 @@ measurement are left unchanged; an optional chi-square gate on the normalised in
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -60,6 +61,12 @@ class UpdateInfo:
     dof: NDArray[np.intp]
     applied: NDArray[np.bool_]
     rejected: NDArray[np.bool_]
+
+
+@functools.lru_cache(maxsize=256)
+def gate_limit(probability: float, dof: int) -> float:
+    """Chi-square quantile of ``probability`` with ``dof`` degrees of freedom (cached)."""
+    return float(chi2.ppf(probability, dof))
 
 
 def predict(x: Array, P: Array, fx: Array, F: Array, Q: Array) -> tuple[Array, Array]:
@@ -125,7 +132,7 @@ def update(
     dof = act.sum(axis=1)
     rejected = np.zeros(n, dtype=bool)
     if gate_probability is not None:
-        limit = chi2.ppf(gate_probability, np.maximum(dof, 1))
+        limit = np.array([gate_limit(gate_probability, int(d)) for d in np.maximum(dof, 1)])
         rejected = pres & (dof > 0) & (nis > limit)
     applied = pres & (dof > 0) & ~rejected
     K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)  # eq. 21

@@ -5,7 +5,10 @@ surfacing manoeuvre (seed 001: the vehicle surfaces to take a GPS fix). For each
 course is the direct course from the estimated position to the way-point (seed 001, "direct course
 nu"), or the course of a pluggable course law (seed 001's current-compensating course, eq. 22-26).
 
-A way-point is reached when the *estimate* is inside its acceptance radius: the vehicle only knows
+A way-point is reached when the *estimate* is inside its acceptance circle with a margin for its
+own uncertainty: ``d_est <= max(R - k sigma, R / 2)`` with sigma the standard deviation of the
+estimate along its worst horizontal direction and k = ``reach_sigmas`` (2 by default), so that the
+true position is inside the circle too unless the filter is inconsistent. The vehicle only knows
 where it thinks it is. A leg that takes longer than ``max_leg_time_s`` is abandoned and the
 way-point counted as missed, so a mission always ends.
 
@@ -95,6 +98,7 @@ class WaypointGuidance:
         fixes_needed: GPS fixes to collect before diving.
         max_leg_time_s: a leg taking longer is abandoned, s.
         course_law: desired course for a leg (default: the direct course).
+        reach_sigmas: margin of the reach test in standard deviations of the estimate.
     """
 
     waypoints: Sequence[Waypoint]
@@ -105,6 +109,7 @@ class WaypointGuidance:
     fixes_needed: int = 1
     max_leg_time_s: float = 1200.0
     course_law: CourseLaw = direct_course
+    reach_sigmas: float = 2.0
     index: int = 0
     mode: str = "transit"
     legs: list[LegRecord] = field(default_factory=list)
@@ -112,6 +117,7 @@ class WaypointGuidance:
     _surfaced_at_s: float | None = None
     _fixes: int = 0
     _hold_course: float = 0.0
+    _sigma: float = 0.0
 
     def __post_init__(self) -> None:
         if not self.waypoints:
@@ -139,17 +145,20 @@ class WaypointGuidance:
         self._leg_start_s = t_s
         self.mode = "done" if self.index >= len(self.waypoints) else "transit"
 
-    def step(self, t_s: float, position: Array) -> GuidanceCommand:
+    def step(self, t_s: float, position: Array, sigma_m: float = 0.0) -> GuidanceCommand:
         """The command for now.
 
         Args:
             t_s: time, s.
             position: estimated position (east, north, up), shape (3,), m, world.
+            sigma_m: standard deviation of the estimate along its worst horizontal direction, m
+                (0 for an estimate without a covariance).
 
         Returns:
             The command.
         """
         p = np.asarray(position, dtype=float)
+        self._sigma = float(sigma_m)
         if self._leg_start_s is None:
             self._leg_start_s = t_s
         if self.mode == "done":
@@ -157,16 +166,17 @@ class WaypointGuidance:
         wp = self.waypoints[self.index]
         if self.mode in ("transit", "dive"):
             dist = math.hypot(wp.east_m - p[0], wp.north_m - p[1])
-            if dist <= wp.acceptance_radius_m:
+            r = wp.acceptance_radius_m
+            if dist <= max(r - self.reach_sigmas * self._sigma, 0.5 * r):
                 if wp.surface:
                     self.mode, self._fixes, self._surfaced_at_s = "ascend", 0, None
                     self._hold_course = self.course_law(p, wp)
                 else:
                     self._next_leg(t_s, True)
-                    return self.step(t_s, p)
+                    return self.step(t_s, p, self._sigma)
             elif t_s - self._leg_start_s > self.max_leg_time_s:
                 self._next_leg(t_s, False)
-                return self.step(t_s, p)
+                return self.step(t_s, p, self._sigma)
             else:
                 if self.mode == "dive" and -p[2] >= 0.8 * wp.depth_m:
                     self.mode = "transit"

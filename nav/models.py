@@ -247,3 +247,76 @@ class DepthMeasurement:
     def active(self, x: Array) -> NDArray[np.bool_]:
         """Shape (n, 1)."""
         return np.ones((*np.shape(x)[:-1], 1), dtype=bool)
+
+
+@dataclass(frozen=True)
+class CurrentAwareMotion:
+    """Seed 000's motion model with the water current in the state.
+
+    State ``x = (east, north, up, c_east, c_north)``: position (m, world) and current (m/s, world).
+    ``f(x, u) = (e + dt (S sin C + c_e), n + dt (S cos C + c_n), up - dz, c_e, c_n)`` with the
+    inputs of :class:`CourseSpeedDepthMotion` (heading as C, speed through water as S), so that
+    position fixes make the current observable and the prediction between fixes drifts with it,
+    as the vehicle does. ``Q`` is seed 000's eq. 16 term for the inputs plus a random walk of the
+    current, ``sigma_current_walk^2 dt`` per component.
+
+    Attributes:
+        base: the input noise model (sigmas of heading, speed, depth change).
+        sigma_current_walk_m_s_per_sqrt_s: random-walk intensity of the current, (m/s)/sqrt(s).
+    """
+
+    base: CourseSpeedDepthMotion
+    sigma_current_walk_m_s_per_sqrt_s: float
+
+    def f(self, x: Array, u: Array, dt_s: float) -> Array:
+        """Predicted state, shape (n, 5)."""
+        out = np.array(x, dtype=float, copy=True)
+        out[..., :3] += self.base.increment(u, dt_s)
+        out[..., :2] += dt_s * x[..., 3:5]
+        return out
+
+    def F(self, x: Array, u: Array, dt_s: float) -> Array:
+        """State Jacobian, shape (n, 5, 5): identity plus dt on the position-current blocks."""
+        F = np.broadcast_to(np.eye(5), (x.shape[0], 5, 5)).copy()
+        F[:, 0, 3] = F[:, 1, 4] = dt_s
+        return F
+
+    def Q(self, u: Array, dt_s: float) -> Array:
+        """Process noise, shape (n, 5, 5)."""
+        Q = np.zeros((*u.shape[:-1], 5, 5))
+        Q[..., :3, :3] = self.base.Q(u, dt_s)
+        q = self.sigma_current_walk_m_s_per_sqrt_s**2 * dt_s
+        Q[..., 3, 3] = Q[..., 4, 4] = q
+        return Q
+
+
+@dataclass(frozen=True)
+class OnPosition:
+    """A position measurement model used on a longer state whose first three components are the
+    position (east, north, up): ``h`` reads them, ``H`` is padded with zero columns.
+
+    Attributes:
+        model: the position measurement model (USBL, GPS, depth).
+        dim: length of the state.
+    """
+
+    model: object
+    dim: int
+
+    def h(self, x: Array) -> Array:
+        return self.model.h(np.asarray(x)[..., :3])
+
+    def H(self, x: Array) -> Array:
+        H3 = self.model.H(np.asarray(x)[..., :3])
+        H = np.zeros((*H3.shape[:-1], self.dim))
+        H[..., :3] = H3
+        return H
+
+    def R(self) -> Array:
+        return self.model.R()
+
+    def residual(self, z: Array, hx: Array) -> Array:
+        return self.model.residual(z, hx)
+
+    def active(self, x: Array) -> NDArray[np.bool_]:
+        return self.model.active(np.asarray(x)[..., :3])

@@ -374,9 +374,18 @@ def execute(
             with _block_path(out_dir, i).open("rb") as fh:
                 yield pickle.load(fh)
 
-    summary = plan.experiment.report(
-        ReportContext(plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress)
-    )
+    try:
+        summary = plan.experiment.report(
+            ReportContext(
+                plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress
+            )
+        )
+    except KeyboardInterrupt:
+        raise BatchInterrupted(
+            f"interrupted while writing the report: all {len(plan.blocks)} blocks are saved in "
+            f"{out_dir}; write the report with: bauv run {plan.experiment.name} --resume "
+            f"--out {out_dir}"
+        ) from None
     _write_run_record(out_dir, plan, "complete")
     return summary
 

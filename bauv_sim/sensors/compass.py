@@ -44,6 +44,26 @@ class Compass:
         self._err = ErrorProcess(cfg.heading.to_model(), seed, runs, ("sensor", name, "heading"))
         self.n = len(runs)
 
+    def measure(
+        self,
+        heading_rad: NDArray[np.float64],
+        t_s: NDArray[np.float64],
+        course_rad: NDArray[np.float64] | None = None,
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Measure true headings (the online form of :meth:`sample`).
+
+        Args:
+            heading_rad: true heading, shape (n, k), rad.
+            t_s: times, shape (k,), s.
+            course_rad: true course over ground, shape (n, k), rad (only for error models with a
+                course-sector bias or deviation).
+
+        Returns:
+            ``(heading (n, k) rad in [0, 2 pi), produced (n, k))``.
+        """
+        value, produced = self._err.apply(heading_rad, t_s, reference_rad=course_rad)
+        return wrap_2pi(value), produced
+
     def sample(self, truth: Truth, index: NDArray[np.intp]) -> SensorSamples:
         """Measure at the given tick indices of ``truth``.
 
@@ -52,7 +72,8 @@ class Compass:
         """
         tr = truth.take(index)
         heading = broadcast_runs(tr.heading_rad, self.n)
-        course = broadcast_runs(tr.course_over_ground_rad, self.n)
-        value, produced = self._err.apply(heading, tr.t_s, reference_rad=course)
-        t_arr = np.broadcast_to(tr.t_s, produced.shape)
-        return SensorSamples(tr.t_s, wrap_2pi(value), produced, t_arr)
+        course = None
+        if self._err.model.needs_reference():
+            course = broadcast_runs(tr.course_over_ground_rad, self.n)
+        value, produced = self.measure(heading, tr.t_s, course)
+        return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))

@@ -112,6 +112,8 @@ class ErrorProcess:
         if gens is None:
             gens = rng_mod.generators(self.seed, self.runs, *self.path, component)
             self._gens[component] = gens
+        if len(gens) == 1:  # the physics loop: one run, one sample
+            return getattr(gens[0], fn)(*args, size=k)[None]
         return np.stack([getattr(g, fn)(*args, size=k) for g in gens])
 
     def apply(

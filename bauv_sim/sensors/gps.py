@@ -48,6 +48,11 @@ class Gps:
         self._errs = [ErrorProcess(m, seed, runs, ("sensor", name, axis)) for axis in ("e", "n")]
         self._surfaced_since = np.full(self.n, np.nan)
 
+    def submerged(self) -> None:
+        """Tell the receiver the antenna is under water (restarts the acquisition clock), when a
+        caller skips :meth:`sample` while the vehicle is deep."""
+        self._surfaced_since[:] = np.nan
+
     def sample(self, truth: Truth, index: NDArray[np.intp]) -> SensorSamples:
         """Fix at the given tick indices.
 

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from bauv_sim.config import Config
-from bauv_sim.frames import KNOT_M_S, R_from_roll_pitch_heading, body_from_world
+from bauv_sim.frames import KNOT_M_S
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import ErrorProcess, SpeedErrorConfig
 from bauv_sim.truth import Truth
@@ -32,11 +32,15 @@ class LogConfig(Config):
 
 
 def forward_speed_through_water(truth: Truth) -> NDArray[np.float64]:
-    """Body-x component of the velocity through water, shape (n, T), m/s."""
-    R = R_from_roll_pitch_heading(
-        truth.roll_pitch_rad[..., 0], truth.roll_pitch_rad[..., 1], truth.heading_rad
-    )
-    return body_from_world(R, truth.vel_water_world_m_s)[..., 0]
+    """Body-x component of the velocity through water, shape (n, T), m/s.
+
+    The body x axis in the world is ``(cos p sin h, cos p cos h, sin p)`` for pitch p and heading h
+    (roll turns the body about that axis and does not move it).
+    """
+    p, h = truth.roll_pitch_rad[..., 1], truth.heading_rad
+    v = truth.vel_water_world_m_s
+    cp = np.cos(p)
+    return cp * np.sin(h) * v[..., 0] + cp * np.cos(h) * v[..., 1] + np.sin(p) * v[..., 2]
 
 
 class Log:
@@ -47,10 +51,18 @@ class Log:
         self._err = ErrorProcess(cfg.speed.to_model(), seed, runs, ("sensor", name, "speed"))
         self.n = len(runs)
 
+    def measure(
+        self, speed_m_s: NDArray[np.float64], t_s: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Measure true forward speeds through water, shape (n, k), m/s (the online form of
+        :meth:`sample`); returns ``(speed, produced)``."""
+        value, produced = self._err.apply(speed_m_s, t_s)
+        return value, produced & (np.abs(speed_m_s) >= self.cfg.min_speed_m_s)
+
     def sample(self, truth: Truth, index: NDArray[np.intp]) -> SensorSamples:
         """Measure at the given tick indices; values: speed through water, shape (n, k), m/s."""
         tr = truth.take(index)
-        stw = broadcast_runs(forward_speed_through_water(tr), self.n)
-        value, produced = self._err.apply(stw, tr.t_s)
-        produced = produced & (np.abs(stw) >= self.cfg.min_speed_m_s)
+        value, produced = self.measure(
+            broadcast_runs(forward_speed_through_water(tr), self.n), tr.t_s
+        )
         return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))

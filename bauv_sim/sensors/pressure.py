@@ -42,6 +42,13 @@ class Pressure:
         self._err = ErrorProcess(cfg.depth.to_model(), seed, runs, ("sensor", name, "depth"))
         self.n = len(runs)
 
+    def measure(
+        self, value: NDArray[np.float64], t_s: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Measure true depths (or depth changes), shape (n, k), m (the online form of
+        :meth:`sample`); returns ``(value, produced)``."""
+        return self._err.apply(value, t_s)
+
     def sample(
         self, truth: Truth, index: NDArray[np.intp], previous: NDArray[np.intp] | None = None
     ) -> SensorSamples:
@@ -62,5 +69,5 @@ class Pressure:
         if self.cfg.output == "depth_change":
             prev = index - 1 if previous is None else previous
             depth = depth - broadcast_runs(truth.take(prev).depth_m, self.n)
-        value, produced = self._err.apply(depth, tr.t_s)
+        value, produced = self.measure(depth, tr.t_s)
         return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))

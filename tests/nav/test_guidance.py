@@ -59,3 +59,16 @@ def test_bad_waypoints():
         WaypointGuidance([])
     with pytest.raises(NavInputError, match=r"waypoints\[0\]"):
         WaypointGuidance([Waypoint(0, 0, 5, acceptance_radius_m=0.0)])
+
+
+def test_reach_test_keeps_a_margin_for_the_estimates_uncertainty():
+    wp = Waypoint(0.0, 0.0, 3.0, acceptance_radius_m=10.0)
+    g = WaypointGuidance([wp, Waypoint(100.0, 0.0, 3.0)])
+    # 8 m from the way-point with sigma 2 m: 8 > 10 - 2 * 2, not reached yet
+    assert g.step(0.0, np.array([8.0, 0.0, -3.0]), sigma_m=2.0).waypoint == 0
+    # 5.9 m: inside 10 - 4
+    assert g.step(1.0, np.array([5.9, 0.0, -3.0]), sigma_m=2.0).waypoint == 1
+    # a very uncertain estimate still has to come within half the radius
+    g2 = WaypointGuidance([wp, Waypoint(100.0, 0.0, 3.0)])
+    assert g2.step(0.0, np.array([5.5, 0.0, -3.0]), sigma_m=50.0).waypoint == 0
+    assert g2.step(1.0, np.array([4.9, 0.0, -3.0]), sigma_m=50.0).waypoint == 1

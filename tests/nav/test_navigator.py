@@ -78,3 +78,46 @@ def test_gps_and_depth_updates_and_gate():
     assert -nav.estimate.x[2] == pytest.approx(5.5, abs=0.05)
     info = nav.update(HorizontalPositionMeasurement(1.0), np.array([80.0, -60.0]))
     assert info.rejected[0] and nav.n_rejected == 1
+
+
+@pytest.mark.parametrize("with_current", [False, True])
+def test_fast_prediction_equals_the_generic_ekf_prediction(with_current):
+    from nav.ekf import predict
+    from nav.models import CurrentAwareMotion
+
+    rng = np.random.default_rng(3)
+    nav = Navigator(
+        0.0, np.zeros(3), np.eye(3), MOTION, current_sigma0_m_s=0.3 if with_current else None
+    )
+    d = nav.dim
+    A = rng.normal(size=(d, d))
+    P = (A @ A.T + np.eye(d))[None]
+    x = rng.normal(size=(1, d))
+    u = np.array([[1.1, 0.9, 0.05]])
+    m = CurrentAwareMotion(MOTION, 0.005) if with_current else MOTION
+    assert type(nav.motion) is type(m)
+    xf, Pf = nav._predict(x, P, u, 0.2)
+    xg, Pg = predict(x, P, m.f(x, u, 0.2), m.F(x, u, 0.2), m.Q(u, 0.2))
+    assert np.allclose(xf, xg, atol=1e-14) and np.allclose(Pf, Pg, atol=1e-14)
+
+
+def test_single_run_update_equals_the_batched_update():
+    from nav.ekf import update
+    from nav.navigator import _update_one
+
+    rng = np.random.default_rng(11)
+    for d, m in [(3, 3), (5, 3), (5, 1), (5, 2)]:
+        A = rng.normal(size=(d, d))
+        P = (A @ A.T + np.eye(d))[None]
+        x = rng.normal(size=(1, d))
+        H = rng.normal(size=(1, m, d))
+        y = rng.normal(size=(1, m))
+        R = np.diag(rng.uniform(0.1, 1.0, m))
+        active = rng.random((1, m)) > 0.3
+        for gate in (None, 0.9):
+            xb, Pb, ib = update(x, P, y, H, R, active, None, gate)
+            xo, Po, io = _update_one(x, P, y, H, R, active, gate)
+            assert np.allclose(xb, xo, atol=1e-12) and np.allclose(Pb, Po, atol=1e-12)
+            assert ib.rejected[0] == io.rejected[0] and ib.applied[0] == io.applied[0]
+            if active.any():
+                assert ib.nis[0] == pytest.approx(io.nis[0])

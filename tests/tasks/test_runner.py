@@ -81,7 +81,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     args = [
         "paper-000/test-1",
         "--runs",
-        "600",
+        "1000",
         "--seed",
         "2",
         "--quiet",
@@ -104,6 +104,8 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # a shell may start the test runner with SIGINT ignored; the child must see Ctrl-C
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.time() + 60
     while time.time() < deadline:
@@ -118,7 +120,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     assert not (out / "metrics.json").exists()
     assert json.loads((out / "run.json").read_text())["state"] == "incomplete"
     n_saved = len(list((out / "blocks").glob("block-*.pkl")))
-    assert 5 <= n_saved < 60
+    assert 5 <= n_saved < 100
     res = subprocess.run(
         [
             sys.executable,
