@@ -101,6 +101,11 @@ class VehicleTruth:
     angular_velocity_body_rad_s: NDArray[np.float64]
 
 
+HULL_HALF_HEIGHT_M = 0.17
+"""Half-height of the hull's largest section, m (``bauv_sim.hull.HullProfile``: 0.34 m high),
+used by the free-surface model."""
+
+
 @dataclass
 class _Vehicle:
     """Index tables of one vehicle (built once from names)."""
@@ -121,6 +126,9 @@ class _Vehicle:
     crank_m: float
     current_world: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
     correction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    float_bodies: NDArray[np.int_] = field(default_factory=lambda: np.zeros(0, dtype=int))
+    float_gravcomp: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    submerged: float = 1.0
 
 
 class BauvPhysics(mjcf.Physics):
@@ -246,6 +254,8 @@ class BauvPhysics(mjcf.Physics):
             lever,
             crank,
             correction=np.zeros(dofs.size),
+            float_bodies=bodies[m.body_gravcomp[bodies] > 0].copy(),
+            float_gravcomp=m.body_gravcomp[bodies][m.body_gravcomp[bodies] > 0].copy(),
         )
 
     def set_control_tick(self, control_tick_s: float) -> None:
@@ -752,6 +762,37 @@ class BauvPhysics(mjcf.Physics):
         """The current field in use, or None."""
         return self._current
 
+    def apply_environment(self) -> None:
+        """Everything the sea does that is evaluated once per control tick: the current
+        (:meth:`apply_current`) and the free surface (:meth:`apply_free_surface`). :meth:`advance`
+        calls it at the start of every tick; a ``dm_control`` task that steps the physics itself
+        calls it in ``before_step``."""
+        self.apply_current()
+        self.apply_free_surface()
+
+    def submerged_fraction(self, vehicle: str | None = None) -> float:
+        """Fraction of the vehicle's displacement under water, held for the current tick."""
+        return self._v(vehicle).submerged
+
+    def apply_free_surface(self) -> None:
+        """Scale every buoyant body's gravity compensation by the submerged fraction of the hull.
+
+        MuJoCo has no free surface: the buoyancy of ``models/bauv`` (gravity compensation of its
+        float bodies) would hold above z = 0 too. The hull is taken as a section of half-height
+        ``HULL_HALF_HEIGHT_M`` at the reference point's depth d: with u = clip(d / h, -1, 1) the
+        submerged fraction of an elliptic section is ``1/2 + (u sqrt(1 - u^2) + asin u) / pi``
+        (1 when the hull top is under water, 0 when its keel is out). Pitch, roll, waves and the
+        shift of the centre of buoyancy are ignored; the fraction is held for the tick.
+        """
+        m = self.model.ptr
+        for v in self._vehicles.values():
+            depth = -float(self.data.ptr.qpos[v.qpos_adr + 2])
+            u = min(1.0, max(-1.0, depth / HULL_HALF_HEIGHT_M))
+            frac = 0.5 + (u * math.sqrt(1.0 - u * u) + math.asin(u)) / math.pi
+            if frac != v.submerged:
+                v.submerged = frac
+                m.body_gravcomp[v.float_bodies] = v.float_gravcomp * frac
+
     def apply_current(self) -> None:
         """Evaluate the current field at every vehicle now and apply it until the next call.
 
@@ -899,7 +940,7 @@ class BauvPhysics(mjcf.Physics):
                 f"control ticks of {self._control_tick_s} s"
             )
         for _ in range(n):
-            self.apply_current()
+            self.apply_environment()
             self.step(self._steps_per_tick)
 
     def time_s(self) -> float:

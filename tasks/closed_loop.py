@@ -174,7 +174,12 @@ class GuidanceConfig(Config):
     waypoints: tuple[WaypointConfig, ...] = Field(min_length=1)
     speed_m_s: float = Field(1.0, gt=0, le=2)
     surface_speed_m_s: float = Field(0.5, gt=0, le=2)
-    surface_depth_m: float = Field(0.15, ge=0, description="estimated depth counted as surfaced")
+    surface_depth_m: float | None = Field(
+        None,
+        ge=0,
+        description="estimated depth counted as surfaced, m (default: the GPS "
+        "antenna's height above the reference point minus 5 cm)",
+    )
     hold_s: float = Field(10.0, ge=0)
     fixes_needed: int = Field(3, ge=1)
     max_leg_time_s: float = Field(900.0, gt=0)
@@ -329,6 +334,25 @@ class MissionTask(control.Task):
         physics.set_current(make_current(scn.current, rng_mod.generator(seed, run, "current")))
         runs = (run,)
         s = scn.sensors
+        # lever arms of the antennas from the model's sites (body frame)
+        R = physics.R_world_from_body()
+        arm = {
+            name: tuple(float(c) for c in R.T @ (physics.site_position_world(name) - pos))
+            for name in ("gps_antenna", "usbl_transponder")
+        }
+        if s.gps.antenna_body_m == (0.0, 0.0, 0.0):
+            s = s.model_copy(
+                update={"gps": s.gps.model_copy(update={"antenna_body_m": arm["gps_antenna"]})}
+            )
+        if s.usbl.transponder_body_m == (0.0, 0.0, 0.0):
+            s = s.model_copy(
+                update={
+                    "usbl": s.usbl.model_copy(
+                        update={"transponder_body_m": arm["usbl_transponder"]}
+                    )
+                }
+            )
+        self.sensors_cfg = s
         self.compass = Compass(s.compass, seed, runs)
         self.compass_needs_course = s.compass.heading.to_model().needs_reference()
         self.log_sensor = Log(s.log, seed, runs)
@@ -373,6 +397,13 @@ class MissionTask(control.Task):
             max_consecutive_rejections=n.max_consecutive_rejections,
         )
         gd = scn.guidance
+        # surfaced: the GPS antenna out of the water with 5 cm to spare (unless configured)
+        antenna_height = s.gps.antenna_body_m[2]
+        surface_depth = (
+            gd.surface_depth_m
+            if gd.surface_depth_m is not None
+            else max(antenna_height - 0.05, 0.0)
+        )
         self.guidance = WaypointGuidance(
             [
                 Waypoint(w.east_m, w.north_m, w.depth_m, w.acceptance_radius_m, w.surface)
@@ -380,7 +411,7 @@ class MissionTask(control.Task):
             ],
             speed_m_s=gd.speed_m_s,
             surface_speed_m_s=gd.surface_speed_m_s,
-            surface_depth_m=gd.surface_depth_m,
+            surface_depth_m=surface_depth,
             hold_s=gd.hold_s,
             fixes_needed=gd.fixes_needed,
             max_leg_time_s=gd.max_leg_time_s,
@@ -403,7 +434,7 @@ class MissionTask(control.Task):
         physics.set_tail_bias_rad(float(a[1]))
         physics.set_lateral_fins_rad(float(a[2]), float(a[3]))
         physics.set_battery_position_m(float(a[4]))
-        physics.apply_current()
+        physics.apply_environment()
         f = self.scn.faults
         if (
             f.physics_nan_at_s is not None

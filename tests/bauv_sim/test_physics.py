@@ -304,3 +304,29 @@ def test_keyframes(phys):
     assert phys.commands()["tail_beat_frequency_hz"] > 0.5
     with pytest.raises(ConfigError):
         phys.reset_to_keyframe("nope")
+
+
+def test_free_surface_buoyancy_fraction_and_motion():
+    """Above the surface the hull loses its buoyancy: the submerged fraction follows the area of
+    an elliptic section, a vehicle released in the air falls back, and one deep stays put."""
+    import math
+
+    from bauv_sim.build import build_physics
+    from bauv_sim.physics import HULL_HALF_HEIGHT_M
+
+    p = build_physics()
+    h = HULL_HALF_HEIGHT_M
+    for depth, want in [(1.0, 1.0), (h, 1.0), (0.0, 0.5), (-h, 0.0), (-1.0, 0.0),
+                        (0.5 * h, 0.5 + (0.5 * math.sqrt(0.75) + math.asin(0.5)) / math.pi)]:
+        p.set_pose([0.0, 0.0, -depth])
+        p.apply_free_surface()
+        assert p.submerged_fraction() == pytest.approx(want, abs=1e-12)
+    # released 0.5 m above the surface, still water, no commands: it falls into the water
+    p.set_pose([0.0, 0.0, 0.5])
+    p.advance(2.0)
+    assert p.depth_m() > -0.2
+    # released at 2 m depth it is neutral: it stays within a few millimetres
+    p.set_pose([0.0, 0.0, -2.0])
+    p.advance(2.0)
+    assert p.depth_m() == pytest.approx(2.0, abs=0.02)
+    assert p.submerged_fraction() == 1.0
