@@ -82,17 +82,31 @@ def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[s
     out = copy.deepcopy(dict(data))
     for text in overrides:
         path, value = parse_override(text)
-        node = out
-        for i, part in enumerate(path[:-1]):
-            child = node.setdefault(part, {})
-            if not isinstance(child, dict):
-                where = ".".join(path[: i + 1])
-                raise ConfigError(f"override {text!r}: {where} is a value, not a table")
-            node = child
-        if path[-1] == "kind" and node.get("kind", value) != value:
-            # a new kind starts from its own defaults, not the old kind's fields
-            node.clear()
-        node[path[-1]] = value
+        node: Any = out
+        for i, part in enumerate(path):
+            where = ".".join(path[: i + 1])
+            last = i == len(path) - 1
+            if isinstance(node, list):
+                # an element of an array of tables: guidance.waypoints.0.surface=true
+                if not part.isdigit() or int(part) >= len(node):
+                    raise ConfigError(
+                        f"override {text!r}: {where}: index must be 0..{len(node) - 1}"
+                    )
+                if last:
+                    node[int(part)] = value
+                else:
+                    node = node[int(part)]
+                continue
+            if not isinstance(node, dict):
+                parent = ".".join(path[:i])
+                raise ConfigError(f"override {text!r}: {parent} is a value, not a table")
+            if last:
+                if part == "kind" and node.get("kind", value) != value:
+                    # a new kind starts from its own defaults, not the old kind's fields
+                    node.clear()
+                node[part] = value
+            else:
+                node = node.setdefault(part, {})
     return out
 
 

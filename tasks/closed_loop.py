@@ -152,9 +152,8 @@ class NavigationConfig(Config):
     sigma_elevation_deg: float = Field(3.0, gt=0)
     sigma_gps_m: float = Field(2.5, gt=0)
     initial_sigma_m: float = Field(3.0, gt=0, description="per horizontal axis, m (GNSS fix)")
-    gate_probability: float | None = Field(
-        0.999, gt=0, lt=1, description="chi-square innovation gate; none switches it off"
-    )
+    gate_enabled: bool = Field(True, description="chi-square innovation gate on USBL/GPS fixes")
+    gate_probability: float = Field(0.999, gt=0, lt=1, description="gate probability")
     history_s: float = Field(20.0, gt=0, description="history kept for late fixes, s")
     estimate_current: bool = Field(
         True, description="carry the water current in the EKF state (else seed 000's 3 states)"
@@ -163,8 +162,8 @@ class NavigationConfig(Config):
     current_walk_m_s_per_sqrt_s: float = Field(
         0.005, ge=0, description="random walk of the current, (m/s)/sqrt(s)"
     )
-    max_consecutive_rejections: int | None = Field(
-        5, ge=1, description="after this many gated fixes in a row, apply the next one; none: never"
+    max_consecutive_rejections: int = Field(
+        5, ge=0, description="after this many gated fixes in a row, apply the next one; 0: never"
     )
 
 
@@ -391,10 +390,10 @@ class MissionTask(control.Task):
             P0,
             self.motion,
             n.history_s,
-            n.gate_probability,
+            n.gate_probability if n.gate_enabled else None,
             current_sigma0_m_s=n.current_sigma0_m_s if n.estimate_current else None,
             current_walk_m_s_per_sqrt_s=n.current_walk_m_s_per_sqrt_s,
-            max_consecutive_rejections=n.max_consecutive_rejections,
+            max_consecutive_rejections=n.max_consecutive_rejections or None,
         )
         gd = scn.guidance
         # surfaced: the GPS antenna out of the water with 5 cm to spare (unless configured)

@@ -51,3 +51,10 @@ def test_bad_override_syntax():
         apply_overrides({}, ["novalue"])
     with pytest.raises(ConfigError, match="is a value, not a table"):
         apply_overrides({"a": 1}, ["a.b=2"])
+
+
+def test_overrides_address_array_elements():
+    data = {"wps": [{"x": 1}, {"x": 2}]}
+    assert apply_overrides(data, ["wps.1.x=5"])["wps"] == [{"x": 1}, {"x": 5}]
+    with pytest.raises(ConfigError, match=r"wps\.2: index must be 0\.\.1"):
+        apply_overrides(data, ["wps.2.x=5"])
