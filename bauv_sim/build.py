@@ -163,14 +163,16 @@ def build_scene(config: SceneConfig | None = None) -> tuple[mjcf.RootElement, sb
         return [x, y, float(bed.height_world(x, y)) + above]
 
     root.find("site", "usbl_transceiver").pos = on_bed(
-        cfg.transceiver_east_m, cfg.transceiver_north_m, cfg.transceiver_height_above_seabed_m)
+        cfg.transceiver_east_m, cfg.transceiver_north_m, cfg.transceiver_height_above_seabed_m
+    )
     template = root.find("site", "beacon_0")
     style = {"size": template.size, "type": template.type, "material": template.material}
     for site in [s for s in root.worldbody.site if s.name.startswith("beacon_")]:
         site.remove()
     for b in cfg.beacons:
-        root.worldbody.add("site", name=b.name,
-                           pos=on_bed(b.east_m, b.north_m, b.height_above_seabed_m), **style)
+        root.worldbody.add(
+            "site", name=b.name, pos=on_bed(b.east_m, b.north_m, b.height_above_seabed_m), **style
+        )
     for spec in cfg.vehicles:
         try:
             floor = float(bed.height_world(spec.east_m, spec.north_m))
@@ -180,7 +182,8 @@ def build_scene(config: SceneConfig | None = None) -> tuple[mjcf.RootElement, sb
         if z < floor + VEHICLE_CLEARANCE_M:
             raise GeometryError(
                 f"vehicle {spec.name!r} at depth {spec.depth_m} m is below or within "
-                f"{VEHICLE_CLEARANCE_M} m of the seabed (depth {-floor:.2f} m there)")
+                f"{VEHICLE_CLEARANCE_M} m of the seabed (depth {-floor:.2f} m there)"
+            )
         frame = root.worldbody.attach(_vehicle(spec.name))
         frame.add("freejoint", name="root")
         frame.pos = [spec.east_m, spec.north_m, z]
@@ -196,8 +199,9 @@ def initial_velocities(config: SceneConfig) -> dict[str, np.ndarray]:
     return out
 
 
-def build_physics(config: SceneConfig | None = None,
-                  control_tick_s: float = DEFAULT_CONTROL_TICK_S) -> BauvPhysics:
+def build_physics(
+    config: SceneConfig | None = None, control_tick_s: float = DEFAULT_CONTROL_TICK_S
+) -> BauvPhysics:
     """Assemble, compile and initialise a scene.
 
     Args:
@@ -213,8 +217,12 @@ def build_physics(config: SceneConfig | None = None,
     phys.set_control_tick(control_tick_s)
     vel = initial_velocities(cfg)
     for v in cfg.vehicles:
-        phys.set_pose([v.east_m, v.north_m, -v.depth_m],
-                      [0.0, 0.0, math.radians(v.heading_deg)], vel[v.name], vehicle=v.name)
+        phys.set_pose(
+            [v.east_m, v.north_m, -v.depth_m],
+            [0.0, 0.0, math.radians(v.heading_deg)],
+            vel[v.name],
+            vehicle=v.name,
+        )
     return phys
 
 

@@ -70,8 +70,9 @@ def _geom_name(model: mujoco.MjModel, g: int) -> str:
     return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) or ""
 
 
-def prepare_model(model: mujoco.MjModel,
-                  keep_added_mass: Iterable[str] = KEEP_ADDED_MASS_GEOMS) -> NDArray[np.int_]:
+def prepare_model(
+    model: mujoco.MjModel, keep_added_mass: Iterable[str] = KEEP_ADDED_MASS_GEOMS
+) -> NDArray[np.int_]:
     """Remove the added-mass artefact of the ellipsoid fluid model, in place.
 
     Zeroes the virtual mass and virtual inertia (``geom_fluid[:, 6:12]``) of every fluid geom
@@ -96,8 +97,9 @@ def prepare_model(model: mujoco.MjModel,
     return idx
 
 
-def added_mass_removed(model: mujoco.MjModel,
-                       keep_added_mass: Iterable[str] = KEEP_ADDED_MASS_GEOMS) -> bool:
+def added_mass_removed(
+    model: mujoco.MjModel, keep_added_mass: Iterable[str] = KEEP_ADDED_MASS_GEOMS
+) -> bool:
     """Whether :func:`prepare_model` is in effect (non-kept fluid geoms have no virtual mass)."""
     keep = set(keep_added_mass)
     for g in fluid_geoms(model):
@@ -271,12 +273,27 @@ def plate_fins() -> list[PlateFin]:
     caudal_area = hull.caudal_fin_area_centroid(hull.TAIL)[0]
     specs = [
         ("caudal_fin_fluid", caudal_area, hull.TAIL.fin_span_m, hull.TAIL.fin_thickness_m, False),
-        ("fin_port_fluid", hull.LATERAL_FIN.area_m2(), hull.LATERAL_FIN.span_m,
-         hull.LATERAL_FIN.thickness_m, True),
-        ("fin_starboard_fluid", hull.LATERAL_FIN.area_m2(), hull.LATERAL_FIN.span_m,
-         hull.LATERAL_FIN.thickness_m, True),
-        ("dorsal_fin_fluid", hull.DORSAL_FIN.area_m2(), hull.DORSAL_FIN.span_m,
-         hull.DORSAL_FIN.thickness_m, True),
+        (
+            "fin_port_fluid",
+            hull.LATERAL_FIN.area_m2(),
+            hull.LATERAL_FIN.span_m,
+            hull.LATERAL_FIN.thickness_m,
+            True,
+        ),
+        (
+            "fin_starboard_fluid",
+            hull.LATERAL_FIN.area_m2(),
+            hull.LATERAL_FIN.span_m,
+            hull.LATERAL_FIN.thickness_m,
+            True,
+        ),
+        (
+            "dorsal_fin_fluid",
+            hull.DORSAL_FIN.area_m2(),
+            hull.DORSAL_FIN.span_m,
+            hull.DORSAL_FIN.thickness_m,
+            True,
+        ),
     ]
     for name, area, span, thick, on_hull in specs:
         ar = (2.0 if on_hull else 1.0) * span**2 / area
@@ -301,8 +318,11 @@ def peduncle_fluid_semi_axes() -> tuple[float, float, float]:
 
     h = hull.HULL
     s_mid = 0.5 * (h.s_hinge + 1.0)
-    return (0.5 * (h.hinge_x_m - h.end_x_m), float(h.half_width(s_mid)),
-            float(h.half_height(s_mid)))
+    return (
+        0.5 * (h.hinge_x_m - h.end_x_m),
+        float(h.half_width(s_mid)),
+        float(h.half_height(s_mid)),
+    )
 
 
 def _ellipsoid_areas(semi: Sequence[float]) -> tuple[float, float]:
@@ -350,8 +370,7 @@ def _wetted_areas() -> tuple[float, float]:
     sh = h.s_hinge
     cap = float(h.section_area(sh))
     end = float(h.section_area(1.0))
-    return (float(hull.hull_mesh(h).area) - cap,
-            float(hull.peduncle_mesh(h).area) - cap - end)
+    return (float(hull.hull_mesh(h).area) - cap, float(hull.peduncle_mesh(h).area) - cap - end)
 
 
 def drag_budget(speed_m_s: float = 1.0) -> DragBudget:
@@ -429,16 +448,24 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
     ar_ped = (2.0 * ps[2]) ** 2 / amax_p
     c_ang_fin = CROSSFLOW_DRAG_COEFFICIENT / (2.0 * np.pi)
     out = {
-        "hull_fluid": np.array([
-            0.5 * cf * (ff - 1.0) * (s_hull + s_ped) / af_h,
-            0.5 * cf * s_hull / (amax_h - af_h),
-            0.0,
-            0.5 * lift_slope_per_rad(0.5 * (ar_side + ar_top)),
-            MAGNUS_LIFT_COEFFICIENT]),
-        "peduncle_fluid": np.array([
-            0.0, 0.5 * cf * s_ped / (amax_p - af_p), 0.0,
-            0.5 * lift_slope_per_rad(ar_ped) * _tail_lift_factor(2.0 * ps[0]),
-            MAGNUS_LIFT_COEFFICIENT]),
+        "hull_fluid": np.array(
+            [
+                0.5 * cf * (ff - 1.0) * (s_hull + s_ped) / af_h,
+                0.5 * cf * s_hull / (amax_h - af_h),
+                0.0,
+                0.5 * lift_slope_per_rad(0.5 * (ar_side + ar_top)),
+                MAGNUS_LIFT_COEFFICIENT,
+            ]
+        ),
+        "peduncle_fluid": np.array(
+            [
+                0.0,
+                0.5 * cf * s_ped / (amax_p - af_p),
+                0.0,
+                0.5 * lift_slope_per_rad(ar_ped) * _tail_lift_factor(2.0 * ps[0]),
+                MAGNUS_LIFT_COEFFICIENT,
+            ]
+        ),
     }
     cb_fin = 0.5 * FIN_OPERATING_DRAG_COEFFICIENT
     for fin in plate_fins():
@@ -450,9 +477,15 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
         lift = 0.5 * lift_slope_per_rad(fin.aspect_ratio)
         if fin.geom == "caudal_fin_fluid":
             lift *= _tail_lift_factor(c)
-        out[fin.geom] = np.array([
-            cb_fin, max(0.0, (friction - cb_fin * a_edge) / (a_plate - a_edge)), c_ang_fin,
-            lift, MAGNUS_LIFT_COEFFICIENT])
+        out[fin.geom] = np.array(
+            [
+                cb_fin,
+                max(0.0, (friction - cb_fin * a_edge) / (a_plate - a_edge)),
+                c_ang_fin,
+                lift,
+                MAGNUS_LIFT_COEFFICIENT,
+            ]
+        )
     return out
 
 
@@ -517,8 +550,12 @@ def crossflow_damping_constants(cg_hull_m: ArrayLike) -> NDArray[np.float64]:
     y = hull.LATERAL_FIN_PIVOT_M[1] + rr
     k_roll += 2.0 * float(np.sum(0.5 * rho * dc_fin * chord * np.abs(y) ** 3) * dr)
     area = hull.LATERAL_FIN.area_m2()
-    xl = hull.LATERAL_FIN_PIVOT_M[0] + float(hull.LATERAL_FIN.centroid_m()[0]) + (
-        hull.LATERAL_FIN_AXIS_FRAC * hull.LATERAL_FIN.root_chord_m) - cg[0]
+    xl = (
+        hull.LATERAL_FIN_PIVOT_M[0]
+        + float(hull.LATERAL_FIN.centroid_m()[0])
+        + (hull.LATERAL_FIN_AXIS_FRAC * hull.LATERAL_FIN.root_chord_m)
+        - cg[0]
+    )
     k_pitch += 2.0 * 0.5 * rho * dc_fin * area * abs(xl) ** 3
     return np.array([k_roll, k_pitch, k_yaw])
 
@@ -540,8 +577,9 @@ def damper_semi_axes(k_rpy: ArrayLike, rho: float = 1025.0) -> NDArray[np.float6
     """
     kr, kp, ky = (float(v) for v in k_rpy)
     if not (ky >= kp > 0 and ky > kr > 0):
-        raise ConfigError(f"damping constants {k_rpy}: need K_yaw >= K_pitch > 0 and "
-                          "K_yaw > K_roll > 0")
+        raise ConfigError(
+            f"damping constants {k_rpy}: need K_yaw >= K_pitch > 0 and K_yaw > K_roll > 0"
+        )
     c = 8.0 / 15.0 * np.pi
     ratio_x = (ky / kr) ** (1.0 / 3.0)
     dz = (kr / (rho * c * ratio_x)) ** 0.2
@@ -594,8 +632,9 @@ class Hydrostatics:
         return float(self.bg_world_m[2])
 
 
-def hydrostatics(mass_kg: ArrayLike, gravcomp: ArrayLike, com_world_m: ArrayLike,
-                 gravity_m_s2: float) -> Hydrostatics:
+def hydrostatics(
+    mass_kg: ArrayLike, gravcomp: ArrayLike, com_world_m: ArrayLike, gravity_m_s2: float
+) -> Hydrostatics:
     """Weight and buoyancy of a set of bodies from their masses, gravity compensations and centres
     of mass (MuJoCo applies ``gravcomp * m * g`` upwards at each body's centre of mass).
 
@@ -641,8 +680,14 @@ class BallastSolution:
     float_gravcomp: float
 
 
-def solve_ballast(spec: mujoco.MjSpec, hull_body: str, float_body: str, ballast_geom: str,
-                  displaced_volume_m3: float, cb_hull_m: ArrayLike) -> BallastSolution:
+def solve_ballast(
+    spec: mujoco.MjSpec,
+    hull_body: str,
+    float_body: str,
+    ballast_geom: str,
+    displaced_volume_m3: float,
+    cb_hull_m: ArrayLike,
+) -> BallastSolution:
     """Ballast mass and (x, y) position that make the vehicle neutral with its CG under its CB at
     zero joint angles (``qpos0``).
 
@@ -686,8 +731,10 @@ def solve_ballast(spec: mujoco.MjSpec, hull_body: str, float_body: str, ballast_
             moment += float(model.body_mass[b]) * (R.T @ (data.xipos[b] - p0))
     m_b = m_disp - total
     if m_b <= 0:
-        raise GeometryError(f"equipment {total:.3f} kg is heavier than the displacement "
-                            f"{m_disp:.3f} kg: no ballast can make the vehicle neutral")
+        raise GeometryError(
+            f"equipment {total:.3f} kg is heavier than the displacement "
+            f"{m_disp:.3f} kg: no ballast can make the vehicle neutral"
+        )
     cb = np.asarray(cb_hull_m, dtype=float)
     xy = (m_disp * cb[:2] - moment[:2]) / m_b
     return BallastSolution(m_b, xy, m_disp / float(model.body_mass[fb]))
@@ -760,8 +807,9 @@ def load_speed_table(path: str | Path | None = None) -> SpeedTable:
         with p.open() as fh:
             rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
     except FileNotFoundError:
-        raise ConfigError(f"speed table {str(p)!r}: not found "
-                          "(run python -m tasks.vehicle_checks)") from None
+        raise ConfigError(
+            f"speed table {str(p)!r}: not found (run python -m tasks.vehicle_checks)"
+        ) from None
     try:
         cols = {c: np.array([float(r[c]) for r in rows]) for c in SPEED_TABLE_COLUMNS}
     except (KeyError, ValueError) as exc:

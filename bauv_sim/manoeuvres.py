@@ -25,8 +25,12 @@ from bauv_sim.physics import BauvPhysics
 from bauv_sim.seabed import SeabedConfig
 
 
-def open_water_scene(depth_m: float = 20.0, heading_deg: float = 0.0,
-                     speed_m_s: float = 0.0, bottom_depth_m: float = 200.0) -> BauvPhysics:
+def open_water_scene(
+    depth_m: float = 20.0,
+    heading_deg: float = 0.0,
+    speed_m_s: float = 0.0,
+    bottom_depth_m: float = 200.0,
+) -> BauvPhysics:
     """One vehicle over a flat seabed far below (no relief, no slope), at rest or moving.
 
     Args:
@@ -38,12 +42,21 @@ def open_water_scene(depth_m: float = 20.0, heading_deg: float = 0.0,
     Returns:
         The physics (control tick 0.1 s).
     """
-    bed = SeabedConfig(depth_at_origin_m=bottom_depth_m, slope=0.0, relief_std_m=0.0,
-                       min_depth_m=bottom_depth_m, half_extent_m=2000.0, cell_m=500.0)
+    bed = SeabedConfig(
+        depth_at_origin_m=bottom_depth_m,
+        slope=0.0,
+        relief_std_m=0.0,
+        min_depth_m=bottom_depth_m,
+        half_extent_m=2000.0,
+        cell_m=500.0,
+    )
     cfg = build.SceneConfig(
-        vehicles=(build.VehicleSpec(depth_m=depth_m, heading_deg=heading_deg,
-                                    speed_m_s=speed_m_s),),
-        seabed=bed, beacons=())
+        vehicles=(
+            build.VehicleSpec(depth_m=depth_m, heading_deg=heading_deg, speed_m_s=speed_m_s),
+        ),
+        seabed=bed,
+        beacons=(),
+    )
     return build.build_physics(cfg)
 
 
@@ -110,9 +123,14 @@ class StraightSwimResult:
     window_s: float
 
 
-def straight_swim(physics: BauvPhysics, frequency_hz: float, settle_s: float = 30.0,
-                  measure_s: float = 20.0, hold_depth: bool = True,
-                  samples_per_beat: int = 50) -> StraightSwimResult:
+def straight_swim(
+    physics: BauvPhysics,
+    frequency_hz: float,
+    settle_s: float = 30.0,
+    measure_s: float = 20.0,
+    hold_depth: bool = True,
+    samples_per_beat: int = 50,
+) -> StraightSwimResult:
     """Swim straight at a fixed tail-beat frequency and measure the steady state.
 
     Runs ``settle_s`` (rounded to control ticks) and then a window of whole tail beats of about
@@ -179,19 +197,26 @@ def straight_swim(physics: BauvPhysics, frequency_hz: float, settle_s: float = 3
     head = np.unwrap(np.asarray(heads))
     yaw = float(np.mean(np.ptp(head[: (head.size // beats) * beats].reshape(beats, -1), axis=1)))
     result = StraightSwimResult(
-        frequency_hz=frequency_hz, speed_through_water_m_s=u_tw,
+        frequency_hz=frequency_hz,
+        speed_through_water_m_s=u_tw,
         speed_over_ground_m_s=float(np.linalg.norm(ground)),
         mean_motor_power_w=physics.mean_motor_power_w(),
         peak_motor_torque_nm=float(np.max(torques)),
-        tail_tip_amplitude_m=amp, strouhal=frequency_hz * amp / u_tw if u_tw > 0 else math.inf,
-        mean_pitch_rad=float(np.mean(pitches)), mean_fin_rad=float(np.mean(fins)),
-        yaw_amplitude_rad=yaw, depth_change_m=float(-(p1[2] - p0[2])), window_s=window)
+        tail_tip_amplitude_m=amp,
+        strouhal=frequency_hz * amp / u_tw if u_tw > 0 else math.inf,
+        mean_pitch_rad=float(np.mean(pitches)),
+        mean_fin_rad=float(np.mean(fins)),
+        yaw_amplitude_rad=yaw,
+        depth_change_m=float(-(p1[2] - p0[2])),
+        window_s=window,
+    )
     physics.set_energy_tracking(False)
     return result
 
 
-def _tip_amplitude(tips: NDArray[np.float64], hulls: NDArray[np.float64],
-                   vel: NDArray[np.float64], beats: int) -> float:
+def _tip_amplitude(
+    tips: NDArray[np.float64], hulls: NDArray[np.float64], vel: NDArray[np.float64], beats: int
+) -> float:
     """Mean per-beat peak-to-peak of the tip's lateral offset from the hull's path.
 
     The lateral direction is horizontal and normal to the mean velocity; the path is the hull's
@@ -207,14 +232,18 @@ def _tip_amplitude(tips: NDArray[np.float64], hulls: NDArray[np.float64],
     # the wrap-around is wrong at the ends for a drifting path: use the interior beats only
     rel = tips[:, :2] @ n - smooth
     if beats >= 3:
-        rel = rel[per: (beats - 1) * per]
+        rel = rel[per : (beats - 1) * per]
         beats -= 2
     cyc = rel[: beats * per].reshape(beats, per)
     return float(np.mean(np.ptp(cyc, axis=1)))
 
 
-def speed_table(physics: BauvPhysics, frequencies_hz: list[float], settle_s: float = 30.0,
-                measure_s: float = 20.0) -> list[StraightSwimResult]:
+def speed_table(
+    physics: BauvPhysics,
+    frequencies_hz: list[float],
+    settle_s: float = 30.0,
+    measure_s: float = 20.0,
+) -> list[StraightSwimResult]:
     """Straight swims at increasing frequencies, one after the other in the same run (each starts
     from the previous steady state).
 
@@ -253,8 +282,12 @@ class TowPoint:
     cd: float
 
 
-def tow_test(physics: BauvPhysics, speeds_m_s: list[float], reference_area_m2: float,
-             current_m_s: float = 0.0) -> list[TowPoint]:
+def tow_test(
+    physics: BauvPhysics,
+    speeds_m_s: list[float],
+    reference_area_m2: float,
+    current_m_s: float = 0.0,
+) -> list[TowPoint]:
     """Drag of the vehicle held at constant speeds with the tail straight and the fins level.
 
     The vehicle is placed level, heading north, moving north at each speed relative to the water
@@ -316,9 +349,14 @@ class TurnResult:
     depth_change_m: float
 
 
-def heading_change(physics: BauvPhysics, frequency_hz: float, bias_rad: float,
-                   approach_s: float = 30.0, turn_s: float = 60.0,
-                   hold_depth: bool = True) -> TurnResult:
+def heading_change(
+    physics: BauvPhysics,
+    frequency_hz: float,
+    bias_rad: float,
+    approach_s: float = 30.0,
+    turn_s: float = 60.0,
+    hold_depth: bool = True,
+) -> TurnResult:
     """Swim straight, then apply a fixed tail bias (open loop in heading) and measure the turn.
 
     Args:
@@ -345,8 +383,14 @@ def heading_change(physics: BauvPhysics, frequency_hz: float, bias_rad: float,
                 physics.set_lateral_fins_rad(a, a)
             physics.advance(tick)
             if log is not None:
-                log.append((physics.time_s(), physics.position_world(), physics.heading_rad(),
-                            float(physics.roll_pitch_heading()[0])))
+                log.append(
+                    (
+                        physics.time_s(),
+                        physics.position_world(),
+                        physics.heading_rad(),
+                        float(physics.roll_pitch_heading()[0]),
+                    )
+                )
 
     run(approach_s, None)
     h0 = physics.heading_rad()
@@ -366,8 +410,16 @@ def heading_change(physics: BauvPhysics, frequency_hz: float, bias_rad: float,
     radius = _fit_circle_radius(pos[half, :2])
     dist = np.sum(np.linalg.norm(np.diff(pos[half], axis=0), axis=1))
     speed = float(dist / (t[half][-1] - t[half][0]))
-    return TurnResult(frequency_hz, bias_rad, rate, radius, speed, t90,
-                      float(np.mean(roll[half])), physics.depth_m() - z0)
+    return TurnResult(
+        frequency_hz,
+        bias_rad,
+        rate,
+        radius,
+        speed,
+        t90,
+        float(np.mean(roll[half])),
+        physics.depth_m() - z0,
+    )
 
 
 def _fit_circle_radius(xy: NDArray[np.float64]) -> float:
@@ -399,8 +451,13 @@ class DepthChangeResult:
     depth_change_m: float
 
 
-def depth_change(physics: BauvPhysics, frequency_hz: float, fin_rad: float,
-                 approach_s: float = 30.0, step_s: float = 20.0) -> DepthChangeResult:
+def depth_change(
+    physics: BauvPhysics,
+    frequency_hz: float,
+    fin_rad: float,
+    approach_s: float = 30.0,
+    step_s: float = 20.0,
+) -> DepthChangeResult:
     """Swim straight with level fins, then set both lateral fins to ``fin_rad`` and hold them.
 
     Args:
@@ -433,8 +490,14 @@ def depth_change(physics: BauvPhysics, frequency_hz: float, fin_rad: float,
     last = t >= t[0] + 0.75 * (t[-1] - t[0])
     rate = float(np.polyfit(t[half], z[half], 1)[0])
     # body y is port: a nose-up pitch rate is a negative rotation about +y
-    return DepthChangeResult(frequency_hz, fin_rad, float(np.max(np.abs(q))),
-                             float(np.mean(pitch[last]) - pitch0), rate, float(z[-1] - z0))
+    return DepthChangeResult(
+        frequency_hz,
+        fin_rad,
+        float(np.max(np.abs(q))),
+        float(np.mean(pitch[last]) - pitch0),
+        rate,
+        float(z[-1] - z0),
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -461,9 +524,12 @@ class RollRecoveryResult:
     max_overshoot_rad: float
 
 
-def roll_recovery(physics: BauvPhysics, roll_rad: float = math.radians(20.0),
-                  duration_s: float = 10.0,
-                  threshold_rad: float = math.radians(2.0)) -> RollRecoveryResult:
+def roll_recovery(
+    physics: BauvPhysics,
+    roll_rad: float = math.radians(20.0),
+    duration_s: float = 10.0,
+    threshold_rad: float = math.radians(2.0),
+) -> RollRecoveryResult:
     """Release the idle vehicle from a roll angle at rest and time its return.
 
     Args:
@@ -486,14 +552,18 @@ def roll_recovery(physics: BauvPhysics, roll_rad: float = math.radians(20.0),
         rolls.append(float(physics.roll_pitch_heading()[0]))
     t, r = np.array(ts), np.array(rolls)
     above = np.flatnonzero(np.abs(r) >= threshold_rad)
-    settle = float(t[above[-1] + 1]) if above.size and above[-1] + 1 < t.size else (
-        math.inf if above.size else 0.0)
+    settle = (
+        float(t[above[-1] + 1])
+        if above.size and above[-1] + 1 < t.size
+        else (math.inf if above.size else 0.0)
+    )
     sign = np.sign(r)
     cross = np.flatnonzero(sign[1:] * sign[:-1] < 0)
     period = float(2.0 * np.mean(np.diff(t[cross]))) if cross.size >= 2 else math.nan
     opposite = r * np.sign(roll_rad)
-    return RollRecoveryResult(roll_rad, settle, threshold_rad, period,
-                              float(max(0.0, -opposite.min())))
+    return RollRecoveryResult(
+        roll_rad, settle, threshold_rad, period, float(max(0.0, -opposite.min()))
+    )
 
 
 @dataclass(frozen=True)
@@ -515,8 +585,9 @@ class DriftResult:
     depth_change_m: float
 
 
-def idle_drift(physics: BauvPhysics, field: currents.CurrentField,
-               duration_s: float = 120.0) -> DriftResult:
+def idle_drift(
+    physics: BauvPhysics, field: currents.CurrentField, duration_s: float = 120.0
+) -> DriftResult:
     """Switch a current on around the idle vehicle (motor stopped, tail straight, fins level) and
     let it drift.
 
@@ -541,9 +612,13 @@ def idle_drift(physics: BauvPhysics, field: currents.CurrentField,
         physics.advance(tick)
     vel = (physics.position_world() - p_mark) / (physics.time_s() - t_mark)
     cur = physics.current_at_vehicle_world()
-    return DriftResult(duration_s, cur, vel,
-                       float(np.linalg.norm(vel - cur) / max(np.linalg.norm(cur), 1e-12)),
-                       physics.depth_m() - z0)
+    return DriftResult(
+        duration_s,
+        cur,
+        vel,
+        float(np.linalg.norm(vel - cur) / max(np.linalg.norm(cur), 1e-12)),
+        physics.depth_m() - z0,
+    )
 
 
 @dataclass(frozen=True)
@@ -563,8 +638,13 @@ class CurrentSwimResult:
     relative_error: float
 
 
-def swim_in_current(make_physics, field: currents.CurrentField, frequency_hz: float,
-                    settle_s: float = 30.0, measure_s: float = 30.0) -> CurrentSwimResult:
+def swim_in_current(
+    make_physics,
+    field: currents.CurrentField,
+    frequency_hz: float,
+    settle_s: float = 30.0,
+    measure_s: float = 30.0,
+) -> CurrentSwimResult:
     """Swim with a fixed tail-beat frequency and level fins, once in still water and once in a
     current, from the same state relative to the water (in the current the vehicle starts moving
     with the water at its start point); compare velocities over the same window.
@@ -587,8 +667,11 @@ def swim_in_current(make_physics, field: currents.CurrentField, frequency_hz: fl
     for fld in (None, field):
         phys = make_physics()
         phys.set_current(fld)
-        phys.set_pose(phys.position_world(), phys.roll_pitch_heading(),
-                      phys.velocity_world() + phys.current_at_vehicle_world())
+        phys.set_pose(
+            phys.position_world(),
+            phys.roll_pitch_heading(),
+            phys.velocity_world() + phys.current_at_vehicle_world(),
+        )
         phys.set_current(fld)
         phys.set_tail_beat_frequency_hz(frequency_hz)
         tick = phys.control_tick_s
@@ -603,4 +686,3 @@ def swim_in_current(make_physics, field: currents.CurrentField, frequency_hz: fl
     (still, _), (ground, cur) = results
     err = float(np.linalg.norm(ground - (still + cur)) / max(np.linalg.norm(ground), 1e-12))
     return CurrentSwimResult(ground, still, cur, err)
-

@@ -60,8 +60,10 @@ class SeabedConfig(Config):
     def _grid(self) -> SeabedConfig:
         n = self.half_extent_m / self.cell_m
         if abs(n - round(n)) > 1e-9 or round(n) < 1:
-            raise ValueError(f"half_extent_m = {self.half_extent_m} must be a whole number of "
-                             f"cells of {self.cell_m} m")
+            raise ValueError(
+                f"half_extent_m = {self.half_extent_m} must be a whole number of "
+                f"cells of {self.cell_m} m"
+            )
         if self.max_wavelength_m < self.min_wavelength_m:
             raise ValueError("max_wavelength_m must be >= min_wavelength_m")
         if self.depth_at_origin_m < self.min_depth_m:
@@ -146,8 +148,9 @@ class Seabed:
         z01, z11 = z[i + 1, j], z[i + 1, j + 1]
         # triangles split along (0,0)-(1,1)
         lower = u >= v
-        return np.where(lower, z00 + u * (z10 - z00) + v * (z11 - z10),
-                        z00 + v * (z01 - z00) + u * (z11 - z01))
+        return np.where(
+            lower, z00 + u * (z10 - z00) + v * (z11 - z10), z00 + v * (z01 - z00) + u * (z11 - z01)
+        )
 
     def depth_at(self, x_m: ArrayLike, y_m: ArrayLike) -> NDArray[np.float64]:
         """Depth of the seabed below the surface, m (positive down); see :meth:`height_world`."""
