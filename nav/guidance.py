@@ -5,12 +5,16 @@ surfacing manoeuvre (seed 001: the vehicle surfaces to take a GPS fix). For each
 course is the direct course from the estimated position to the way-point (seed 001, "direct course
 nu"), or the course of a pluggable course law (seed 001's current-compensating course, eq. 22-26).
 
-A way-point is reached when the *estimate* is inside its acceptance circle with a margin for its
-own uncertainty: ``d_est <= max(R - k sigma, R / 2)`` with sigma the standard deviation of the
-estimate along its worst horizontal direction and k = ``reach_sigmas`` (2 by default), so that the
-true position is inside the circle too unless the filter is inconsistent. The vehicle only knows
-where it thinks it is. A leg that takes longer than ``max_leg_time_s`` is abandoned and the
-way-point counted as missed, so a mission always ends.
+A way-point is reached when, given the estimate and its uncertainty, the true position is inside
+the acceptance circle with probability ``reach_probability`` (0.95): with the estimate at
+horizontal distance d from the way-point and sigma the standard deviation along its worst
+horizontal direction (taken isotropic, which is conservative), the true distance is Rice
+distributed, and the test is ``P(Rice(d, sigma) <= R) >= p``. When sigma is so large that even
+d = 0 cannot satisfy it (R < sigma sqrt(-2 ln(1 - p))), the vehicle aims to pass within
+``min_reach_m`` of the way-point instead, which is the best it can do. An estimate without a
+covariance (sigma = 0) reaches it inside the circle. The vehicle only knows where it thinks it is.
+A leg that takes longer than ``max_leg_time_s`` is abandoned and the way-point counted as missed,
+so a mission always ends.
 
 Surfacing: ``ascend`` (depth 0 at reduced speed until the estimated depth is above
 ``surface_depth_m``), ``surface`` (hold until ``fixes_needed`` GPS fixes arrived and ``hold_s``
@@ -25,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.stats import rice
 
 from nav.errors import NavInputError
 
@@ -98,7 +103,8 @@ class WaypointGuidance:
         fixes_needed: GPS fixes to collect before diving.
         max_leg_time_s: a leg taking longer is abandoned, s.
         course_law: desired course for a leg (default: the direct course).
-        reach_sigmas: margin of the reach test in standard deviations of the estimate.
+        reach_probability: probability that the true position is inside the circle.
+        min_reach_m: distance that counts as reached when the probability cannot be met, m.
     """
 
     waypoints: Sequence[Waypoint]
@@ -109,7 +115,8 @@ class WaypointGuidance:
     fixes_needed: int = 1
     max_leg_time_s: float = 1200.0
     course_law: CourseLaw = direct_course
-    reach_sigmas: float = 2.0
+    reach_probability: float = 0.95
+    min_reach_m: float = 1.0
     index: int = 0
     mode: str = "transit"
     legs: list[LegRecord] = field(default_factory=list)
@@ -145,6 +152,23 @@ class WaypointGuidance:
         self._leg_start_s = t_s
         self.mode = "done" if self.index >= len(self.waypoints) else "transit"
 
+    def reached(self, dist_m: float, radius_m: float, sigma_m: float) -> bool:
+        """The reach test of the module docstring.
+
+        Args:
+            dist_m: horizontal distance of the estimate to the way-point, m.
+            radius_m: acceptance radius, m.
+            sigma_m: standard deviation of the estimate (worst horizontal direction), m.
+        """
+        if dist_m > radius_m:
+            return False
+        if sigma_m <= 0.0:
+            return True
+        p = self.reach_probability
+        if radius_m < sigma_m * math.sqrt(-2.0 * math.log(1.0 - p)):
+            return dist_m <= self.min_reach_m  # the probability cannot be met: pass over it
+        return float(rice.cdf(radius_m, dist_m / sigma_m, scale=sigma_m)) >= p
+
     def step(self, t_s: float, position: Array, sigma_m: float = 0.0) -> GuidanceCommand:
         """The command for now.
 
@@ -166,8 +190,7 @@ class WaypointGuidance:
         wp = self.waypoints[self.index]
         if self.mode in ("transit", "dive"):
             dist = math.hypot(wp.east_m - p[0], wp.north_m - p[1])
-            r = wp.acceptance_radius_m
-            if dist <= max(r - self.reach_sigmas * self._sigma, 0.5 * r):
+            if self.reached(dist, wp.acceptance_radius_m, self._sigma):
                 if wp.surface:
                     self.mode, self._fixes, self._surfaced_at_s = "ascend", 0, None
                     self._hold_course = self.course_law(p, wp)

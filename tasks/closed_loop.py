@@ -22,6 +22,7 @@ way-points and settings; everything else is here.
 from __future__ import annotations
 
 import collections
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -39,6 +40,7 @@ from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig, make_current
 from bauv_sim.errors import BauvSimError, ConfigError, PhysicsError
+from bauv_sim.frames import R_from_roll_pitch_heading
 from bauv_sim.hydro import load_speed_table
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
@@ -182,9 +184,14 @@ class GuidanceConfig(Config):
     hold_s: float = Field(10.0, ge=0)
     fixes_needed: int = Field(3, ge=1)
     max_leg_time_s: float = Field(900.0, gt=0)
-    reach_sigmas: float = Field(
-        2.0, ge=0, description="reach test margin in sigmas of the estimate (see nav.guidance)"
+    reach_probability: float = Field(
+        0.95,
+        gt=0,
+        lt=1,
+        description="a way-point is reached when the truth is inside its "
+        "circle with this probability given the estimate (see nav.guidance)",
     )
+    min_reach_m: float = Field(1.0, gt=0, description="else pass within this distance, m")
 
 
 class TimingConfig(Config):
@@ -352,6 +359,8 @@ class MissionTask(control.Task):
                 }
             )
         self.sensors_cfg = s
+        self.transponder_arm = np.asarray(s.usbl.transponder_body_m, dtype=float)
+        self.antenna_arm = np.asarray(s.gps.antenna_body_m, dtype=float)
         self.compass = Compass(s.compass, seed, runs)
         self.compass_needs_course = s.compass.heading.to_model().needs_reference()
         self.log_sensor = Log(s.log, seed, runs)
@@ -414,7 +423,8 @@ class MissionTask(control.Task):
             hold_s=gd.hold_s,
             fixes_needed=gd.fixes_needed,
             max_leg_time_s=gd.max_leg_time_s,
-            reach_sigmas=gd.reach_sigmas,
+            reach_probability=gd.reach_probability,
+            min_reach_m=gd.min_reach_m,
         )
         self.every = {name: round(getattr(s, name).period_s / tick) for name in ("usbl", "gps")}
         self.every["odometry"] = round(odo.period_s / tick)
@@ -530,14 +540,20 @@ class MissionTask(control.Task):
             tr = _truth_record(vt, t)
             u = self.usbl.sample(tr, _I0)
             if u.produced[0, 0]:
-                self.pending.append((float(u.t_arrival_s[0, 0]), t, u.values[0, 0]))
+                # the transponder's lever arm in the world from the vehicle's own attitude
+                # (measured heading, INS roll and pitch) at the time of validity
+                R = R_from_roll_pitch_heading(rph[0], rph[1], heading)
+                model = dataclasses.replace(
+                    self.usbl_model, transceiver_world_m=self.transceiver - R @ self.transponder_arm
+                )
+                self.pending.append((float(u.t_arrival_s[0, 0]), t, u.values[0, 0], model))
         still = []
-        for t_arr, t_valid, z in self.pending:
+        for t_arr, t_valid, z, model in self.pending:
             if t_arr > t + 1e-9:
-                still.append((t_arr, t_valid, z))
+                still.append((t_arr, t_valid, z, model))
                 continue
             try:
-                info = nav.update(self.usbl_model, z, t_valid)
+                info = nav.update(model, z, t_valid)
                 accepted = not bool(info.rejected[0])
             except NavInputError:
                 accepted = False
@@ -548,7 +564,7 @@ class MissionTask(control.Task):
                     "t_arrival_s": t,
                     "z": z.tolist(),
                     "accepted": accepted,
-                    "position": self.usbl_model.invert(z).tolist(),
+                    "position": model.invert(z).tolist(),
                 }
             )
             usbl_used = True
@@ -560,9 +576,12 @@ class MissionTask(control.Task):
             gfix = self.gps.sample(tr, _I0)
             if gfix.produced[0, 0]:
                 z = gfix.values[0, 0]
+                # the antenna's horizontal lever arm from the vehicle's own attitude
+                arm_world = R_from_roll_pitch_heading(rph[0], rph[1], heading) @ self.antenna_arm
+                z_ref = z - arm_world[:2]
                 accepted = True
                 if self.scn.sensors.use_gps:
-                    accepted = not bool(nav.update(self.gps_model, z).rejected[0])
+                    accepted = not bool(nav.update(self.gps_model, z_ref).rejected[0])
                 self.guidance.gps_fix()
                 self.fixes.append(
                     {

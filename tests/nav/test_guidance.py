@@ -61,14 +61,17 @@ def test_bad_waypoints():
         WaypointGuidance([Waypoint(0, 0, 5, acceptance_radius_m=0.0)])
 
 
-def test_reach_test_keeps_a_margin_for_the_estimates_uncertainty():
-    wp = Waypoint(0.0, 0.0, 3.0, acceptance_radius_m=10.0)
-    g = WaypointGuidance([wp, Waypoint(100.0, 0.0, 3.0)])
-    # 8 m from the way-point with sigma 2 m: 8 > 10 - 2 * 2, not reached yet
-    assert g.step(0.0, np.array([8.0, 0.0, -3.0]), sigma_m=2.0).waypoint == 0
-    # 5.9 m: inside 10 - 4
-    assert g.step(1.0, np.array([5.9, 0.0, -3.0]), sigma_m=2.0).waypoint == 1
-    # a very uncertain estimate still has to come within half the radius
-    g2 = WaypointGuidance([wp, Waypoint(100.0, 0.0, 3.0)])
-    assert g2.step(0.0, np.array([5.5, 0.0, -3.0]), sigma_m=50.0).waypoint == 0
-    assert g2.step(1.0, np.array([4.9, 0.0, -3.0]), sigma_m=50.0).waypoint == 1
+def test_reach_test_is_the_probability_that_the_truth_is_inside():
+    from scipy.stats import rice
+
+    g = WaypointGuidance([Waypoint(0.0, 0.0, 3.0, acceptance_radius_m=10.0)])
+    # by Monte Carlo: estimate 5 m from the way-point, sigma 2 m
+    rng = np.random.default_rng(0)
+    truth = np.array([5.0, 0.0]) + 2.0 * rng.standard_normal((200_000, 2))
+    p_in = np.mean(np.hypot(truth[:, 0], truth[:, 1]) <= 10.0)
+    assert rice.cdf(10.0, 5.0 / 2.0, scale=2.0) == pytest.approx(p_in, abs=0.003)
+    assert g.reached(5.0, 10.0, 2.0) == (p_in >= 0.95)
+    assert not g.reached(8.0, 10.0, 2.0) and g.reached(4.0, 10.0, 2.0)
+    assert g.reached(9.9, 10.0, 0.0) and not g.reached(10.1, 10.0, 0.0)
+    # sigma so large that even d = 0 gives less than 95 %: pass within min_reach_m
+    assert not g.reached(2.0, 10.0, 5.0) and g.reached(0.9, 10.0, 5.0)

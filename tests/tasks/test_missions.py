@@ -192,3 +192,18 @@ def test_a_diverging_run_is_reported_and_the_batch_completes(tmp_path):
     assert m["n_failed"] == 1 and m["runs"][0]["failed"] is None
     msg = m["runs"][1]["failed"]
     assert "run 1 (seed 4)" in msg and "t = 5.2" in msg and "PhysicsError" in msg
+
+
+def test_mission_navigator_is_not_overconfident():
+    """The EKF's horizontal NEES averaged over runs and time stays near its dimension (2). Time
+    samples are correlated, so this is a loose band rather than a chi-square test; it failed (4.0)
+    while the USBL transponder's lever arm was missing from the measurement model."""
+    nees = []
+    for run_index in range(4):
+        a = cl.run_mission(scenario(SHORT), 5, run_index).arrays
+        e = (a["ekf"] - a["truth"])[:, :2]
+        P = a["P"][:, :2, :2]
+        late = a["t"] > 20.0
+        nees.append(np.einsum("ni,ni->n", e, np.linalg.solve(P, e[..., None])[..., 0])[late])
+    mean = float(np.mean(np.concatenate(nees)))
+    assert 0.8 < mean < 3.0, mean
