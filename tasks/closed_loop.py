@@ -63,7 +63,7 @@ from bauv_sim.sensors import (
 )
 from bauv_sim.truth import Truth
 from nav.errors import NavError, NavInputError
-from nav.guidance import Waypoint, WaypointGuidance
+from nav.guidance import GuidanceCommand, Waypoint, WaypointGuidance
 from nav.models import (
     CourseSpeedDepthMotion,
     DepthMeasurement,
@@ -532,7 +532,7 @@ class MissionTask(control.Task):
         }
         nav = self.nav
         if not initial:
-            nav.predict(t, heading, speed, 0.0)
+            self._predict(t, heading, speed)
         if depth_due:
             nav.update(self.depth_model, np.array([depth]))
         usbl_used = gps_used = False
@@ -578,10 +578,7 @@ class MissionTask(control.Task):
                 z = gfix.values[0, 0]
                 # the antenna's horizontal lever arm from the vehicle's own attitude
                 arm_world = R_from_roll_pitch_heading(rph[0], rph[1], heading) @ self.antenna_arm
-                z_ref = z - arm_world[:2]
-                accepted = True
-                if self.scn.sensors.use_gps:
-                    accepted = not bool(nav.update(self.gps_model, z_ref).rejected[0])
+                accepted = self._gps_fix(t, z - arm_world[:2])
                 self.guidance.gps_fix()
                 self.fixes.append(
                     {
@@ -595,13 +592,7 @@ class MissionTask(control.Task):
                 )
                 gps_used = True
         est = nav.estimate
-        if self.scn.navigation.steer_on == "ekf":
-            p_h = est.P[:2, :2]
-            tr_h, det_h = p_h[0, 0] + p_h[1, 1], p_h[0, 0] * p_h[1, 1] - p_h[0, 1] ** 2
-            sigma = math.sqrt(max(0.5 * tr_h + math.sqrt(max(0.25 * tr_h**2 - det_h, 0.0)), 0.0))
-            self.command = self.guidance.step(t, est.x, sigma)
-        else:  # dead reckoning carries no covariance here: the bare acceptance circle
-            self.command = self.guidance.step(t, nav.dr_position)
+        self.command = self._steer(t, est)
         cmds = physics.commands()
         cur = nav.current_estimate
         self.log.add(
@@ -633,7 +624,35 @@ class MissionTask(control.Task):
             waypoint=self.command.waypoint,
             usbl_event=usbl_used,
             gps_event=gps_used,
+            **self._extra_log(),
         )
+
+    # -- hooks of the world side (a mission module may override them) ---------------------------
+
+    def _predict(self, t: float, heading: float, speed: float) -> None:
+        """Time update of the navigation from the measured heading and speed."""
+        self.nav.predict(t, heading, speed, 0.0)
+
+    def _gps_fix(self, t: float, z_ref: NDArray[np.float64]) -> bool:
+        """A GPS fix of the reference point (antenna lever arm removed); returns whether the
+        navigator accepted it."""
+        if not self.scn.sensors.use_gps:
+            return True
+        return not bool(self.nav.update(self.gps_model, z_ref).rejected[0])
+
+    def _steer(self, t: float, est) -> GuidanceCommand:
+        """Guidance on the estimate the scenario says (EKF with its uncertainty, or DR)."""
+        if self.scn.navigation.steer_on == "ekf":
+            p_h = est.P[:2, :2]
+            tr_h, det_h = p_h[0, 0] + p_h[1, 1], p_h[0, 0] * p_h[1, 1] - p_h[0, 1] ** 2
+            sigma = math.sqrt(max(0.5 * tr_h + math.sqrt(max(0.25 * tr_h**2 - det_h, 0.0)), 0.0))
+            return self.guidance.step(t, est.x, sigma)
+        # dead reckoning carries no covariance here: the bare acceptance circle
+        return self.guidance.step(t, self.nav.dr_position)
+
+    def _extra_log(self) -> dict[str, Any]:
+        """Additional per-tick columns of a mission module."""
+        return {}
 
 
 class Pilot:
