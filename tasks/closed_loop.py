@@ -26,7 +26,7 @@ import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from dm_control.rl import control
@@ -131,8 +131,9 @@ class MissionSensors(Config):
         description="MicronNav: 0.2 m, 3 deg, 500 m; travel time + 1 s modem latency",
     )
     gps: GpsConfig = Field(default_factory=GpsConfig, description="GPS at the surface")
-    odometry: OdometryConfig | None = Field(
-        None, description="speed from the tail-beat setting; default: the model's speed table"
+    odometry: OdometryConfig = Field(
+        default_factory=lambda: OdometryConfig(period_s=1.0),
+        description="speed from the tail-beat setting; an empty table is the model's speed table",
     )
     use_usbl: bool = Field(True, description="give USBL fixes to the navigator")
     use_gps: bool = Field(True, description="give GPS fixes to the navigator")
@@ -243,8 +244,7 @@ class MissionScenario(Config):
         s = self.sensors
         for name in ("compass", "log", "pressure", "usbl", "gps"):
             check_multiple(getattr(s, name).period_s, tick, f"sensors.{name}.period_s")
-        if s.odometry is not None:
-            check_multiple(s.odometry.period_s, tick, "sensors.odometry.period_s")
+        check_multiple(s.odometry.period_s, tick, "sensors.odometry.period_s")
         if abs(s.compass.period_s - tick) > 1e-9:
             raise ValueError(
                 f"sensors.compass.period_s = {s.compass.period_s:g}: the heading is sampled "
@@ -373,11 +373,14 @@ class MissionTask(control.Task):
         tx = physics.transceiver_world()
         self.transceiver = tx
         self.usbl = Usbl(s.usbl, tx, seed, runs)
-        odo = s.odometry or OdometryConfig(
-            period_s=s.log.period_s,
-            frequency_hz=tuple(float(f) for f in self.speed_table.frequency_hz),
-            speed_m_s=tuple(float(v) for v in self.speed_table.speed_m_s),
-        )
+        odo = s.odometry
+        if not odo.frequency_hz:
+            odo = odo.model_copy(
+                update={
+                    "frequency_hz": tuple(float(f) for f in self.speed_table.frequency_hz),
+                    "speed_m_s": tuple(float(v) for v in self.speed_table.speed_m_s),
+                }
+            )
         self.odometry = Odometry(odo, seed, runs)
         n = scn.navigation
         self.motion = CourseSpeedDepthMotion(
@@ -434,6 +437,7 @@ class MissionTask(control.Task):
         self.pending: list[tuple[float, float, NDArray[np.float64]]] = []
         self.last_action = np.zeros(5)
         self.meas: dict[str, float] = {}
+        self._setup(physics)
         self._sense(physics, initial=True)
 
     def before_step(self, action, physics) -> None:
@@ -629,6 +633,9 @@ class MissionTask(control.Task):
 
     # -- hooks of the world side (a mission module may override them) ---------------------------
 
+    def _setup(self, physics) -> None:
+        """Called at the end of :meth:`initialize_episode`, before the first sensing."""
+
     def _predict(self, t: float, heading: float, speed: float) -> None:
         """Time update of the navigation from the measured heading and speed."""
         self.nav.predict(t, heading, speed, 0.0)
@@ -719,10 +726,18 @@ class MissionRun:
     fixes: list[dict[str, Any]] = field(default_factory=list)
     waypoints: list[dict[str, Any]] = field(default_factory=list)
     summary: dict[str, float] = field(default_factory=dict)
+    task: Any = field(default=None, repr=False, compare=False)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # the finished task (physics, streams) stays in the worker: only results travel
+        return {**self.__dict__, "task": None}
 
 
-def make_environment(scn: MissionScenario, seed: int, run: int) -> control.Environment:
-    """Build the physics, the task and the dm_control environment of one mission run."""
+def make_environment(
+    scn: MissionScenario, seed: int, run: int, task_type: type[MissionTask] | None = None
+) -> control.Environment:
+    """Build the physics, the task (``task_type``, default :class:`MissionTask`) and the
+    dm_control environment of one mission run."""
     st = scn.start
     scene = SceneConfig(
         vehicles=(
@@ -739,7 +754,7 @@ def make_environment(scn: MissionScenario, seed: int, run: int) -> control.Envir
         transceiver_north_m=scn.transceiver_north_m,
     )
     physics = build_physics(scene, control_tick_s=scn.timing.control_tick_s)
-    task = MissionTask(scn, seed, run, load_speed_table())
+    task = (task_type or MissionTask)(scn, seed, run, load_speed_table())
     return control.Environment(
         physics,
         task,
@@ -749,7 +764,13 @@ def make_environment(scn: MissionScenario, seed: int, run: int) -> control.Envir
     )
 
 
-def run_mission(scn: MissionScenario, seed: int, run: int, keep_arrays: bool = True) -> MissionRun:
+def run_mission(
+    scn: MissionScenario,
+    seed: int,
+    run: int,
+    keep_arrays: bool = True,
+    task_type: type[MissionTask] | None = None,
+) -> MissionRun:
     """Fly one mission run to its end, its time limit, or a failure.
 
     A physics or navigation failure does not raise: it is returned in :attr:`MissionRun.failed`
@@ -760,11 +781,13 @@ def run_mission(scn: MissionScenario, seed: int, run: int, keep_arrays: bool = T
         seed: batch seed.
         run: run index.
         keep_arrays: keep the per-tick records (for recordings and figures).
+        task_type: the task class (a mission module's subclass of :class:`MissionTask`).
 
     Returns:
-        The run's outcome.
+        The run's outcome (``task`` holds the finished task for the caller's own metrics; it is
+        not pickled).
     """
-    env = make_environment(scn, seed, run)
+    env = make_environment(scn, seed, run, task_type)
     task: MissionTask = env.task
     ts = env.reset()
     pilot = Pilot(scn.autopilot, task.speed_table, scn.timing.control_tick_s, env.action_spec())
@@ -776,7 +799,9 @@ def run_mission(scn: MissionScenario, seed: int, run: int, keep_arrays: bool = T
         t = env.physics.time_s()
         failed = f"run {run} (seed {seed}) failed at t = {t:.2f} s: {type(exc).__name__}: {exc}"
     arrays = task.log.arrays()
-    return _summarise(scn, seed, run, failed, arrays, task, keep_arrays)
+    result = _summarise(scn, seed, run, failed, arrays, task, keep_arrays)
+    result.task = task
+    return result
 
 
 def _summarise(scn, seed, run, failed, a, task, keep_arrays) -> MissionRun:
@@ -884,6 +909,12 @@ class MissionExperiment(Experiment):
 
     scenario_type = MissionScenario
     metrics_type = MissionMetrics
+    task_type: ClassVar[type[MissionTask]] = MissionTask
+    """The task class a run flies (a mission module may extend the world side)."""
+
+    def flight_scenario(self, scenario: MissionScenario, seed: int, run: int) -> MissionScenario:
+        """The scenario one run flies (a mission module may make it per run)."""
+        return scenario
 
     def check(self, scenario: MissionScenario, n_runs: int) -> None:
         if scenario.report.record_run >= n_runs:
@@ -894,7 +925,13 @@ class MissionExperiment(Experiment):
     def run_block(self, scenario: MissionScenario, seed: int, runs: tuple[int, ...]):
         out = []
         for r in runs:
-            res = run_mission(scenario, seed, r, keep_arrays=True)
+            res = run_mission(
+                self.flight_scenario(scenario, seed, r),
+                seed,
+                r,
+                keep_arrays=True,
+                task_type=self.task_type,
+            )
             if r != scenario.report.record_run:
                 res.arrays = _thin(res.arrays)
             out.append(res)

@@ -17,14 +17,16 @@ WAYPOINTS = [
     {"east_m": 150.0, "north_m": 100.0},
 ]
 
-register(MissionExperiment(
-    name="mission/survey",
-    summary="lawn-mower survey around a USBL transceiver, ~20 min, 0.25 m/s current (EKF guidance)",
-    preset=mission_preset(
-        [{**w, "depth_m": 3.0, "acceptance_radius_m": 10.0} for w in WAYPOINTS],
-        start={"east_m": -150.0, "north_m": -100.0, "depth_m": 3.0, "heading_deg": 90.0},
-        current={"kind": "uniform", "speed_m_s": 0.25, "direction_deg": 60.0},
-        timing={"max_duration_s": 2400.0},
-    ),
-    default_runs=1,
-))
+register(
+    MissionExperiment(
+        name="mission/survey",
+        summary="lawn-mower survey around a USBL transceiver, 18 min, 0.25 m/s current (EKF)",
+        preset=mission_preset(
+            [{**w, "depth_m": 3.0, "acceptance_radius_m": 10.0} for w in WAYPOINTS],
+            start={"east_m": -150.0, "north_m": -100.0, "depth_m": 3.0, "heading_deg": 90.0},
+            current={"kind": "uniform", "speed_m_s": 0.25, "direction_deg": 60.0},
+            timing={"max_duration_s": 2400.0},
+        ),
+        default_runs=1,
+    )
+)

@@ -23,10 +23,12 @@ class OdometryConfig(Config):
 
     period_s: float = Field(1.0, gt=0, description="sample period, s")
     frequency_hz: tuple[float, ...] = Field(
-        (0.0, 1.0), description="calibration: tail-beat frequencies, Hz (increasing)"
+        (),
+        description="calibration: tail-beat frequencies, Hz (increasing); empty: the "
+        "vehicle's own speed table, filled in by the mission",
     )
     speed_m_s: tuple[float, ...] = Field(
-        (0.0, 1.0), description="calibration: steady speed through water at each frequency, m/s"
+        (), description="calibration: steady speed through water at each frequency, m/s"
     )
     speed: SpeedErrorConfig = Field(
         default_factory=SpeedErrorConfig, description="error of the odometry speed"
@@ -35,14 +37,21 @@ class OdometryConfig(Config):
     @model_validator(mode="after")
     def _table(self) -> OdometryConfig:
         f = np.asarray(self.frequency_hz)
+        if len(f) == len(self.speed_m_s) == 0:
+            return self
         if len(f) != len(self.speed_m_s) or len(f) < 2:
-            raise ValueError("frequency_hz and speed_m_s need the same length (>= 2)")
+            raise ValueError(
+                "frequency_hz and speed_m_s need the same length (>= 2), or both "
+                "empty for the vehicle's speed table"
+            )
         if np.any(np.diff(f) <= 0):
             raise ValueError(f"frequency_hz = {self.frequency_hz}: must be strictly increasing")
         return self
 
     def speed_at(self, frequency_hz: NDArray[np.float64]) -> NDArray[np.float64]:
         """Calibrated speed at a setting, linear between table rows, clamped at the ends, m/s."""
+        if not self.frequency_hz:
+            raise ValueError("odometry table is empty: fill it from the vehicle's speed table")
         return np.interp(frequency_hz, self.frequency_hz, self.speed_m_s)
 
 

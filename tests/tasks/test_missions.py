@@ -32,8 +32,13 @@ def short_run():
 
 @pytest.mark.parametrize("name", MISSIONS)
 def test_mission_contract(name):
-    scn = scenario(name, "timing.max_duration_s=20")
-    env = cl.make_environment(scn, 0, 0)
+    exp = registry.get(name)
+
+    def flight(seed, run):
+        return exp.flight_scenario(scenario(name, "timing.max_duration_s=20"), seed, run)
+
+    scn = flight(0, 0)
+    env = cl.make_environment(scn, 0, 0, exp.task_type)
     ts = env.reset()
     pilot = cl.Pilot(
         scn.autopilot, env.task.speed_table, scn.timing.control_tick_s, env.action_spec()
@@ -49,14 +54,15 @@ def test_mission_contract(name):
         ts = env.step(action)
         steps += 1
     assert steps == round(20 / scn.timing.control_tick_s)
-    a = cl.run_mission(scn, 0, 0)
-    b = cl.run_mission(scn, 0, 0)
-    c = cl.run_mission(scn, 1, 0)
+    a = cl.run_mission(scn, 0, 0, task_type=exp.task_type)
+    b = cl.run_mission(flight(0, 0), 0, 0, task_type=exp.task_type)
+    c = cl.run_mission(flight(1, 0), 1, 0, task_type=exp.task_type)
     assert a.failed is None and b.failed is None and c.failed is None
     for key in ("truth", "ekf", "dr", "heading_meas", "P"):
         assert np.array_equal(a.arrays[key], b.arrays[key]), key  # same seed: bit for bit
     assert a.summary == b.summary
-    assert not np.array_equal(a.arrays["truth"][0], c.arrays["truth"][0])  # initial state
+    state0 = [np.r_[r.arrays["truth"][0], r.arrays["quat"][0]] for r in (a, c)]
+    assert not np.array_equal(*state0)  # initial state (position and attitude)
     assert not np.array_equal(a.arrays["heading_meas"], c.arrays["heading_meas"])  # noise
 
 
@@ -207,3 +213,27 @@ def test_mission_navigator_is_not_overconfident():
         nees.append(np.einsum("ni,ni->n", e, np.linalg.solve(P, e[..., None])[..., 0])[late])
     mean = float(np.mean(np.concatenate(nees)))
     assert 0.8 < mean < 3.0, mean
+
+
+def test_correction_mission_corrects_dr_and_the_course(tmp_path):
+    """Seed 001 on the physical vehicle, one run (both flights): CP2 from two surfacings makes
+    leg 3's DR several times better and the compensated course stays on the desired course."""
+    out = tmp_path / "corr"
+    run(
+        "mission/correction",
+        n_runs=1,
+        seed=0,
+        out_dir=out,
+        progress=False,
+        overrides=["report.recording=false", "report.figures=false"],
+    )
+    m = json.loads((out / "metrics.json").read_text())
+    r = m["runs"][0]
+    assert r["failed"] is None and r["correction_error"] is None
+    comp, direct = r["compensated"], r["direct"]
+    assert comp["uncorrected_mean_error_m"] > 3 * comp["corrected_mean_error_m"]
+    assert comp["course_deviation_deg"] < 0.5 * direct["course_deviation_deg"]
+    assert comp["current_error_m_s"] < 0.05  # uniform 0.3 m/s current
+    assert m["improvement_factor"] == pytest.approx(
+        comp["uncorrected_mean_error_m"] / comp["corrected_mean_error_m"]
+    )

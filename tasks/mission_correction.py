@@ -1,0 +1,641 @@
+"""``mission/correction``: seed 001's correction procedures on the physical BAUV.
+
+The BAUV of seed 001 has a compass and odometry only (no log, no USBL). It starts from a GPS fix,
+swims leg 1 holding course alpha_1, surfaces for GPS fixes, swims leg 2 on alpha_2, surfaces
+again; the DRNS (:mod:`nav.drns`) turns the two legs' errors into estimates of the vehicle's
+systematic velocity error and of the current (CP2 by default: alpha_1 = 45 deg, alpha_2 = 225 deg;
+CP1: two random courses at least ``cp1_min_separation_deg`` apart and from opposite), and leg 3
+(a random course) is dead-reckoned with and without the correction. Each run flies the mission
+twice with the same random streams: leg 3 on the direct course from the corrected DR position to
+the way-point, and on the current-compensating course of eq. 22-26 (seed 001 Table 3).
+
+The vehicle's own systematic error is configurable: a compass bias (``sensors.compass.heading
+.bias_deg``, default 5 deg: the autopilot holds the compass course, so the vehicle really swims
+5 deg off it) and an odometry scale error (``sensors.odometry.speed.scale_factor``, default 0.1:
+the odometry believes the vehicle 10 % faster than it swims). The current defaults to a uniform
+0.3 m/s setting 20 deg (seed 001's alpha_c); ``--set current.kind=randomised`` gives seed 001's
+randomised current and ``current.kind=gyre`` a spatially varying one.
+
+In the physics world the vehicle drifts with the water whatever its course (``models/bauv``
+check 5), so CP2's hull response is uniform (``correction.response_cos_coeffs = [1.0]``); the
+kinematic replica (``paper-001/replica``) uses the paper's course-dependent rho.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, Field
+
+from bauv_sim import rng as rng_mod
+from bauv_sim.config import Config, load_config, to_plain
+from bauv_sim.errors import ConfigError
+from nav.correction import CurrentResponse, compensated_course
+from nav.drns import CorrectedDeadReckoning
+from nav.guidance import GuidanceCommand, direct_course
+from tasks import closed_loop as cl
+from tasks.registry import ReportContext, ReportSummary, register
+
+METHODS = ("uncorrected", "corrected", "baseline")
+
+
+class CorrectionConfig(Config):
+    """The correction experiment."""
+
+    procedure: Literal["cp1", "cp2", "baseline"] = Field("cp2", description="after leg 2")
+    leg_length_m: float = Field(100.0, gt=0, description="seed 001: 100 m between way-points")
+    depth_m: float = Field(3.0, gt=0, description="depth of the legs, m")
+    cp2_courses_deg: tuple[float, float] = Field((45.0, 225.0), description="CP2's two courses")
+    cp1_min_separation_deg: float = Field(
+        30.0, gt=0, lt=90, description="CP1's courses differ by this and from opposite, deg"
+    )
+    third_course_deg: float | None = Field(
+        None, ge=0, lt=360, description="leg 3's course, deg (default: random per run)"
+    )
+    response_cos_coeffs: tuple[float, ...] = Field(
+        (1.0,), description="CP2's hull response rho (uniform in the physics world)"
+    )
+    acceptance_radius_m: float = Field(5.0, gt=0, description="reached by the DR, m")
+
+
+class CorrectionScenario(cl.MissionScenario):
+    """A mission scenario with the correction experiment (its way-points are made per run)."""
+
+    correction: CorrectionConfig = Field(default_factory=CorrectionConfig)
+
+
+def leg_courses(scn: CorrectionScenario, seed: int, run: int) -> tuple[float, float, float]:
+    """The three legs' courses of a run, rad (from the run's own ``legs`` stream)."""
+    c = scn.correction
+    g = rng_mod.generator(seed, run, "legs")
+    if c.procedure == "cp1":
+        sep = math.radians(c.cp1_min_separation_deg)
+        a1 = g.uniform(0, 2 * math.pi)
+        # the second course at least `sep` from the first and from its opposite
+        d = g.uniform(sep, math.pi - sep) * (1 if g.random() < 0.5 else -1)
+        a2 = (a1 + d) % (2 * math.pi)
+    else:
+        a1, a2 = (math.radians(x) for x in c.cp2_courses_deg)
+    a3 = g.uniform(0, 2 * math.pi)
+    if c.third_course_deg is not None:
+        a3 = math.radians(c.third_course_deg)
+    return a1, a2, a3
+
+
+def run_scenario(scn: CorrectionScenario, seed: int, run: int, course_law: str):
+    """The mission scenario of one run: way-points of the three legs, the course law of leg 3."""
+    c = scn.correction
+    a = leg_courses(scn, seed, run)
+    p = np.array([scn.start.east_m, scn.start.north_m])
+    wps = []
+    for i, course in enumerate(a):
+        p = p + c.leg_length_m * np.array([math.sin(course), math.cos(course)])
+        wps.append(
+            {
+                "east_m": float(p[0]),
+                "north_m": float(p[1]),
+                "depth_m": c.depth_m,
+                "acceptance_radius_m": c.acceptance_radius_m,
+                "surface": i < 2,
+            }
+        )
+    data = to_plain(scn)
+    data["guidance"]["waypoints"] = wps
+    data["start"]["heading_deg"] = math.degrees(a[0]) % 360.0
+    data["correction_course_law"] = course_law
+    return load_config(CorrectionRun, data)
+
+
+class CorrectionRun(CorrectionScenario):
+    """One flight of a run (internal): the scenario with its legs and leg 3's course law."""
+
+    correction_course_law: Literal["direct", "compensated"] = "direct"
+
+
+class CorrectionTask(cl.MissionTask):
+    """The mission's world side plus seed 001's DRNS and its course laws."""
+
+    scn: CorrectionRun
+
+    def _setup(self, physics) -> None:
+        c = self.scn.correction
+        x0 = self.nav.estimate.x
+        self.drns = CorrectedDeadReckoning(
+            0.0, x0[:2], c.procedure, CurrentResponse(tuple(c.response_cos_coeffs))
+        )
+        self.courses = leg_courses(self.scn, self.seed, self.run)
+        self.guidance.course_law = self._course_law
+        self.guidance.waypoints = list(self.guidance.waypoints)
+        self.placed: set[int] = set()
+        self.leg_start: dict[int, NDArray[np.float64]] = {}
+        self.leg3_start_s: float | None = None
+
+    def _predict(self, t: float, heading: float, speed: float) -> None:
+        super()._predict(t, heading, speed)
+        self.drns.predict(t, heading, self.odo_speed)
+
+    def _gps_fix(self, t: float, z_ref: NDArray[np.float64]) -> bool:
+        accepted = super()._gps_fix(t, z_ref)
+        self.drns.fix(t, z_ref)
+        if len(self.drns.legs) >= 2:
+            self.leg3_start_s = t  # the last fix before leg 3
+        return accepted
+
+    def _steer(self, t: float, est) -> GuidanceCommand:
+        # seed 001's vehicle steers on its DRNS (corrected after leg 2), depth from pressure
+        p = np.array([*self.drns.corrected, -self.depth_meas])
+        return self.guidance.step(t, p)
+
+    def _course_law(self, position, wp) -> float:
+        leg = self.guidance.index
+        p = np.asarray(position, dtype=float)[:2]
+        c = self.courses[leg]
+        if leg not in self.placed:
+            # a leg is 100 m on its course from where it starts (seed 001's legs are defined by
+            # course and distance): the way-point goes on the line the vehicle holds once its turn
+            # onto the course is over, at the rest of the 100 m from the leg's start
+            start = self.leg_start.setdefault(leg, p.copy())
+            heading = self.meas.get("heading", c)
+            if leg == 2 or abs(math.remainder(heading - c, 2 * math.pi)) < math.radians(10.0):
+                rest = max(self.scn.correction.leg_length_m - float(np.linalg.norm(p - start)), 0.0)
+                new = p + rest * np.array([math.sin(c), math.cos(c)])
+                self.guidance.waypoints[leg] = dataclasses.replace(
+                    self.guidance.waypoints[leg], east_m=float(new[0]), north_m=float(new[1])
+                )
+                self.placed.add(leg)
+                wp = self.guidance.waypoints[leg]
+        if leg < 2:
+            return c  # CP legs: hold the leg's course
+        nu = direct_course(position, wp)
+        est = self.drns.estimate
+        if self.scn.correction_course_law == "compensated" and est is not None:
+            sol = compensated_course(np.array([nu]), np.array([self.odo_speed]), est)
+            if bool(sol.feasible[0]):
+                return float(sol.course_rad[0])
+        return nu
+
+    def _extra_log(self) -> dict[str, Any]:
+        d = self.drns
+        est = d.estimate
+        heading = self.meas["heading"]
+        cur = (
+            est.current_for_course(np.array([heading]))[0]
+            if est is not None
+            else np.full(2, np.nan)
+        )
+        return {
+            "dr_uncorrected": d.uncorrected.copy(),
+            "dr_corrected": d.corrected.copy(),
+            "dr_baseline": d.baseline.copy(),
+            "cp_current": cur,
+            "n_legs": len(d.legs),
+        }
+
+
+# ---------------------------------------------------------------------------------------------
+# Metrics of one run
+
+
+def leg3_metrics(res: cl.MissionRun, wp3: NDArray[np.float64]) -> dict[str, float]:
+    """Errors of the three DR tracks and the deviation from the desired course on leg 3.
+
+    The deviation is the mean over leg 3 of the angle between the course over ground (averaged
+    over 1 s) and the desired course ``nu`` from the true position to way-point 3 (seed 001
+    Table 3's "deviation from desired course"), and the mean distance from the straight line
+    between the leg's start and way-point 3.
+    """
+    a = res.arrays
+    task = res.task
+    t = a["t"]
+    if task.leg3_start_s is None:
+        return {}
+    m = t >= task.leg3_start_s
+    out = {"leg3_duration_s": float(t[m][-1] - t[m][0])}
+    truth = a["truth"][m, :2]
+    for name in METHODS:
+        e = np.linalg.norm(a[f"dr_{name}"][m] - truth, axis=1)
+        out[f"{name}_mean_error_m"] = float(e.mean())
+        out[f"{name}_max_error_m"] = float(e.max())
+        out[f"{name}_final_error_m"] = float(e[-1])
+    n = max(1, round(1.0 / float(t[1] - t[0])))
+    v = a["vel"][m, :2]
+    kernel = np.ones(n) / n
+    v = np.column_stack([np.convolve(v[:, i], kernel, mode="same") for i in range(2)])
+    cog = np.arctan2(v[:, 0], v[:, 1])
+    nu = np.arctan2(wp3[0] - truth[:, 0], wp3[1] - truth[:, 1])
+    dev = np.degrees(np.abs(np.angle(np.exp(1j * (cog - nu)))))
+    far = np.linalg.norm(wp3 - truth, axis=1) > 10.0  # the course to a point is ill-defined near it
+    out["course_deviation_deg"] = float(dev[far].mean()) if far.any() else math.nan
+    p0 = truth[0]
+    d = (wp3 - p0) / max(np.linalg.norm(wp3 - p0), 1e-9)
+    rel = truth - p0
+    out["cross_track_m"] = float(np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0]).mean())
+    return out
+
+
+def current_metrics(res: cl.MissionRun) -> dict[str, float]:
+    """The CP's current estimate against the true current at the vehicle over legs 1-2."""
+    task = res.task
+    est = task.drns.estimate
+    if est is None or task.leg3_start_s is None:
+        return {}
+    a = res.arrays
+    m = a["t"] < task.leg3_start_s
+    true = a["current"][m, :2].mean(axis=0)
+    c = est.current_for_course(np.array([task.courses[0]]))[0]
+    return {
+        "current_true_east_m_s": float(true[0]),
+        "current_true_north_m_s": float(true[1]),
+        "current_est_east_m_s": float(c[0]),
+        "current_est_north_m_s": float(c[1]),
+        "current_error_m_s": float(np.linalg.norm(c - true)),
+    }
+
+
+@dataclass
+class CorrectionRunResult:
+    """Both flights of one run (compensated and direct course on leg 3)."""
+
+    run: int
+    failed: str | None
+    metrics: dict[str, dict[str, float]]
+    correction_error: str | None
+    flights: dict[str, cl.MissionRun]
+    scenarios: dict[str, CorrectionRun]
+    waypoints: dict[str, list[tuple[float, float, float]]]
+
+
+class FlightMetrics(BaseModel):
+    """Leg-3 metrics of one flight."""
+
+    values: dict[str, float]
+
+
+class CorrectionRunMetrics(BaseModel):
+    """One run of ``mission/correction``."""
+
+    run: int
+    failed: str | None
+    correction_error: str | None
+    compensated: dict[str, float]
+    direct: dict[str, float]
+
+
+class CorrectionMetrics(BaseModel):
+    """``metrics.json`` of ``mission/correction``."""
+
+    schema_version: Literal[1] = 1
+    experiment: str
+    seed: int
+    n_runs: int
+    n_failed: int
+    procedure: str
+    current_kind: str
+    means: dict[str, float] = Field(description="means over successful runs")
+    improvement_factor: float = Field(
+        description="uncorrected / corrected mean DR error on leg 3 (compensated flights)"
+    )
+    runs: list[CorrectionRunMetrics]
+
+
+@dataclass(frozen=True)
+class CorrectionExperiment(cl.MissionExperiment):
+    """Seed 001's procedures on the physical vehicle (two flights per run)."""
+
+    scenario_type = CorrectionScenario
+    metrics_type = CorrectionMetrics
+    task_type = CorrectionTask
+
+    def flight_scenario(self, scenario: CorrectionScenario, seed: int, run: int) -> CorrectionRun:
+        """The compensated-course flight of a run (the report flies the direct one too)."""
+        return run_scenario(scenario, seed, run, "compensated")
+
+    def check(self, scenario: CorrectionScenario, n_runs: int) -> None:
+        super().check(scenario, n_runs)
+        if scenario.sensors.use_usbl:
+            raise ConfigError("sensors.use_usbl = true: seed 001's vehicle has no USBL")
+
+    def run_block(self, scenario: CorrectionScenario, seed: int, runs: tuple[int, ...]):
+        out = []
+        for r in runs:
+            flights, metrics, scns, wps, failed, cp_err = {}, {}, {}, {}, None, None
+            for law in ("compensated", "direct"):
+                scns[law] = run_scenario(scenario, seed, r, law)
+                res = cl.run_mission(scns[law], seed, r, task_type=CorrectionTask)
+                failed = failed or res.failed
+                wps[law] = [
+                    (w.east_m, w.north_m, w.acceptance_radius_m)
+                    for w in res.task.guidance.waypoints
+                ]
+                wp = res.task.guidance.waypoints[2]
+                metrics[law] = leg3_metrics(
+                    res, np.array([wp.east_m, wp.north_m])
+                ) | current_metrics(res)
+                cp_err = cp_err or res.task.drns.correction_error
+                if r != scenario.report.record_run:
+                    res.arrays = {}
+                flights[law] = res
+            out.append(CorrectionRunResult(r, failed, metrics, cp_err, flights, scns, wps))
+        return out
+
+    def report(self, ctx: ReportContext) -> ReportSummary:
+        return report_correction(self, ctx)
+
+
+def report_correction(exp: CorrectionExperiment, ctx: ReportContext) -> ReportSummary:
+    """Tables 1 and 3 analogues, the current estimate, figures and the recording."""
+    from tasks.report import Table, write_metrics, write_tables
+
+    scn: CorrectionScenario = ctx.scenario  # type: ignore[assignment]
+    runs: list[CorrectionRunResult] = [r for b in ctx.blocks for r in b]
+    ok = [r for r in runs if r.failed is None and r.metrics["compensated"] and r.metrics["direct"]]
+
+    def mean(law: str, key: str) -> float:
+        vals = [r.metrics[law][key] for r in ok if key in r.metrics[law]]
+        return float(np.nanmean(vals)) if vals else math.nan
+
+    means = {
+        f"{law}.{k}": mean(law, k)
+        for law in ("compensated", "direct")
+        for k in (ok[0].metrics[law] if ok else {})
+    }
+    factor = mean("compensated", "uncorrected_mean_error_m") / mean(
+        "compensated", "corrected_mean_error_m"
+    )
+    metrics = CorrectionMetrics(
+        experiment=exp.name,
+        seed=ctx.seed,
+        n_runs=ctx.n_runs,
+        n_failed=sum(r.failed is not None for r in runs),
+        procedure=scn.correction.procedure,
+        current_kind=scn.current.kind,
+        means=means,
+        improvement_factor=factor,
+        runs=[
+            CorrectionRunMetrics(
+                run=r.run,
+                failed=r.failed,
+                correction_error=r.correction_error,
+                compensated=r.metrics.get("compensated", {}),
+                direct=r.metrics.get("direct", {}),
+            )
+            for r in runs
+        ],
+    )
+    files = [write_metrics(ctx.out_dir, metrics)]
+    p = scn.correction.procedure.upper()
+    t1 = Table(
+        f"Leg 3 dead-reckoning error after {p} ({len(ok)} runs, {scn.current.kind} current; "
+        "seed 001 Table 1-2 analogue)",
+        ["DR", "Mean error (m)", "Max error (m)", "Final error (m)"],
+        [
+            [
+                name,
+                mean("compensated", f"{k}_mean_error_m"),
+                mean("compensated", f"{k}_max_error_m"),
+                mean("compensated", f"{k}_final_error_m"),
+            ]
+            for name, k in [
+                ("without CP", "uncorrected"),
+                (f"{p}-corrected", "corrected"),
+                ("baseline (GPS - DR) / T", "baseline"),
+            ]
+        ],
+        digits=2,
+        slug="leg3-errors",
+        note=f"Improvement of the mean error by the correction: {factor:.1f}x.",
+    )
+    t3 = Table(
+        "Leg 3 deviation from the desired course (seed 001 Table 3 analogue)",
+        ["Course law", "Mean deviation (deg)", "Mean cross-track distance (m)"],
+        [
+            [
+                "direct course to the way-point",
+                mean("direct", "course_deviation_deg"),
+                mean("direct", "cross_track_m"),
+            ],
+            [
+                "compensated (eq. 22-26)",
+                mean("compensated", "course_deviation_deg"),
+                mean("compensated", "cross_track_m"),
+            ],
+        ],
+        digits=2,
+        slug="leg3-course",
+    )
+    tc = Table(
+        f"Current estimated by {p} against the true current at the vehicle (legs 1-2)",
+        [
+            "Run",
+            "True east (m/s)",
+            "True north (m/s)",
+            "Estimated east (m/s)",
+            "Estimated north (m/s)",
+            "Error (m/s)",
+        ],
+        [
+            [
+                r.run,
+                *(
+                    r.metrics["compensated"].get(k)
+                    for k in (
+                        "current_true_east_m_s",
+                        "current_true_north_m_s",
+                        "current_est_east_m_s",
+                        "current_est_north_m_s",
+                        "current_error_m_s",
+                    )
+                ),
+            ]
+            for r in ok
+        ],
+        digits=3,
+        slug="current",
+        note=f"Mean error {mean('compensated', 'current_error_m_s'):.3f} m/s.",
+    )
+    tables = [t1, t3, tc]
+    failures = [r.failed for r in runs if r.failed]
+    if failures:
+        tables.append(
+            Table(
+                "Failed runs",
+                ["Run", "Reason"],
+                [[r.run, r.failed] for r in runs if r.failed],
+                slug="failed",
+            )
+        )
+    files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
+    rec = next((r for r in runs if r.run == scn.report.record_run and r.failed is None), None)
+    if rec is not None:
+        flight = rec.flights["compensated"]
+        if scn.report.figures:
+            files.append(correction_figure(exp.name, scn, rec, ctx.out_dir))
+        if scn.report.recording and flight.arrays:
+            files += record_correction(exp.name, rec.scenarios["compensated"], flight, ctx.out_dir)
+    text = "".join(t.to_text() + "\n" for t in tables[:2])
+    text += tc.note + "\n" + f"wrote {len(files)} files to {ctx.out_dir}\n"
+    return ReportSummary(text, tuple(files))
+
+
+def correction_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResult, out) -> str:
+    """Tracks of the recorded run: truth, the DR tracks, GPS fixes, current arrows."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axs = plt.subplots(1, 2, figsize=(13, 6.5))
+    for ax, law in zip(axs, ("direct", "compensated"), strict=True):
+        f = rec.flights[law]
+        a = f.arrays
+        if not a:
+            continue
+        ax.plot(a["truth"][:, 0], a["truth"][:, 1], "k-", lw=1.5, label="truth")
+        ax.plot(
+            a["dr_uncorrected"][:, 0],
+            a["dr_uncorrected"][:, 1],
+            color="tab:red",
+            lw=1,
+            label="DR without CP",
+        )
+        ax.plot(
+            a["dr_corrected"][:, 0],
+            a["dr_corrected"][:, 1],
+            color="tab:purple",
+            lw=1,
+            label=f"DR after {scn.correction.procedure.upper()}",
+        )
+        gps = np.array([fx["position"] for fx in f.fixes if fx["kind"] == "gps"]).reshape(-1, 3)
+        if len(gps):
+            ax.plot(gps[:, 0], gps[:, 1], "x", color="tab:orange", ms=7, label="GPS fixes")
+        for e, n, radius in rec.waypoints[law]:
+            c = cl._circle(e, n, radius)
+            ax.plot(c[:, 0], c[:, 1], color="tab:green", lw=1)
+        true_c = a["current"][:, :2].mean(axis=0)
+        est = a["cp_current"][~np.isnan(a["cp_current"][:, 0])]
+        x0, y0 = a["truth"][0, :2]
+        k = 100.0
+        ax.annotate(
+            "",
+            xy=(x0 + k * true_c[0], y0 + k * true_c[1]),
+            xytext=(x0, y0),
+            arrowprops={"arrowstyle": "->", "color": "tab:cyan", "lw": 2},
+        )
+        if len(est):
+            e = est.mean(axis=0)
+            ax.annotate(
+                "",
+                xy=(x0 + k * e[0], y0 + k * e[1]),
+                xytext=(x0, y0),
+                arrowprops={"arrowstyle": "->", "color": "tab:blue", "lw": 2, "ls": "--"},
+            )
+        ax.plot([], [], color="tab:cyan", lw=2, label="true current (x100 s)")
+        ax.plot([], [], color="tab:blue", lw=2, ls="--", label="estimated current (x100 s)")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(alpha=0.3)
+        ax.set_xlabel("east (m)")
+        ax.set_ylabel("north (m)")
+        ax.set_title(f"{name} run {rec.run}: leg 3 on the {law} course")
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(out / "tracks.png", dpi=110)
+    plt.close(fig)
+    return "tracks.png"
+
+
+def record_correction(name: str, scn: CorrectionRun, flight: cl.MissionRun, out) -> list[str]:
+    """The recordings of the recorded run's compensated flight: the mission recording, and a
+    second one with the DR tracks and the estimated current beside the true one."""
+    import rerun as rr
+
+    from tasks.recording import Recording
+
+    path = cl.record_mission(name, scn, flight, out)
+    a = flight.arrays
+    rec = Recording(
+        out / "recording-correction.rrd", name, f"{name}/seed{flight.seed}/run{flight.run}/dr"
+    )
+    t = a["t"]
+    z = a["truth"][:, 2:3]
+    rec.track("truth", t, a["truth"], (40, 40, 40))
+    rec.track("dr_uncorrected", t, np.column_stack([a["dr_uncorrected"], z]), (214, 39, 40))
+    rec.track("dr_corrected", t, np.column_stack([a["dr_corrected"], z]), (148, 103, 189))
+    gps = [f for f in flight.fixes if f["kind"] == "gps"]
+    if gps:
+        rec.fixes(
+            "gps",
+            np.array([f["t_valid_s"] for f in gps]),
+            np.array([f["position"] for f in gps]),
+            (255, 127, 14),
+        )
+    every = max(1, round(1.0 / float(t[1] - t[0])))
+    origins = a["truth"][::every] + [0.0, 0.0, 2.0]
+    rec.rec.send_columns(
+        "world/current/true",
+        indexes=[rr.TimeColumn("sim_time", duration=t[::every])],
+        columns=rr.Arrows3D.columns(origins=origins, vectors=20.0 * a["current"][::every]),
+    )
+    est = np.nan_to_num(a["cp_current"][::every])
+    rec.rec.send_columns(
+        "world/current/estimated",
+        indexes=[rr.TimeColumn("sim_time", duration=t[::every])],
+        columns=rr.Arrows3D.columns(
+            origins=origins + [0.0, 0.0, 1.0],
+            vectors=20.0 * np.column_stack([est, np.zeros(len(est))]),
+        ),
+    )
+    rec.rec.log("world/current/true", rr.Arrows3D.from_fields(colors=(0, 190, 220)), static=True)
+    rec.rec.log(
+        "world/current/estimated", rr.Arrows3D.from_fields(colors=(31, 119, 180)), static=True
+    )
+    for key, color in [("uncorrected", (214, 39, 40)), ("corrected", (148, 103, 189))]:
+        rec.scalars(
+            f"errors/dr_{key}",
+            t,
+            np.linalg.norm(a[f"dr_{key}"] - a["truth"][:, :2], axis=1),
+            color,
+            f"DR {key} horizontal error (m)",
+        )
+    rec.blueprint("errors")
+    rec.close()
+    return [path, "recording-correction.rrd"]
+
+
+register(
+    CorrectionExperiment(
+        name="mission/correction",
+        summary="seed 001 on the physical BAUV: compass + odometry, CP2 from two surfacings, leg 3 "
+        "corrected (0.3 m/s current)",
+        preset={
+            "start": {
+                "east_m": 0.0,
+                "north_m": 0.0,
+                "depth_m": 3.0,
+                "heading_deg": 45.0,
+                "position_sigma_m": 0.0,
+                "heading_sigma_deg": 3.0,
+            },
+            "current": {"kind": "uniform", "speed_m_s": 0.3, "direction_deg": 20.0},
+            "sensors": {
+                "use_usbl": False,
+                "use_log": False,
+                "compass": {"heading": {"bias_deg": 5.0}},
+                "odometry": {"speed": {"scale_factor": 0.1}},
+            },
+            "navigation": {"initial_sigma_m": 2.5},
+            "guidance": {
+                "waypoints": [{"east_m": 0.0, "north_m": 100.0}],
+                "hold_s": 5.0,
+                "fixes_needed": 3,
+                "max_leg_time_s": 400.0,
+            },
+            "timing": {"max_duration_s": 900.0},
+        },
+        default_runs=20,
+    )
+)
