@@ -110,18 +110,21 @@ def varied_commands(seed: int, duration_s: float, hold_s: float = 20.0) -> list[
     gen = rng.generator(seed, 0, "vehicle_checks", "commands")
     out = []
     for _ in range(math.ceil(duration_s / hold_s)):
-        out.append({
-            "frequency_hz": float(gen.uniform(0.3, 2.8)),
-            "bias_rad": float(gen.uniform(-1.0, 1.0) * math.radians(18.0)),
-            "battery_m": float(gen.uniform(-0.06, 0.06)),
-            "depth_m": float(gen.uniform(20.0, 60.0)),
-            "fin_offset_rad": float(gen.uniform(-0.1, 0.1)),
-        })
+        out.append(
+            {
+                "frequency_hz": float(gen.uniform(0.3, 2.8)),
+                "bias_rad": float(gen.uniform(-1.0, 1.0) * math.radians(18.0)),
+                "battery_m": float(gen.uniform(-0.06, 0.06)),
+                "depth_m": float(gen.uniform(20.0, 60.0)),
+                "fin_offset_rad": float(gen.uniform(-0.1, 0.1)),
+            }
+        )
     return out
 
 
-def run_commands(physics: BauvPhysics, commands: list[dict[str, float]], hold_s: float,
-                 record: bool = False) -> np.ndarray | None:
+def run_commands(
+    physics: BauvPhysics, commands: list[dict[str, float]], hold_s: float, record: bool = False
+) -> np.ndarray | None:
     """Apply a command sequence (each set for ``hold_s``), the fins holding each depth target.
 
     Args:
@@ -149,8 +152,9 @@ def run_commands(physics: BauvPhysics, commands: list[dict[str, float]], hold_s:
     return np.asarray(rows) if record else None
 
 
-def check_ten_minute_swim(seed: int = 3, duration_s: float = 600.0,
-                          hold_s: float = 20.0) -> LongSwimResult:
+def check_ten_minute_swim(
+    seed: int = 3, duration_s: float = 600.0, hold_s: float = 20.0
+) -> LongSwimResult:
     """Swim for ``duration_s`` under seeded varied commands; any MuJoCo warning or divergence
     raises :class:`~bauv_sim.errors.PhysicsError` from the facade (check 1)."""
     t0 = time.perf_counter()
@@ -179,10 +183,19 @@ def check_ten_minute_swim(seed: int = 3, duration_s: float = 600.0,
             if phys.time_s() > 15.0:
                 late.append(abs(pt))
     warnings = phys.warning_count()
-    return LongSwimResult(phys.time_s(), len(cmds), dist, min(depths), max(depths), max(speeds),
-                          math.degrees(max(rolls)), math.degrees(max(pitches)),
-                          math.degrees(max(late)), warnings,
-                          time.perf_counter() - t0)
+    return LongSwimResult(
+        phys.time_s(),
+        len(cmds),
+        dist,
+        min(depths),
+        max(depths),
+        max(speeds),
+        math.degrees(max(rolls)),
+        math.degrees(max(pitches)),
+        math.degrees(max(late)),
+        warnings,
+        time.perf_counter() - t0,
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -222,9 +235,19 @@ def check_buoyancy(idle_s: float = 300.0) -> BuoyancyResult:
     phys.advance(idle_s)
     rate = (phys.depth_m() - z0) / (idle_s / 60.0)
     rr = manoeuvres.roll_recovery(_scene(depth_m=20.0))
-    return BuoyancyResult(v_mesh, archimedes, hs.buoyancy_n, hs.weight_n, hs.net_up_n,
-                          hs.metacentric_height_m(), rate, idle_s, rr.settle_time_s, rr.period_s,
-                          math.degrees(rr.max_overshoot_rad))
+    return BuoyancyResult(
+        v_mesh,
+        archimedes,
+        hs.buoyancy_n,
+        hs.weight_n,
+        hs.net_up_n,
+        hs.metacentric_height_m(),
+        rate,
+        idle_s,
+        rr.settle_time_s,
+        rr.period_s,
+        math.degrees(rr.max_overshoot_rad),
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -247,8 +270,10 @@ def check_tow(speeds: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)) -> 
     area = hull.HULL.frontal_area_m2()
     pts = manoeuvres.tow_test(_scene(), list(speeds), area)
     in_current = manoeuvres.tow_test(_scene(), list(speeds), area, current_m_s=0.5)
-    same = all(abs(a.drag_n - b.drag_n) <= 1e-9 * max(1.0, a.drag_n)
-               for a, b in zip(pts, in_current, strict=True))
+    same = all(
+        abs(a.drag_n - b.drag_n) <= 1e-9 * max(1.0, a.drag_n)
+        for a, b in zip(pts, in_current, strict=True)
+    )
     budget = hydro.drag_budget(1.0)
     return TowResult(pts, budget.cd, CD_TARGET_RANGE, budget, same)
 
@@ -267,8 +292,11 @@ class CruiseResult:
     trim_fin_rad: float
 
 
-def check_speed_table(frequencies: tuple[float, ...] = SPEED_TABLE_FREQUENCIES_HZ,
-                      settle_s: float = 30.0, measure_s: float = 20.0) -> CruiseResult:
+def check_speed_table(
+    frequencies: tuple[float, ...] = SPEED_TABLE_FREQUENCIES_HZ,
+    settle_s: float = 30.0,
+    measure_s: float = 20.0,
+) -> CruiseResult:
     """Speed vs frequency (depth held by the fins), the frequency that gives 1.0 m/s (rounded to
     0.01 Hz) and a separate run at that frequency."""
     table = manoeuvres.speed_table(_scene(), list(frequencies), settle_s, measure_s)
@@ -282,13 +310,21 @@ def check_speed_table(frequencies: tuple[float, ...] = SPEED_TABLE_FREQUENCIES_H
 def write_speed_table(result: CruiseResult, path: Path = SPEED_TABLE) -> None:
     """Write the speed calibration CSV read by :func:`bauv_sim.hydro.load_speed_table`."""
     with path.open("w", newline="") as fh:
-        fh.write("# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
-                 " written by tasks/vehicle_checks.py\n")
+        fh.write(
+            "# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
+            " written by tasks/vehicle_checks.py\n"
+        )
         w = csv.writer(fh)
         w.writerow(hydro.SPEED_TABLE_COLUMNS)
         for r in result.table:
-            w.writerow([f"{r.frequency_hz:.4g}", f"{r.speed_through_water_m_s:.4f}",
-                        f"{r.mean_motor_power_w:.3f}", f"{r.strouhal:.4f}"])
+            w.writerow(
+                [
+                    f"{r.frequency_hz:.4g}",
+                    f"{r.speed_through_water_m_s:.4f}",
+                    f"{r.mean_motor_power_w:.3f}",
+                    f"{r.strouhal:.4f}",
+                ]
+            )
 
 
 def write_trim_keyframe(result: CruiseResult, path: Path = VEHICLE_XML) -> None:
@@ -297,9 +333,11 @@ def write_trim_keyframe(result: CruiseResult, path: Path = VEHICLE_XML) -> None:
     w = 2.0 * math.pi * result.cruise_frequency_hz
     a = result.trim_fin_rad
     u = result.cruise.speed_through_water_m_s
-    new = (f'<key name="trim" qpos="0 0 -3 1 0 0 0  0 0 0 0 0 0 0 0"\n'
-           f'         qvel="{u:.4f} 0 0 0 0 0  0 0 0 0 0 0 0 0"\n'
-           f'         act="0 0 {a:.4f} {a:.4f} 0" ctrl="{w:.4f} 0 {a:.4f} {a:.4f} 0"/>')
+    new = (
+        f'<key name="trim" qpos="0 0 -3 1 0 0 0  0 0 0 0 0 0 0 0"\n'
+        f'         qvel="{u:.4f} 0 0 0 0 0  0 0 0 0 0 0 0 0"\n'
+        f'         act="0 0 {a:.4f} {a:.4f} 0" ctrl="{w:.4f} 0 {a:.4f} {a:.4f} 0"/>'
+    )
     text, n = re.subn(r'<key name="trim"[^>]*/>', new, text, flags=re.S)
     if n != 1:
         raise RuntimeError(f"{path}: no unique trim keyframe to rewrite")
@@ -363,13 +401,18 @@ def check_current(frequency_hz: float | None = None, long_s: float = 1500.0) -> 
             break
     swim = manoeuvres.swim_in_current(lambda: _scene(heading_deg=90.0), field, frequency_hz)
     gyre = currents.GyreCurrent((0.0, 0.0), 200.0, 0.3, clockwise=True)
-    east = manoeuvres.swim_in_current(
-        lambda: _offset_scene(300.0, 0.0), gyre, frequency_hz)
-    west = manoeuvres.swim_in_current(
-        lambda: _offset_scene(-300.0, 0.0), gyre, frequency_hz)
-    return CurrentResult(drift, expected, t3, swim, east, west,
-                         gyre.velocity_world(0.0, np.array([300.0, 0.0, -20.0])),
-                         gyre.velocity_world(0.0, np.array([-300.0, 0.0, -20.0])))
+    east = manoeuvres.swim_in_current(lambda: _offset_scene(300.0, 0.0), gyre, frequency_hz)
+    west = manoeuvres.swim_in_current(lambda: _offset_scene(-300.0, 0.0), gyre, frequency_hz)
+    return CurrentResult(
+        drift,
+        expected,
+        t3,
+        swim,
+        east,
+        west,
+        gyre.velocity_world(0.0, np.array([300.0, 0.0, -20.0])),
+        gyre.velocity_world(0.0, np.array([-300.0, 0.0, -20.0])),
+    )
 
 
 def _offset_scene(east_m: float, north_m: float) -> BauvPhysics:
@@ -394,8 +437,10 @@ def check_manoeuvres(frequency_hz: float | None = None) -> ManoeuvreResult:
     """Turns with tail bias +-10 and +-20 deg (depth held), depth changes with fins +-0.2 rad, at
     the cruise frequency."""
     frequency_hz = frequency_hz or cruise_frequency_hz()
-    turns = [manoeuvres.heading_change(_scene(), frequency_hz, math.radians(b))
-             for b in (10.0, -10.0, 20.0, -20.0)]
+    turns = [
+        manoeuvres.heading_change(_scene(), frequency_hz, math.radians(b))
+        for b in (10.0, -10.0, 20.0, -20.0)
+    ]
     depth = [manoeuvres.depth_change(_scene(), frequency_hz, a) for a in (0.2, -0.2)]
     return ManoeuvreResult(turns, depth)
 
@@ -421,11 +466,11 @@ def check_determinism(seed: int = 11, duration_s: float = 60.0) -> DeterminismRe
         phys = _scene(depth_m=40.0)
         cfg = currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1)
         phys.set_current(currents.make_current(cfg, rng.generator(seed, 0, "current")))
-        runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0,
-                                 record=True))
+        runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0, record=True))
     a, b = runs
-    return DeterminismResult(duration_s, a.shape[0], bool(np.array_equal(a, b)),
-                             float(np.max(np.abs(a - b))))
+    return DeterminismResult(
+        duration_s, a.shape[0], bool(np.array_equal(a, b)), float(np.max(np.abs(a - b)))
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -442,103 +487,192 @@ def render(name: str, res: object) -> str:
     """Markdown for one check's README section."""
     if name == "swim":
         r: LongSwimResult = res  # type: ignore[assignment]
-        return _table(["quantity", "value"], [
-            ["simulated time", f"{r.duration_s:.0f} s ({r.command_changes} command sets of 20 s)"],
-            ["MuJoCo warnings / divergences", f"{r.mujoco_warnings}"],
-            ["distance swum", f"{r.distance_m:.0f} m"],
-            ["depth range", f"{r.min_depth_m:.1f}-{r.max_depth_m:.1f} m"],
-            ["largest speed through water", f"{r.max_speed_m_s:.2f} m/s"],
-            ["largest roll", f"{r.max_abs_roll_deg:.1f} deg"],
-            ["largest pitch: in the start from rest / after 15 s",
-             f"{r.max_abs_pitch_deg:.1f} deg / {r.max_abs_pitch_after_start_deg:.1f} deg"],
-            ["wall time", f"{r.wall_s:.1f} s"],
-        ])
+        return _table(
+            ["quantity", "value"],
+            [
+                [
+                    "simulated time",
+                    f"{r.duration_s:.0f} s ({r.command_changes} command sets of 20 s)",
+                ],
+                ["MuJoCo warnings / divergences", f"{r.mujoco_warnings}"],
+                ["distance swum", f"{r.distance_m:.0f} m"],
+                ["depth range", f"{r.min_depth_m:.1f}-{r.max_depth_m:.1f} m"],
+                ["largest speed through water", f"{r.max_speed_m_s:.2f} m/s"],
+                ["largest roll", f"{r.max_abs_roll_deg:.1f} deg"],
+                [
+                    "largest pitch: in the start from rest / after 15 s",
+                    f"{r.max_abs_pitch_deg:.1f} deg / {r.max_abs_pitch_after_start_deg:.1f} deg",
+                ],
+                ["wall time", f"{r.wall_s:.1f} s"],
+            ],
+        )
     if name == "buoyancy":
         r: BuoyancyResult = res  # type: ignore[no-redef]
-        return _table(["quantity", "value"], [
-            ["displaced volume, hull + dorsal fin (trimesh)",
-             f"{r.displaced_volume_mesh_m3:.6f} m^3"],
-            ["Archimedes rho g V, all parts (meshes)", f"{r.archimedes_n:.3f} N"],
-            ["buoyancy in the model (gravcomp)", f"{r.buoyancy_model_n:.3f} N"],
-            ["weight", f"{r.weight_n:.3f} N"],
-            ["net upward force", f"{r.net_up_n:.2e} N"],
-            ["BG (CB above CG)", f"{1000 * r.bg_m:.1f} mm"],
-            [f"idle depth change ({r.idle_duration_s:.0f} s, still water)",
-             f"{r.idle_depth_change_m_per_min:+.2e} m/min (target < 0.1)"],
-            ["roll 20 deg -> below 2 deg", f"{r.roll_settle_s:.2f} s (target <= 5)"],
-            ["roll period, first overshoot",
-             f"{r.roll_period_s:.2f} s, {r.roll_overshoot_deg:.1f} deg"],
-        ])
+        return _table(
+            ["quantity", "value"],
+            [
+                [
+                    "displaced volume, hull + dorsal fin (trimesh)",
+                    f"{r.displaced_volume_mesh_m3:.6f} m^3",
+                ],
+                ["Archimedes rho g V, all parts (meshes)", f"{r.archimedes_n:.3f} N"],
+                ["buoyancy in the model (gravcomp)", f"{r.buoyancy_model_n:.3f} N"],
+                ["weight", f"{r.weight_n:.3f} N"],
+                ["net upward force", f"{r.net_up_n:.2e} N"],
+                ["BG (CB above CG)", f"{1000 * r.bg_m:.1f} mm"],
+                [
+                    f"idle depth change ({r.idle_duration_s:.0f} s, still water)",
+                    f"{r.idle_depth_change_m_per_min:+.2e} m/min (target < 0.1)",
+                ],
+                ["roll 20 deg -> below 2 deg", f"{r.roll_settle_s:.2f} s (target <= 5)"],
+                [
+                    "roll period, first overshoot",
+                    f"{r.roll_period_s:.2f} s, {r.roll_overshoot_deg:.1f} deg",
+                ],
+            ],
+        )
     if name == "tow":
         r: TowResult = res  # type: ignore[no-redef]
         rows = [[f"{p.speed_m_s:.2f}", f"{p.drag_n:.3f}", f"{p.cd:.4f}"] for p in r.points]
-        return (_table(["speed m/s", "drag N", "Cd (frontal 0.0587 m^2)"], rows) + "\n\n"
-                + f"Target (first principles, `hydro.drag_budget`): Cd = {r.target_cd:.4f} "
-                f"(body {r.budget.body_n:.2f} N + fins {r.budget.fins_n:.2f} N at 1 m/s); "
-                f"accepted range {r.target_range[0]}-{r.target_range[1]}. "
-                "Same drag with the water moving at 0.5 m/s: "
-                f"{'yes' if r.same_in_current else 'NO'}.")
+        return (
+            _table(["speed m/s", "drag N", "Cd (frontal 0.0587 m^2)"], rows)
+            + "\n\n"
+            + f"Target (first principles, `hydro.drag_budget`): Cd = {r.target_cd:.4f} "
+            f"(body {r.budget.body_n:.2f} N + fins {r.budget.fins_n:.2f} N at 1 m/s); "
+            f"accepted range {r.target_range[0]}-{r.target_range[1]}. "
+            "Same drag with the water moving at 0.5 m/s: "
+            f"{'yes' if r.same_in_current else 'NO'}."
+        )
     if name == "cruise":
         r: CruiseResult = res  # type: ignore[no-redef]
-        rows = [[f"{x.frequency_hz:.2f}", f"{x.speed_through_water_m_s:.3f}",
-                 f"{x.mean_motor_power_w:.1f}", f"{x.peak_motor_torque_nm:.1f}",
-                 f"{x.tail_tip_amplitude_m:.3f}", f"{x.strouhal:.3f}",
-                 f"{math.degrees(x.yaw_amplitude_rad):.1f}", f"{math.degrees(x.mean_fin_rad):+.1f}"]
-                for x in r.table]
+        rows = [
+            [
+                f"{x.frequency_hz:.2f}",
+                f"{x.speed_through_water_m_s:.3f}",
+                f"{x.mean_motor_power_w:.1f}",
+                f"{x.peak_motor_torque_nm:.1f}",
+                f"{x.tail_tip_amplitude_m:.3f}",
+                f"{x.strouhal:.3f}",
+                f"{math.degrees(x.yaw_amplitude_rad):.1f}",
+                f"{math.degrees(x.mean_fin_rad):+.1f}",
+            ]
+            for x in r.table
+        ]
         c = r.cruise
-        return (_table(["f Hz", "U m/s", "P W", "peak torque N m", "A m", "St",
-                        "yaw p-p deg", "trim fin deg"], rows) + "\n\n"
-                + f"**Cruise**: {c.speed_through_water_m_s:.3f} m/s at "
-                f"{r.cruise_frequency_hz:.2f} Hz "
-                f"(target 1.0 +- 10 %), mean motor power {c.mean_motor_power_w:.1f} W (<= 250 W), "
-                f"peak torque {c.peak_motor_torque_nm:.1f} N m, tail-tip amplitude "
-                f"{c.tail_tip_amplitude_m:.3f} m p-p, Strouhal {c.strouhal:.3f} (0.2-0.5), "
-                f"trim fin angle {math.degrees(r.trim_fin_rad):+.2f} deg.")
+        return (
+            _table(
+                [
+                    "f Hz",
+                    "U m/s",
+                    "P W",
+                    "peak torque N m",
+                    "A m",
+                    "St",
+                    "yaw p-p deg",
+                    "trim fin deg",
+                ],
+                rows,
+            )
+            + "\n\n"
+            + f"**Cruise**: {c.speed_through_water_m_s:.3f} m/s at "
+            f"{r.cruise_frequency_hz:.2f} Hz "
+            f"(target 1.0 +- 10 %), mean motor power {c.mean_motor_power_w:.1f} W (<= 250 W), "
+            f"peak torque {c.peak_motor_torque_nm:.1f} N m, tail-tip amplitude "
+            f"{c.tail_tip_amplitude_m:.3f} m p-p, Strouhal {c.strouhal:.3f} (0.2-0.5), "
+            f"trim fin angle {math.degrees(r.trim_fin_rad):+.2f} deg."
+        )
     if name == "current":
         r: CurrentResult = res  # type: ignore[no-redef]
         d = r.drift
+
         def v(a: np.ndarray) -> str:
             return "(" + ", ".join(f"{x:+.3f}" for x in a[:2]) + ")"
-        return _table(["check", "measured", "target"], [
-            ["idle drift from rest, 0.5 m/s at 20 deg, after 120 s",
-             f"velocity {v(d.velocity_world_m_s)} vs current {v(d.current_world_m_s)} m/s: "
-             f"error {100 * d.relative_error:.1f} % (quadratic-drag law with the tow drag: "
-             f"{100 * r.drift_expected_error:.1f} %)", "3 %"],
-            ["idle drift: time until within 3 %", f"{r.time_to_3pct_s:.0f} s", "-"],
-            ["swim east at cruise frequency in the uniform current",
-             f"ground {v(r.swim_uniform.ground_velocity_m_s)} = still-water "
-             f"{v(r.swim_uniform.still_velocity_m_s)} + current "
-             f"{v(r.swim_uniform.mean_current_m_s)}: error "
-             f"{100 * r.swim_uniform.relative_error:.2f} %", "3 %"],
-            ["gyre (0.3 m/s, core 200 m), swim north from (+300, 0)",
-             f"current there {v(r.gyre_current_east)}; mean on the path "
-             f"{v(r.swim_gyre_east.mean_current_m_s)}; error "
-             f"{100 * r.swim_gyre_east.relative_error:.2f} %", "3 %"],
-            ["gyre, swim north from (-300, 0)",
-             f"current there {v(r.gyre_current_west)}; mean on the path "
-             f"{v(r.swim_gyre_west.mean_current_m_s)}; error "
-             f"{100 * r.swim_gyre_west.relative_error:.2f} %", "3 %"],
-        ])
+
+        return _table(
+            ["check", "measured", "target"],
+            [
+                [
+                    "idle drift from rest, 0.5 m/s at 20 deg, after 120 s",
+                    f"velocity {v(d.velocity_world_m_s)} vs current {v(d.current_world_m_s)} m/s: "
+                    f"error {100 * d.relative_error:.1f} % (quadratic-drag law with the tow drag: "
+                    f"{100 * r.drift_expected_error:.1f} %)",
+                    "3 %",
+                ],
+                ["idle drift: time until within 3 %", f"{r.time_to_3pct_s:.0f} s", "-"],
+                [
+                    "swim east at cruise frequency in the uniform current",
+                    f"ground {v(r.swim_uniform.ground_velocity_m_s)} = still-water "
+                    f"{v(r.swim_uniform.still_velocity_m_s)} + current "
+                    f"{v(r.swim_uniform.mean_current_m_s)}: error "
+                    f"{100 * r.swim_uniform.relative_error:.2f} %",
+                    "3 %",
+                ],
+                [
+                    "gyre (0.3 m/s, core 200 m), swim north from (+300, 0)",
+                    f"current there {v(r.gyre_current_east)}; mean on the path "
+                    f"{v(r.swim_gyre_east.mean_current_m_s)}; error "
+                    f"{100 * r.swim_gyre_east.relative_error:.2f} %",
+                    "3 %",
+                ],
+                [
+                    "gyre, swim north from (-300, 0)",
+                    f"current there {v(r.gyre_current_west)}; mean on the path "
+                    f"{v(r.swim_gyre_west.mean_current_m_s)}; error "
+                    f"{100 * r.swim_gyre_west.relative_error:.2f} %",
+                    "3 %",
+                ],
+            ],
+        )
     if name == "manoeuvres":
         r: ManoeuvreResult = res  # type: ignore[no-redef]
-        t = _table(["tail bias deg", "turn rate deg/s", "radius m", "speed m/s",
-                    "90 deg after s", "roll deg"],
-                   [[f"{math.degrees(x.bias_rad):+.0f}", f"{math.degrees(x.turn_rate_rad_s):+.2f}",
-                     f"{x.turning_radius_m:.2f}", f"{x.speed_through_water_m_s:.3f}",
-                     f"{x.time_to_90deg_s:.1f}", f"{math.degrees(x.mean_roll_rad):+.1f}"]
-                    for x in r.turns])
-        dd = _table(["fin deg", "peak pitch rate deg/s", "pitch change deg", "depth rate m/s",
-                     "depth change m (20 s)"],
-                    [[f"{math.degrees(x.fin_rad):+.1f}",
-                      f"{math.degrees(x.peak_pitch_rate_rad_s):.2f}",
-                      f"{math.degrees(x.pitch_change_rad):+.2f}", f"{x.depth_rate_m_s:+.3f}",
-                      f"{x.depth_change_m:+.2f}"] for x in r.depth_changes])
+        t = _table(
+            [
+                "tail bias deg",
+                "turn rate deg/s",
+                "radius m",
+                "speed m/s",
+                "90 deg after s",
+                "roll deg",
+            ],
+            [
+                [
+                    f"{math.degrees(x.bias_rad):+.0f}",
+                    f"{math.degrees(x.turn_rate_rad_s):+.2f}",
+                    f"{x.turning_radius_m:.2f}",
+                    f"{x.speed_through_water_m_s:.3f}",
+                    f"{x.time_to_90deg_s:.1f}",
+                    f"{math.degrees(x.mean_roll_rad):+.1f}",
+                ]
+                for x in r.turns
+            ],
+        )
+        dd = _table(
+            [
+                "fin deg",
+                "peak pitch rate deg/s",
+                "pitch change deg",
+                "depth rate m/s",
+                "depth change m (20 s)",
+            ],
+            [
+                [
+                    f"{math.degrees(x.fin_rad):+.1f}",
+                    f"{math.degrees(x.peak_pitch_rate_rad_s):.2f}",
+                    f"{math.degrees(x.pitch_change_rad):+.2f}",
+                    f"{x.depth_rate_m_s:+.3f}",
+                    f"{x.depth_change_m:+.2f}",
+                ]
+                for x in r.depth_changes
+            ],
+        )
         return t + "\n\n" + dd
     if name == "determinism":
         r: DeterminismResult = res  # type: ignore[no-redef]
-        return (f"Two runs of {r.duration_s:.0f} s ({r.ticks} control ticks) with the same seeded "
-                f"commands and randomised current: bit-identical = **{r.bit_identical}** "
-                f"(largest difference {r.max_abs_difference:g}).")
+        return (
+            f"Two runs of {r.duration_s:.0f} s ({r.ticks} control ticks) with the same seeded "
+            f"commands and randomised current: bit-identical = **{r.bit_identical}** "
+            f"(largest difference {r.max_abs_difference:g})."
+        )
     raise KeyError(name)
 
 
@@ -546,8 +680,7 @@ def rewrite_readme(sections: dict[str, str], path: Path = README) -> None:
     """Replace the text between ``<!-- BEGIN results:NAME -->`` and its ``END`` marker."""
     text = path.read_text()
     for name, body in sections.items():
-        pat = re.compile(rf"(<!-- BEGIN results:{name} -->).*?(<!-- END results:{name} -->)",
-                         re.S)
+        pat = re.compile(rf"(<!-- BEGIN results:{name} -->).*?(<!-- END results:{name} -->)", re.S)
         text, n = pat.subn(lambda m, b=body: m.group(1) + "\n" + b + "\n" + m.group(2), text)
         if n != 1:
             raise RuntimeError(f"{path}: no unique results block {name!r}")
@@ -601,8 +734,9 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     return results
 
 
-def render_png(path: Path = MODEL_DIR / "bauv.png", width: int = 1280, height: int = 720,
-               seconds: float = 2.3) -> Path:
+def render_png(
+    path: Path = MODEL_DIR / "bauv.png", width: int = 1280, height: int = 720, seconds: float = 2.3
+) -> Path:
     """Render the default scene offscreen (``MUJOCO_GL=egl`` or ``osmesa``) with the vehicle
     swimming from the ``trim`` keyframe, seen from port, ahead and above.
 
