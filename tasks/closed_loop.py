@@ -1272,14 +1272,13 @@ def record_mission(name: str, scn: MissionScenario, run: MissionRun, out) -> str
                 color,
             )
     # current at the vehicle as arrows (scaled x20 to be visible)
-    r.send_columns(
-        "world/current",
-        indexes=[rr.TimeColumn("sim_time", duration=t[::every])],
-        columns=rr.Arrows3D.columns(
-            origins=a["truth"][::every] + [0, 0, 2.0], vectors=20.0 * a["current"][::every]
-        ),
+    rec.arrows(
+        "current",
+        t[::every],
+        a["truth"][::every] + [0, 0, 2.0],
+        20.0 * a["current"][::every],
+        (0, 190, 220),
     )
-    r.log("world/current", rr.Arrows3D.from_fields(colors=(0, 190, 220), radii=0.2), static=True)
     err = lambda k: np.hypot(*(a[k] - a["truth"])[:, :2].T)  # noqa: E731
     rec.scalars("errors/ekf", t, err("ekf"), COLORS["ekf"], "EKF horizontal error (m)")
     rec.scalars("errors/dr", t, err("dr"), COLORS["dr"], "DR horizontal error (m)")

@@ -551,7 +551,6 @@ def correction_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResu
 def record_correction(name: str, scn: CorrectionRun, flight: cl.MissionRun, out) -> list[str]:
     """The recordings of the recorded run's compensated flight: the mission recording, and a
     second one with the DR tracks and the estimated current beside the true one."""
-    import rerun as rr
 
     from tasks.recording import Recording
 
@@ -575,23 +574,14 @@ def record_correction(name: str, scn: CorrectionRun, flight: cl.MissionRun, out)
         )
     every = max(1, round(1.0 / float(t[1] - t[0])))
     origins = a["truth"][::every] + [0.0, 0.0, 2.0]
-    rec.rec.send_columns(
-        "world/current/true",
-        indexes=[rr.TimeColumn("sim_time", duration=t[::every])],
-        columns=rr.Arrows3D.columns(origins=origins, vectors=20.0 * a["current"][::every]),
-    )
-    est = np.nan_to_num(a["cp_current"][::every])
-    rec.rec.send_columns(
-        "world/current/estimated",
-        indexes=[rr.TimeColumn("sim_time", duration=t[::every])],
-        columns=rr.Arrows3D.columns(
-            origins=origins + [0.0, 0.0, 1.0],
-            vectors=20.0 * np.column_stack([est, np.zeros(len(est))]),
-        ),
-    )
-    rec.rec.log("world/current/true", rr.Arrows3D.from_fields(colors=(0, 190, 220)), static=True)
-    rec.rec.log(
-        "world/current/estimated", rr.Arrows3D.from_fields(colors=(31, 119, 180)), static=True
+    # the current at the vehicle and the correction's estimate of it (x20 to be visible)
+    rec.arrows("current/true", t[::every], origins, 20.0 * a["current"][::every], (0, 190, 220))
+    rec.arrows(
+        "current/estimated",
+        t[::every],
+        origins + [0.0, 0.0, 1.0],
+        20.0 * np.nan_to_num(a["cp_current"][::every]),
+        (31, 119, 180),
     )
     for key, color in [("uncorrected", (214, 39, 40)), ("corrected", (148, 103, 189))]:
         rec.scalars(

@@ -138,6 +138,34 @@ class Recording:
             static=True,
         )
 
+    def arrows(
+        self,
+        entity: str,
+        t_s: NDArray[np.float64],
+        origins_world_m: NDArray[np.float64],
+        vectors_world: NDArray[np.float64],
+        color: Color,
+    ) -> None:
+        """Arrows over time (one per row), e.g. the current at the vehicle, scaled by the caller.
+
+        Args:
+            entity: entity path under ``world/``.
+            t_s: times, shape (T,), s.
+            origins_world_m: arrow tails, shape (T, 3), m, world.
+            vectors_world: arrows, shape (T, 3) (or (T, 2) horizontal), world.
+        """
+        v = np.asarray(vectors_world, dtype=float)
+        if v.shape[-1] == 2:
+            v = np.column_stack([v, np.zeros(len(v))])
+        self.rec.send_columns(
+            f"world/{entity}",
+            indexes=self._time(t_s),
+            columns=rr.Arrows3D.columns(origins=np.asarray(origins_world_m, float), vectors=v),
+        )
+        self.rec.log(
+            f"world/{entity}", rr.Arrows3D.from_fields(colors=color, radii=0.2), static=True
+        )
+
     def scalars(
         self,
         entity: str,

@@ -239,52 +239,47 @@ class AutopilotTrials(Experiment):
         tr = next(iter(ctx.blocks))
         t_step = 10.0
         n = max(1, round(1.0 / (1.2 * s.control_tick_s)))  # one tail beat near cruise
+        trials = [
+            # (trial, response, before, set-point, band, unit)
+            (
+                "heading",
+                np.degrees(np.unwrap(wrap_pi(tr["heading"]["heading"]))),
+                0.0,
+                s.heading_step_deg,
+                s.heading_band_deg,
+                "deg",
+            ),
+            (
+                "depth",
+                tr["depth"]["depth"],
+                s.depth_m,
+                s.depth_m + s.depth_step_m,
+                s.depth_band_m,
+                "m",
+            ),
+            (
+                "speed",
+                tr["speed"]["speed"],
+                s.speed_from_m_s,
+                s.speed_to_m_s,
+                s.speed_band_m_s,
+                "m/s",
+            ),
+        ]
         results = []
-        h = tr["heading"]
-        hd = beat_average(np.degrees(np.unwrap(wrap_pi(h["heading"]))), n)
-        after = h["t"] >= t_step
-        o, st = step_metrics(
-            h["t"][after] - t_step, hd[after], 0.0, s.heading_step_deg, s.heading_band_deg
-        )
-        results.append(
-            TrialResult(
-                name="heading",
-                step=f"0 -> {s.heading_step_deg:g} deg",
-                overshoot_percent=o,
-                band=f"+-{s.heading_band_deg:g} deg",
-                settling_time_s=None if math.isinf(st) else st,
+        for name, y, y0, y1, band, unit in trials:
+            t = tr[name]["t"]
+            after = t >= t_step
+            o, st = step_metrics(t[after] - t_step, beat_average(y, n)[after], y0, y1, band)
+            results.append(
+                TrialResult(
+                    name=name,
+                    step=f"{y0:g} -> {y1:g} {unit}",
+                    overshoot_percent=o,
+                    band=f"+-{band:g} {unit}",
+                    settling_time_s=None if math.isinf(st) else st,
+                )
             )
-        )
-        d = tr["depth"]
-        dd = beat_average(d["depth"], n)
-        after = d["t"] >= t_step
-        o, st = step_metrics(
-            d["t"][after] - t_step, dd[after], s.depth_m, s.depth_m + s.depth_step_m, s.depth_band_m
-        )
-        results.append(
-            TrialResult(
-                name="depth",
-                step=f"{s.depth_m:g} -> {s.depth_m + s.depth_step_m:g} m",
-                overshoot_percent=o,
-                band=f"+-{s.depth_band_m:g} m",
-                settling_time_s=None if math.isinf(st) else st,
-            )
-        )
-        v = tr["speed"]
-        vd = beat_average(v["speed"], n)
-        after = v["t"] >= t_step
-        o, st = step_metrics(
-            v["t"][after] - t_step, vd[after], s.speed_from_m_s, s.speed_to_m_s, s.speed_band_m_s
-        )
-        results.append(
-            TrialResult(
-                name="speed",
-                step=f"{s.speed_from_m_s:g} -> {s.speed_to_m_s:g} m/s",
-                overshoot_percent=o,
-                band=f"+-{s.speed_band_m_s:g} m/s",
-                settling_time_s=None if math.isinf(st) else st,
-            )
-        )
         c = tr["current"]
         raw = np.degrees(np.angle(np.exp(1j * (c["heading"] - math.pi / 2))))
         err = beat_average(raw, n)

@@ -68,55 +68,21 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     """Start `bauv view --web` on a recording and fetch the page over HTTP."""
     import socket
     import time
-    import urllib.request
 
     from tasks.recording import Recording
+    from tests.webviewer import web_viewer
 
     rec = Recording(tmp_path / "recording.rrd", "test", "test")
     rec.point("x", [0.0, 0.0, 0.0], (0, 0, 0), "x")
     rec.close()
-
-    def free_port():
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            return s.getsockname()[1]
-
-    web, grpc = free_port(), free_port()
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "tasks.cli",
-            "view",
-            str(tmp_path),
-            "--web",
-            "--web-port",
-            str(web),
-            "--grpc-port",
-            str(grpc),
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    try:
-        html = None
-        for _ in range(150):
-            try:
-                html = urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=1).read()
-                break
-            except OSError:
-                time.sleep(0.2)
-        assert html is not None and b"re_viewer" in html
+    with web_viewer(tmp_path) as v:
+        assert b"re_viewer" in v.html
         # nothing answers on the machine's other addresses
         host_ip = socket.gethostbyname(socket.gethostname())
         if not host_ip.startswith("127."):
             with pytest.raises(OSError):
-                socket.create_connection((host_ip, web), timeout=1).close()
-    finally:
-        proc.terminate()
-        proc.wait(timeout=10)
+                socket.create_connection((host_ip, v.web_port), timeout=1).close()
     # stopping bauv view stops the rerun server it started (no leaked process)
     time.sleep(1.0)
     left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
-    assert f"--web-viewer-port {web}" not in left
+    assert f"--web-viewer-port {v.web_port}" not in left
