@@ -30,23 +30,32 @@ def test_default_build_matches_the_scene_file():
     # the same vehicle: body masses and fluid parameters, names with the vehicle's prefix
     # the built scene has one more body: the massless attachment frame that carries the free joint
     assert built.nbody == plain.nbody + 1 and plain.nv == built.nv and plain.nu == built.nu
-    assert np.allclose(np.sort(plain.body_mass[plain.body_mass > 0]),
-                       np.sort(built.body_mass[built.body_mass > 0]))
+    assert np.allclose(
+        np.sort(plain.body_mass[plain.body_mass > 0]), np.sort(built.body_mass[built.body_mass > 0])
+    )
     # (the plain load keeps its virtual masses, columns 6-11; the facade removes them)
-    assert np.allclose(np.sort(plain.geom_fluid[:, :6], axis=0),
-                       np.sort(built.geom_fluid[:, :6], axis=0))
+    assert np.allclose(
+        np.sort(plain.geom_fluid[:, :6], axis=0), np.sort(built.geom_fluid[:, :6], axis=0)
+    )
     assert "bauv/hull" in _ids(built, mujoco.mjtObj.mjOBJ_BODY, built.nbody)
 
 
 def test_two_vehicles_are_namespaced_and_placed():
-    cfg = build.SceneConfig(vehicles=(
-        build.VehicleSpec(name="leader", east_m=5.0, heading_deg=45.0, speed_m_s=1.0),
-        build.VehicleSpec(name="follower", east_m=-15.0, north_m=2.0, depth_m=4.0)))
+    cfg = build.SceneConfig(
+        vehicles=(
+            build.VehicleSpec(name="leader", east_m=5.0, heading_deg=45.0, speed_m_s=1.0),
+            build.VehicleSpec(name="follower", east_m=-15.0, north_m=2.0, depth_m=4.0),
+        )
+    )
     phys = build.build_physics(cfg)
     m = phys.model.ptr
     assert phys.vehicle_names() == ["leader", "follower"]
-    for kind, n in [(mujoco.mjtObj.mjOBJ_SITE, m.nsite), (mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu),
-                    (mujoco.mjtObj.mjOBJ_JOINT, m.njnt), (mujoco.mjtObj.mjOBJ_GEOM, m.ngeom)]:
+    for kind, n in [
+        (mujoco.mjtObj.mjOBJ_SITE, m.nsite),
+        (mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu),
+        (mujoco.mjtObj.mjOBJ_JOINT, m.njnt),
+        (mujoco.mjtObj.mjOBJ_GEOM, m.ngeom),
+    ]:
         names = _ids(m, kind, n)
         assert len(set(names)) == len(names) and all(names)
     assert "follower/usbl_transponder" in _ids(m, mujoco.mjtObj.mjOBJ_SITE, m.nsite)
@@ -76,8 +85,9 @@ def test_seabed_heights_are_the_surface_mujoco_collides_with():
     rng = np.random.default_rng(4)
     geomid = np.array([-1], dtype=np.int32)
     for x, y in rng.uniform(-900, 900, size=(20, 2)):
-        dist = mujoco.mj_ray(m, d, np.array([x, y, 5.0]), np.array([0, 0, -1.0]), None, 1, -1,
-                             geomid)
+        dist = mujoco.mj_ray(
+            m, d, np.array([x, y, 5.0]), np.array([0, 0, -1.0]), None, 1, -1, geomid
+        )
         assert 5.0 - dist == pytest.approx(float(bed.height_world(x, y)), abs=1e-4)
     # the transceiver lies on the seabed at 6 m depth, beacons 1 m above it
     assert np.allclose(m.site("usbl_transceiver").pos, [0, 0, -6.0], atol=1e-6)
@@ -86,10 +96,18 @@ def test_seabed_heights_are_the_surface_mujoco_collides_with():
 
 
 def test_a_custom_seabed_replaces_the_heightfield():
-    cfg = build.SceneConfig(seabed=seabed.SeabedConfig(depth_at_origin_m=30.0, relief_std_m=0.0,
-                                                       slope=0.0, min_depth_m=30.0,
-                                                       half_extent_m=500.0, cell_m=50.0),
-                            transceiver_east_m=100.0, beacons=())
+    cfg = build.SceneConfig(
+        seabed=seabed.SeabedConfig(
+            depth_at_origin_m=30.0,
+            relief_std_m=0.0,
+            slope=0.0,
+            min_depth_m=30.0,
+            half_extent_m=500.0,
+            cell_m=50.0,
+        ),
+        transceiver_east_m=100.0,
+        beacons=(),
+    )
     phys = build.build_physics(cfg)
     m = phys.model.ptr
     assert m.hfield_nrow[0] == 21 and m.nsite == 1 + 12  # transceiver + the vehicle's 12 sites
@@ -107,8 +125,9 @@ def test_seabed_generator_laws():
     assert 0.5 * c.relief_std_m < np.std(relief) < 1.5 * c.relief_std_m
     # same seed, same seabed; another seed, another one
     assert np.array_equal(seabed.generate().depth_m, bed.depth_m)
-    assert not np.array_equal(seabed.generate(c.model_copy(update={"seed": 2})).depth_m,
-                              bed.depth_m)
+    assert not np.array_equal(
+        seabed.generate(c.model_copy(update={"seed": 2})).depth_m, bed.depth_m
+    )
     assert seabed.DEFAULT_SEABED_FILE.read_bytes() == bed.to_bytes()
     with pytest.raises(GeometryError):
         bed.height_world(2000.0, 0.0)

@@ -39,8 +39,9 @@ def test_archimedes_buoyancy_equals_rho_g_v_of_the_meshes(model):
     mujoco.mj_forward(model, d)
     g = float(np.linalg.norm(model.opt.gravity))
     vols = _mesh_volumes()
-    total_v = (vols["hull"] + vols["dorsal"] + vols["peduncle"] + vols["caudal"]
-               + 2 * vols["lateral"])
+    total_v = (
+        vols["hull"] + vols["dorsal"] + vols["peduncle"] + vols["caudal"] + 2 * vols["lateral"]
+    )
     archimedes = SEAWATER_DENSITY_KG_M3 * g * total_v
     # MuJoCo's own upward force from gravity compensation on the free joint's z
     up = float(d.qfrc_gravcomp[2])
@@ -61,7 +62,8 @@ def test_centre_of_buoyancy_is_the_mesh_centroid(model):
     b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "buoyancy")
     assert np.allclose(d.xipos[b] - d.xpos[1], cb, atol=1e-6)
     assert model.body_gravcomp[b] * model.body_mass[b] == pytest.approx(
-        SEAWATER_DENSITY_KG_M3 * v, rel=1e-7)
+        SEAWATER_DENSITY_KG_M3 * v, rel=1e-7
+    )
 
 
 def test_vehicle_is_level_and_self_righting():
@@ -180,8 +182,10 @@ def test_formula_laws():
 
 def test_speed_table_round_trip(tmp_path):
     p = tmp_path / "t.csv"
-    p.write_text("# comment\nfrequency_hz,speed_m_s,power_w,strouhal\n"
-                 "0.5,0.4,1,0.3\n1.0,0.85,8,0.27\n1.5,1.25,28,0.3\n2.0,1.2,60,0.4\n")
+    p.write_text(
+        "# comment\nfrequency_hz,speed_m_s,power_w,strouhal\n"
+        "0.5,0.4,1,0.3\n1.0,0.85,8,0.27\n1.5,1.25,28,0.3\n2.0,1.2,60,0.4\n"
+    )
     t = hydro.load_speed_table(p)
     assert t.speed_at(1.0) == pytest.approx(0.85)
     assert t.speed_at(0.25) == pytest.approx(0.2)  # linear to 0 at 0 Hz

@@ -30,15 +30,18 @@ def test_tail_bias_turns_the_way_it_says():
         assert sign * r.turn_rate_rad_s > 0.1
         assert 2.0 < r.turning_radius_m < 15.0
         # a steady turn: radius = speed / rate
-        assert r.turning_radius_m == pytest.approx(r.speed_through_water_m_s
-                                                   / abs(r.turn_rate_rad_s), rel=0.1)
+        assert r.turning_radius_m == pytest.approx(
+            r.speed_through_water_m_s / abs(r.turn_rate_rad_s), rel=0.1
+        )
 
 
 def test_fins_change_depth_the_way_they_say():
-    up = manoeuvres.depth_change(manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, 0.2,
-                                 approach_s=5.0, step_s=10.0)
-    down = manoeuvres.depth_change(manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, -0.2,
-                                   approach_s=5.0, step_s=10.0)
+    up = manoeuvres.depth_change(
+        manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, 0.2, approach_s=5.0, step_s=10.0
+    )
+    down = manoeuvres.depth_change(
+        manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, -0.2, approach_s=5.0, step_s=10.0
+    )
     assert up.depth_rate_m_s < -0.03 and down.depth_rate_m_s > 0.03
 
 
@@ -75,7 +78,12 @@ def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
 
 def test_swimming_in_a_current_adds_the_current():
     field = currents.UniformCurrent(0.4, math.radians(200.0))
-    r = manoeuvres.swim_in_current(lambda: manoeuvres.open_water_scene(heading_deg=90.0), field,
-                                   1.2, settle_s=5.0, measure_s=5.0)
+    r = manoeuvres.swim_in_current(
+        lambda: manoeuvres.open_water_scene(heading_deg=90.0),
+        field,
+        1.2,
+        settle_s=5.0,
+        measure_s=5.0,
+    )
     assert r.relative_error < 1e-9
     assert np.allclose(r.mean_current_m_s, field.velocity_world(0.0, np.zeros(3)))

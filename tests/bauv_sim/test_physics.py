@@ -49,8 +49,7 @@ def test_velocities_match_finite_differences(phys):
     W = R0.T @ (R1 - R0) / dt
     w_fd = np.array([W[2, 1], W[0, 2], W[1, 0]])
     assert np.allclose(w_fd, w0, atol=0.02)
-    assert np.allclose(phys.angular_velocity_world(), R1 @ phys.angular_velocity_body(),
-                       atol=1e-12)
+    assert np.allclose(phys.angular_velocity_world(), R1 @ phys.angular_velocity_body(), atol=1e-12)
 
 
 def test_sensor_sites_move_rigidly_with_the_hull(phys):
@@ -213,8 +212,9 @@ def test_current_is_applied_and_velocity_through_water_is_ground_minus_current(p
     phys.set_pose([0, 0, -3], [0, 0, 0], cur)  # moving with the water
     phys.advance(1.0)
     assert np.allclose(phys.velocity_world(), cur, atol=1e-6)
-    assert np.allclose(phys.velocity_through_water_world(),
-                       phys.velocity_world() - phys.current_at_vehicle_world())
+    assert np.allclose(
+        phys.velocity_through_water_world(), phys.velocity_world() - phys.current_at_vehicle_world()
+    )
     assert phys.truth().current_world_m_s == pytest.approx(cur)
 
 
@@ -223,22 +223,24 @@ def test_each_vehicle_feels_the_current_at_its_own_position():
     same state whose water has that vehicle's current (the per-vehicle correction is exact at the
     tick start)."""
     gyre = currents.GyreCurrent((0.0, 0.0), 50.0, 0.4)
-    cfg = build.SceneConfig(vehicles=(
-        build.VehicleSpec(name="a", east_m=60.0, depth_m=3.0),
-        build.VehicleSpec(name="b", east_m=-40.0, north_m=10.0, depth_m=3.0, heading_deg=40.0,
-                          speed_m_s=0.8)))
+    cfg = build.SceneConfig(
+        vehicles=(
+            build.VehicleSpec(name="a", east_m=60.0, depth_m=3.0),
+            build.VehicleSpec(
+                name="b", east_m=-40.0, north_m=10.0, depth_m=3.0, heading_deg=40.0, speed_m_s=0.8
+            ),
+        )
+    )
     two = build.build_physics(cfg)
     two.set_current(gyre)
     ca, cb = two.current_at_vehicle_world("a"), two.current_at_vehicle_world("b")
     assert not np.allclose(ca, cb)
     mujoco.mj_forward(two.model.ptr, two.data.ptr)
     v = two._vehicles["b"]
-    total_b = (two.data.qfrc_fluid + two.data.qfrc_applied)[v.dof_adr:v.dof_adr + 3]
+    total_b = (two.data.qfrc_fluid + two.data.qfrc_applied)[v.dof_adr : v.dof_adr + 3]
     lone = BauvPhysics.from_scene_xml()
-    lone.set_current(currents.UniformCurrent(float(np.hypot(*cb[:2])),
-                                             math.atan2(cb[0], cb[1])))
-    lone.set_pose([-40.0, 10.0, -3.0], [0.0, 0.0, math.radians(40.0)],
-                  two.velocity_world("b"))
+    lone.set_current(currents.UniformCurrent(float(np.hypot(*cb[:2])), math.atan2(cb[0], cb[1])))
+    lone.set_pose([-40.0, 10.0, -3.0], [0.0, 0.0, math.radians(40.0)], two.velocity_world("b"))
     assert np.allclose(lone.fluid_force_world(), total_b, rtol=1e-9, atol=1e-12)
 
 
@@ -250,9 +252,12 @@ def test_same_commands_give_bit_identical_trajectories(energy):
     def run(track: bool) -> np.ndarray:
         p = BauvPhysics.from_scene_xml()
         p.set_energy_tracking(track)
-        p.set_current(currents.make_current(
-            currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
-            np.random.default_rng(7)))
+        p.set_current(
+            currents.make_current(
+                currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
+                np.random.default_rng(7),
+            )
+        )
         rows = []
         for k in range(30):
             p.set_tail_beat_frequency_hz(0.5 + 0.05 * k)
@@ -316,8 +321,14 @@ def test_free_surface_buoyancy_fraction_and_motion():
 
     p = build_physics()
     h = HULL_HALF_HEIGHT_M
-    for depth, want in [(1.0, 1.0), (h, 1.0), (0.0, 0.5), (-h, 0.0), (-1.0, 0.0),
-                        (0.5 * h, 0.5 + (0.5 * math.sqrt(0.75) + math.asin(0.5)) / math.pi)]:
+    for depth, want in [
+        (1.0, 1.0),
+        (h, 1.0),
+        (0.0, 0.5),
+        (-h, 0.0),
+        (-1.0, 0.0),
+        (0.5 * h, 0.5 + (0.5 * math.sqrt(0.75) + math.asin(0.5)) / math.pi),
+    ]:
         p.set_pose([0.0, 0.0, -depth])
         p.apply_free_surface()
         assert p.submerged_fraction() == pytest.approx(want, abs=1e-12)
