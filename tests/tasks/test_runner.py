@@ -18,63 +18,37 @@ def _bytes(out):
     return (out / "metrics.json").read_bytes()
 
 
-@pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    out = tmp_path_factory.mktemp("ref") / "run"
-    run("paper-000/test-2", n_runs=30, seed=5, out_dir=out, overrides=SMALL, progress=False)
+def _batch(out, seed=5, **executor):
+    run(
+        "paper-000/test-2",
+        n_runs=30,
+        seed=seed,
+        out_dir=out,
+        overrides=SMALL,
+        progress=False,
+        **executor,
+    )
     return _bytes(out)
 
 
-def test_same_seed_twice_is_identical(reference, tmp_path):
-    run(
-        "paper-000/test-2",
-        n_runs=30,
-        seed=5,
-        out_dir=tmp_path / "a",
-        overrides=SMALL,
-        progress=False,
-    )
-    assert _bytes(tmp_path / "a") == reference
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    return _batch(tmp_path_factory.mktemp("ref") / "run")
+
+
+@pytest.mark.parametrize(
+    "executor",
+    [{}, {"workers": 2}, {"executor": "dask", "workers": 2}],
+    ids=["same-seed-again", "two-local-workers", "local-dask-cluster"],
+)
+def test_same_seed_is_bit_identical_whatever_the_executor(reference, tmp_path, executor):
+    if executor.get("executor") == "dask":
+        pytest.importorskip("distributed")
+    assert _batch(tmp_path / "a", **executor) == reference
 
 
 def test_different_seed_differs(reference, tmp_path):
-    run(
-        "paper-000/test-2",
-        n_runs=30,
-        seed=6,
-        out_dir=tmp_path / "a",
-        overrides=SMALL,
-        progress=False,
-    )
-    assert _bytes(tmp_path / "a") != reference
-
-
-def test_two_local_workers_are_identical(reference, tmp_path):
-    run(
-        "paper-000/test-2",
-        n_runs=30,
-        seed=5,
-        out_dir=tmp_path / "a",
-        overrides=SMALL,
-        workers=2,
-        progress=False,
-    )
-    assert _bytes(tmp_path / "a") == reference
-
-
-def test_local_dask_cluster_is_identical(reference, tmp_path):
-    pytest.importorskip("distributed")
-    run(
-        "paper-000/test-2",
-        n_runs=30,
-        seed=5,
-        out_dir=tmp_path / "a",
-        overrides=SMALL,
-        executor="dask",
-        workers=2,
-        progress=False,
-    )
-    assert _bytes(tmp_path / "a") == reference
+    assert _batch(tmp_path / "a", seed=6) != reference
 
 
 def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
