@@ -305,7 +305,6 @@ class MissionTask(control.Task):
         self.speed_table = speed_table
         self.log = _Log()
         self.fixes: list[dict[str, Any]] = []
-        self.failure: str | None = None
 
     # -- dm_control interface ------------------------------------------------------------------
 

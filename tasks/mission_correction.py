@@ -270,12 +270,6 @@ class CorrectionRunResult:
     waypoints: dict[str, list[tuple[float, float, float]]]
 
 
-class FlightMetrics(BaseModel):
-    """Leg-3 metrics of one flight."""
-
-    values: dict[str, float]
-
-
 class CorrectionRunMetrics(BaseModel):
     """One run of ``mission/correction``."""
 
