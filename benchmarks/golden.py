@@ -13,8 +13,8 @@ Usage::
     .venv/bin/python benchmarks/golden.py compare --only mission/survey paper-000/test-1
 
 Strings (file names, failure messages) must be equal; numbers are compared as floats, NaN equal
-to NaN. The commands run through the ``bauv`` CLI of this checkout (``python -m tasks.core.cli``
-when it exists, else the installed ``bauv``).
+to NaN. The commands run through the ``bauv`` CLI of this checkout (``python -m tasks.core.cli``,
+or ``tasks.cli`` before the framework moved), with the checkout as working directory.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
 GOLDEN_DIR = HERE / "golden"
 
 # name of the golden file -> arguments of `bauv run`
@@ -45,8 +46,10 @@ RUNS: dict[str, list[str]] = {
 
 
 def _bauv() -> list[str]:
-    exe = Path(sys.executable).with_name("bauv")
-    return [str(exe)] if exe.exists() else [sys.executable, "-m", "tasks.cli"]
+    # the CLI of this checkout (run with the checkout as working directory, so that its packages
+    # are imported even when another checkout is installed in the environment)
+    cli = "tasks.core.cli" if (ROOT / "tasks" / "core" / "cli.py").exists() else "tasks.cli"
+    return [sys.executable, "-m", cli]
 
 
 def run_metrics(args: list[str]) -> dict:
@@ -55,7 +58,7 @@ def run_metrics(args: list[str]) -> dict:
     try:
         out = tmp / "run"
         cmd = [*_bauv(), "run", *args, "--quiet", "--out", str(out)]
-        proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=ROOT)
         if proc.returncode != 0:
             raise RuntimeError(f"{' '.join(cmd)} exited {proc.returncode}:\n{proc.stderr[-2000:]}")
         return json.loads((out / "metrics.json").read_text())
