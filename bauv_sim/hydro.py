@@ -808,7 +808,7 @@ def load_speed_table(path: str | Path | None = None) -> SpeedTable:
             rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
     except FileNotFoundError:
         raise ConfigError(
-            f"speed table {str(p)!r}: not found (run python -m tasks.vehicle_checks)"
+            f"speed table {str(p)!r}: not found (run python -m tasks.vehicle.checks)"
         ) from None
     try:
         cols = {c: np.array([float(r[c]) for r in rows]) for c in SPEED_TABLE_COLUMNS}

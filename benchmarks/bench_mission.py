@@ -21,8 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from tasks import closed_loop as cl
-from tasks.runner import plan_batch, run
+from tasks.closed_loop import mission as cl
+from tasks.core.runner import plan_batch, run
 
 
 def raw_physics(scn: cl.MissionScenario, actions: list) -> float:

@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from tasks.paper000 import measure_passages, run_ekf
-from tasks.runner import plan_batch
+from tasks.core.runner import plan_batch
+from tasks.paper000.passage import measure_passages, run_ekf
 
 
 def batch_run(passages: int, workers: int) -> tuple[float, float]:
@@ -34,7 +34,7 @@ def batch_run(passages: int, workers: int) -> tuple[float, float]:
     with tempfile.TemporaryDirectory() as tmp:
         code = (
             "import resource, sys;"
-            "from tasks.cli import main;"
+            "from tasks.core.cli import main;"
             "\ntry:\n    main(sys.argv[1:])\nexcept SystemExit as e:\n    assert not e.code\n"
             "r = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss;"
             "c = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss;"

@@ -98,8 +98,9 @@ def facade_steps_per_s(seconds: float, repeats: int, energy: bool) -> float:
     return _median_rate(run, repeats)
 
 
-def batch_steps_per_s(m: mujoco.MjModel, nsim: int, nthread: int, nstep: int,
-                      repeats: int) -> float:
+def batch_steps_per_s(
+    m: mujoco.MjModel, nsim: int, nthread: int, nstep: int, repeats: int
+) -> float:
     """``mujoco.batch.Batch``: ``nsim`` copies of the vehicle stepped on ``nthread`` threads with
     per-simulation currents (``opt.wind``), aggregate steps per second."""
     b = mujoco.batch.Batch(m, nsim, nthread, persistent=True)
@@ -137,9 +138,14 @@ def ablations(nstep: int, repeats: int) -> list[tuple[str, float, float]]:
         rows.append((name, r, 1e6 / r))
 
     variant("full scene (vehicle + seabed heightfield)", lambda m: None)
-    rows.append(("vehicle only (bauv.xml, no seabed)",
-                 *(lambda r: (r, 1e6 / r))(raw_steps_per_s(_model(MODEL_DIR / "bauv.xml"),
-                                                           nstep, repeats))))
+    rows.append(
+        (
+            "vehicle only (bauv.xml, no seabed)",
+            *(lambda r: (r, 1e6 / r))(
+                raw_steps_per_s(_model(MODEL_DIR / "bauv.xml"), nstep, repeats)
+            ),
+        )
+    )
 
     def no_fluid(m: mujoco.MjModel) -> None:
         m.opt.density = 0.0
@@ -257,8 +263,9 @@ def main(argv: list[str] | None = None) -> str:
         text = README.read_text() if README.exists() else "# Benchmarks\n"
         block = f"<!-- BEGIN physics -->\n{report}\n<!-- END physics -->"
         if "<!-- BEGIN physics -->" in text:
-            text = re.sub(r"<!-- BEGIN physics -->.*?<!-- END physics -->", lambda _: block,
-                          text, flags=re.S)
+            text = re.sub(
+                r"<!-- BEGIN physics -->.*?<!-- END physics -->", lambda _: block, text, flags=re.S
+            )
         else:
             text += "\n" + block + "\n"
         README.write_text(text)

@@ -14,7 +14,7 @@ Usage::
 
 Strings (file names, failure messages) must be equal; numbers are compared as floats, NaN equal
 to NaN. The commands run through the ``bauv`` CLI of this checkout (``python -m tasks.core.cli``,
-or ``tasks.cli`` before the framework moved), with the checkout as working directory.
+or ``tasks.core.cli`` before the framework moved), with the checkout as working directory.
 """
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ def web_viewer(run_dir: str, timeout_s: float = 30.0) -> Iterator[Viewer]:
         [
             sys.executable,
             "-m",
-            "tasks.cli",
+            "tasks.core.cli",
             "view",
             str(run_dir),
             "--web",

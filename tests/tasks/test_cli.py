@@ -5,12 +5,12 @@ import sys
 
 import pytest
 
-from tasks import cli
+from tasks.core import cli
 
 
 def bauv(*args, cwd=None):
     return subprocess.run(
-        [sys.executable, "-m", "tasks.cli", *args], capture_output=True, text=True, cwd=cwd
+        [sys.executable, "-m", "tasks.core.cli", *args], capture_output=True, text=True, cwd=cwd
     )
 
 
@@ -69,7 +69,7 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     import socket
     import time
 
-    from tasks.recording import Recording
+    from tasks.core.recording import Recording
     from tests.webviewer import web_viewer
 
     rec = Recording(tmp_path / "recording.rrd", "test", "test")

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from bauv_sim.frames import R_from_quat_wxyz
-from tasks import closed_loop as cl
-from tasks import registry
-from tasks.recording import read_time_series
-from tasks.runner import plan_batch, run
+from tasks.closed_loop import mission as cl
+from tasks.core import registry
+from tasks.core.recording import read_time_series
+from tasks.core.runner import plan_batch, run
 
 MISSIONS = [n for n in registry.names() if n.startswith("mission/")]
 SHORT = "mission/short"

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from tasks import paper000
-from tasks.recording import read_time_series
-from tasks.runner import plan_batch, run
+from tasks.core.recording import read_time_series
+from tasks.core.runner import plan_batch, run
+from tasks.paper000 import passage as paper000
 
 FAST = ["report.figures=false", "report.recording=false"]
 GAUSSIAN = ["initial_error.distribution=gaussian"] + [

@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from bauv_sim.config import load_config
-from tasks import paper001, registry
-from tasks.runner import run
+from tasks.core import registry
+from tasks.core.runner import run
+from tasks.paper001 import replica as paper001
 
 COARSE = ["world.step_s=0.02"]
 

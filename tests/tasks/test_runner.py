@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from tasks.runner import run
+from tasks.core.runner import run
 
 SMALL = ["report.figures=false", "report.recording=false", "runner.block_size=7"]
 
@@ -68,13 +68,13 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     ]
     straight = tmp_path / "straight"
     subprocess.run(
-        [sys.executable, "-m", "tasks.cli", "run", *args, "--out", str(straight)],
+        [sys.executable, "-m", "tasks.core.cli", "run", *args, "--out", str(straight)],
         check=True,
         capture_output=True,
     )
     out = tmp_path / "interrupted"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "tasks.cli", "run", *args, "--out", str(out)],
+        [sys.executable, "-m", "tasks.core.cli", "run", *args, "--out", str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -99,7 +99,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
         [
             sys.executable,
             "-m",
-            "tasks.cli",
+            "tasks.core.cli",
             "run",
             "paper-000/test-1",
             "--resume",

@@ -1,16 +1,19 @@
 """The registry of experiments and missions, loaded by name.
 
-An experiment is one module in ``tasks/`` whose name starts with ``paper``, ``mission`` or
-``vehicle`` (e.g. ``tasks/paper000.py``). The module builds :class:`Experiment` instances and passes
-them to :func:`register` at import time, the way dm_control's suite domains add themselves with
-``@SUITE.add``. Adding an experiment touches its own module and nothing else: :func:`get` and
-:func:`names` import every such module the first time they are called.
+Experiments live in experiment packages (``tasks.paper000``, ``tasks.paper001``, ``tasks.missions``,
+``tasks.vehicle``; the list is :data:`EXPERIMENT_PACKAGES`). A module builds :class:`Experiment`
+instances and passes them to :func:`register` at import time, the way dm_control's suite domains add
+themselves with ``@SUITE.add``; its package's ``__init__`` imports it, so importing the package
+registers all of its experiments. :func:`get` and :func:`names` import every package the first time
+they are called. Registration is explicit: a module that its package does not import is not
+registered, whatever its file name.
 
 An experiment is split in two pure parts so that the runner can distribute it:
 
 * :meth:`Experiment.run_block` computes a block of Monte Carlo runs (a tuple of run indices) and
-  returns a picklable result. It must depend only on ``(scenario, seed, runs)``: each run draws from
-  its own streams (:mod:`bauv_sim.rng`), so a block's result does not depend on which worker ran it.
+  returns plain data (:mod:`tasks.core.store`). It must depend only on ``(scenario, seed, runs)``:
+  each run draws from its own streams (:mod:`bauv_sim.rng`), so a block's result does not depend
+  on which worker ran it.
 * :meth:`Experiment.report` turns the block results, in block order, into ``metrics.json``, tables,
   figures and the recording of one run.
 """
@@ -18,7 +21,6 @@ An experiment is split in two pure parts so that the runner can distribute it:
 from __future__ import annotations
 
 import importlib
-import pkgutil
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +31,8 @@ from pydantic import BaseModel
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 
-EXPERIMENT_MODULE_PREFIXES = ("paper", "mission", "vehicle")
+EXPERIMENT_PACKAGES = ("tasks.paper000", "tasks.paper001", "tasks.missions", "tasks.vehicle")
+"""The packages whose import registers every experiment and mission."""
 
 _REGISTRY: dict[str, Experiment] = {}
 _LOADED = False
@@ -122,11 +125,8 @@ def _load_all() -> None:
     global _LOADED
     if _LOADED:
         return
-    import tasks
-
-    for info in pkgutil.iter_modules(tasks.__path__):
-        if info.name.startswith(EXPERIMENT_MODULE_PREFIXES):
-            importlib.import_module(f"tasks.{info.name}")
+    for package in EXPERIMENT_PACKAGES:
+        importlib.import_module(package)
     _LOADED = True
 
 

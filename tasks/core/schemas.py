@@ -1,6 +1,7 @@
 """Write the JSON Schema of every experiment's ``metrics.json`` to ``docs/schemas/``.
 
-Run ``python -m tasks.schemas`` after changing a metrics model; a test checks the files are current.
+Run ``python -m tasks.core.schemas`` after changing a metrics model; a test checks that the files
+are current.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ import json
 from pathlib import Path
 
 from bauv_sim import PROJECT_ROOT
-from tasks import registry
+from tasks.core import registry
 
 SCHEMA_DIR = PROJECT_ROOT / "docs" / "schemas"
 

@@ -41,7 +41,7 @@ def cli() -> None:
 @cli.command("list")
 def list_cmd() -> None:
     """List the registered experiments and missions."""
-    from tasks import registry
+    from tasks.core import registry
 
     exps = registry.all_experiments()
     width = max(len(e.name) for e in exps)
@@ -61,7 +61,7 @@ def list_cmd() -> None:
 )
 def show_cmd(name: str, overrides: tuple[str, ...], files: tuple[str, ...]) -> None:
     """Print the resolved scenario of NAME as TOML (every field, with its default)."""
-    from tasks import registry
+    from tasks.core import registry
 
     exp = registry.get(name)
     scn = load_config(exp.scenario_type, exp.preset, files, overrides)
@@ -119,7 +119,7 @@ def run_cmd(
     quiet: bool,
 ) -> None:
     """Run experiment or mission NAME and write its run folder."""
-    from tasks.runner import run
+    from tasks.core.runner import run
 
     out_dir, summary = run(
         name,
@@ -217,7 +217,7 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the CLI and map errors to exit statuses without tracebacks."""
-    from tasks.runner import BatchFailed, BatchInterrupted
+    from tasks.core.runner import BatchFailed, BatchInterrupted
 
     try:
         cli.main(args=argv, prog_name="bauv", standalone_mode=False)

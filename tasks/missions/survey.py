@@ -6,8 +6,8 @@ current setting 60 deg. Guidance steers on the EKF estimate (USBL every 5 s, dep
 ``--set navigation.steer_on=dr`` flies the same mission on dead reckoning alone for comparison.
 """
 
-from tasks.closed_loop import MissionExperiment, mission_preset
-from tasks.registry import register
+from tasks.closed_loop.mission import MissionExperiment, mission_preset
+from tasks.core.registry import register
 
 WAYPOINTS = [
     {"east_m": 150.0, "north_m": -100.0},

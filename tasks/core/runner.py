@@ -37,8 +37,8 @@ import tomli_w
 from bauv_sim.config import Config, load_config, read_toml, to_plain, validate
 from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.rng import check_seed
-from tasks import registry
-from tasks.registry import Experiment, ReportContext, ReportSummary
+from tasks.core import registry
+from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 RUN_FILE = "run.json"
 SCENARIO_FILE = "scenario.toml"

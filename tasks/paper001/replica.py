@@ -42,8 +42,8 @@ from bauv_sim.config import Config
 from bauv_sim.frames import velocity_from_course_speed
 from bauv_sim.kinematic import seed001 as kin
 from nav import correction as corr
-from tasks.registry import Experiment, ReportContext, ReportSummary, register
-from tasks.report import Table, write_metrics, write_tables
+from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.report import Table, write_metrics, write_tables
 
 Array = NDArray[np.float64]
 PROCEDURES = ("cp1", "cp2")

@@ -26,8 +26,8 @@ from pydantic import BaseModel, Field
 
 from bauv_sim.config import Config
 from nav import accuracy as acc
-from tasks.registry import Experiment, ReportContext, ReportSummary, register
-from tasks.report import Table, write_metrics, write_tables
+from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.report import Table, write_metrics, write_tables
 
 
 class AccuracyScenario(Config):

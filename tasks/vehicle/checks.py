@@ -7,8 +7,8 @@ updates the ``trim`` keyframe of ``models/bauv/bauv.xml`` and rewrites the resul
 
 Run from the repository root::
 
-    python -m tasks.vehicle_checks            # everything (about 3 minutes on 2 cores)
-    python -m tasks.vehicle_checks tow swim   # some checks only
+    python -m tasks.vehicle.checks            # everything (about 3 minutes on 2 cores)
+    python -m tasks.vehicle.checks tow swim   # some checks only
 
 Fast versions of the same checks are the unit tests in ``tests/bauv_sim``.
 """

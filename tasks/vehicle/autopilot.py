@@ -29,7 +29,7 @@ from pydantic import BaseModel, Field
 from bauv_sim.autopilot import Autopilot, AutopilotConfig, Measured
 from bauv_sim.config import Config
 from bauv_sim.frames import wrap_pi
-from tasks.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 
 
 class AutopilotTrialsScenario(Config):
@@ -233,7 +233,7 @@ class AutopilotTrials(Experiment):
         }
 
     def report(self, ctx: ReportContext) -> ReportSummary:
-        from tasks.report import Table, write_metrics, write_tables
+        from tasks.core.report import Table, write_metrics, write_tables
 
         s: AutopilotTrialsScenario = ctx.scenario  # type: ignore[assignment]
         tr = next(iter(ctx.blocks))

@@ -71,10 +71,10 @@ from nav.metrics import (
     series_stats,
 )
 from nav.models import CourseSpeedDepthMotion, UsblMeasurement
-from tasks import figures
-from tasks.recording import COLORS, Recording
-from tasks.registry import Experiment, ReportContext, ReportSummary, register
-from tasks.report import Table, write_metrics, write_tables
+from tasks.core import figures
+from tasks.core.recording import COLORS, Recording
+from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.report import Table, write_metrics, write_tables
 
 METHODS = ("EKF", "DR", "USBL")
 SIGMA_SOG_M_S = 0.5 * KNOT_M_S

@@ -1,7 +1,7 @@
 """``mission/short``: a two-leg, two-minute mission for tests and quick checks."""
 
-from tasks.closed_loop import MissionExperiment, mission_preset
-from tasks.registry import register
+from tasks.closed_loop.mission import MissionExperiment, mission_preset
+from tasks.core.registry import register
 
 register(
     MissionExperiment(

@@ -71,7 +71,7 @@ from nav.models import (
     UsblMeasurement,
 )
 from nav.navigator import Navigator
-from tasks.registry import Experiment, ReportContext, ReportSummary
+from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 MODES = ("transit", "ascend", "surface", "dive", "done")
 
@@ -951,7 +951,7 @@ def _thin(a: dict[str, NDArray], every_s: float = 5.0) -> dict[str, NDArray]:
 
 def report_mission(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
     """Tables, metrics, figures and the recording of a mission batch."""
-    from tasks.report import Table, write_metrics, write_tables
+    from tasks.core.report import Table, write_metrics, write_tables
 
     scn: MissionScenario = ctx.scenario  # type: ignore[assignment]
     runs: list[MissionRun] = [r for block in ctx.blocks for r in block]
@@ -1182,13 +1182,13 @@ def mission_figures(
 
 def record_mission(name: str, scn: MissionScenario, run: MissionRun, out) -> str:
     """Write ``recording.rrd`` of a mission run (see the module docstring of
-    :mod:`tasks.recording`)."""
+    :mod:`tasks.core.recording`)."""
     import rerun as rr
 
     from bauv_sim.frames import quat_wxyz_to_xyzw
     from bauv_sim.hull import MODEL_DIR
     from bauv_sim.seabed import generate
-    from tasks.recording import COLORS, Recording
+    from tasks.core.recording import COLORS, Recording
 
     a = run.arrays
     t = a["t"]

@@ -38,8 +38,8 @@ from bauv_sim.errors import ConfigError
 from nav.correction import CurrentResponse, compensated_course
 from nav.drns import CorrectedDeadReckoning
 from nav.guidance import GuidanceCommand, direct_course
-from tasks import closed_loop as cl
-from tasks.registry import ReportContext, ReportSummary, register
+from tasks.closed_loop import mission as cl
+from tasks.core.registry import ReportContext, ReportSummary, register
 
 METHODS = ("uncorrected", "corrected", "baseline")
 
@@ -343,7 +343,7 @@ class CorrectionExperiment(cl.MissionExperiment):
 
 def report_correction(exp: CorrectionExperiment, ctx: ReportContext) -> ReportSummary:
     """Tables 1 and 3 analogues, the current estimate, figures and the recording."""
-    from tasks.report import Table, write_metrics, write_tables
+    from tasks.core.report import Table, write_metrics, write_tables
 
     scn: CorrectionScenario = ctx.scenario  # type: ignore[assignment]
     runs: list[CorrectionRunResult] = [r for b in ctx.blocks for r in b]
@@ -546,7 +546,7 @@ def record_correction(name: str, scn: CorrectionRun, flight: cl.MissionRun, out)
     """The recordings of the recorded run's compensated flight: the mission recording, and a
     second one with the DR tracks and the estimated current beside the true one."""
 
-    from tasks.recording import Recording
+    from tasks.core.recording import Recording
 
     path = cl.record_mission(name, scn, flight, out)
     a = flight.arrays
