@@ -81,6 +81,15 @@ def direct_course(position: Array, wp: Waypoint) -> float:
     return math.atan2(wp.east_m - position[0], wp.north_m - position[1]) % (2 * math.pi)
 
 
+def horizontal_sigma_m(P: Array) -> float:
+    """Standard deviation of a position estimate along its worst horizontal direction: the
+    square root of the larger eigenvalue of the horizontal 2x2 block of ``P`` (shape (3, 3) or
+    larger, m^2), m."""
+    tr = P[0, 0] + P[1, 1]
+    det = P[0, 0] * P[1, 1] - P[0, 1] ** 2
+    return math.sqrt(max(0.5 * tr + math.sqrt(max(0.25 * tr**2 - det, 0.0)), 0.0))
+
+
 @dataclass
 class LegRecord:
     """How a leg ended: reached (by the estimate) or missed (timed out), and when."""

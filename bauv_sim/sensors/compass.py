@@ -8,6 +8,8 @@ course-sector bias of seed 003 are part of the error vocabulary (:mod:`bauv_sim.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
@@ -16,6 +18,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import wrap_2pi
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess
+from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 
@@ -77,3 +80,29 @@ class Compass:
             course = broadcast_runs(tr.course_over_ground_rad, self.n)
         value, produced = self.measure(heading, tr.t_s, course)
         return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))
+
+
+@register_device(CompassConfig)
+class CompassDevice:
+    """The compass in a vehicle's rig (held; sampled every ``period_s``).
+
+    Value: measured heading, shape (1,), rad in [0, 2 pi) clockwise from north.
+    """
+
+    kind = "held"
+
+    def __init__(self, cfg: CompassConfig, build: DeviceBuild):
+        self.name = build.name
+        self.every = build.every(cfg.period_s)
+        self._compass = Compass(cfg, build.seed, (build.run,), build.stream)
+        self._needs_course = cfg.heading.to_model().needs_reference()
+
+    def step(self, ctx: TickContext) -> Measurement:
+        """Measure the true heading (and pass the course over ground to sector-bias models)."""
+        vt = ctx.truth
+        course = None
+        if self._needs_course:
+            v = vt.velocity_world_m_s
+            course = np.array([[math.atan2(v[0], v[1]) % (2 * math.pi)]])  # FRAMES
+        heading = self._compass.measure(np.array([[vt.roll_pitch_heading_rad[2]]]), ctx.tt, course)
+        return Measurement(self.name, ctx.t_s, ctx.t_s, heading[0][0])

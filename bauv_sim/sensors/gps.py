@@ -14,6 +14,7 @@ from pydantic import Field
 from bauv_sim.config import Config
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
 from bauv_sim.sensors.errors import ErrorProcess, LengthErrorConfig
+from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 
@@ -76,3 +77,47 @@ class Gps:
         return SensorSamples(
             tr.t_s, np.stack(vals, -1), produced, np.broadcast_to(tr.t_s, produced.shape)
         )
+
+
+@register_device(GpsConfig)
+class GpsDevice:
+    """The GPS receiver in a vehicle's rig (event): a fix when the antenna has been out of the
+    water for the acquisition time.
+
+    The receiver does not try while the vehicle's reference point is deeper than
+    ``max_antenna_depth_m`` + the lever arm's length + :data:`DEEP_MARGIN_M` (the antenna is
+    surely under water there): its acquisition clock restarts without a sample. The antenna's
+    lever arm is the configured one, or the model's site when it is zero.
+    Value: the antenna's (east, north), shape (2,), m, world (no lever-arm correction).
+    """
+
+    kind = "event"
+
+    def __init__(self, cfg: GpsConfig, build: DeviceBuild):
+        arm = cfg.antenna_body_m
+        if arm == (0.0, 0.0, 0.0) and build.lever_arm_body_m is not None:
+            arm = build.lever_arm_body_m
+            cfg = cfg.model_copy(update={"antenna_body_m": arm})
+        self.lever_arm_body_m = np.asarray(arm, dtype=float)
+        self.name = build.name
+        self.every = build.every(cfg.period_s)
+        self.deep_m = cfg.max_antenna_depth_m + DEEP_MARGIN_M + float(np.linalg.norm(arm))
+        self._gps = Gps(cfg, build.seed, (build.run,), build.stream)
+
+    def step(self, ctx: TickContext) -> Measurement | None:
+        """A fix at the GPS's ticks when the antenna is up (``None`` otherwise)."""
+        if ctx.truth.depth_m > self.deep_m:
+            self._gps.submerged()
+            return None
+        if ctx.k % self.every:
+            return None
+        g = self._gps.sample(ctx.record, _FIRST)
+        if not g.produced[0, 0]:
+            return None
+        return Measurement(self.name, ctx.t_s, ctx.t_s, g.values[0, 0], ctx.measured_attitude_rad)
+
+
+DEEP_MARGIN_M = 0.5
+"""Margin beyond which the receiver stops trying, m (see :class:`GpsDevice`)."""
+
+_FIRST = np.zeros(1, dtype=np.intp)

@@ -15,6 +15,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import KNOT_M_S
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import ErrorProcess, SpeedErrorConfig
+from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 
@@ -66,3 +67,25 @@ class Log:
             broadcast_runs(forward_speed_through_water(tr), self.n), tr.t_s
         )
         return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))
+
+
+@register_device(LogConfig)
+class LogDevice:
+    """The EM log in a vehicle's rig (held; nothing held after a sample below the minimum speed).
+
+    Value: speed through water along the hull, shape (1,), m/s.
+    """
+
+    kind = "held"
+
+    def __init__(self, cfg: LogConfig, build: DeviceBuild):
+        self.name = build.name
+        self.every = build.every(cfg.period_s)
+        self._log = Log(cfg, build.seed, (build.run,), build.stream)
+
+    def step(self, ctx: TickContext) -> Measurement | None:
+        """Measure the true forward speed through water; ``None`` when the log is blind."""
+        value, ok = self._log.measure(forward_speed_through_water(ctx.record), ctx.tt)
+        if not ok[0, 0]:
+            return None
+        return Measurement(self.name, ctx.t_s, ctx.t_s, value[0])

@@ -14,8 +14,10 @@ from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from bauv_sim.config import Config
+from bauv_sim.errors import ConfigError
 from bauv_sim.sensors.base import SensorSamples
 from bauv_sim.sensors.errors import ErrorProcess, SpeedErrorConfig
+from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 
 
 class OdometryConfig(Config):
@@ -76,3 +78,39 @@ class Odometry:
         """
         v, ok = self._err.apply(self.cfg.speed_at(np.asarray(frequency_hz, float)), t_s)
         return SensorSamples(np.asarray(t_s, float), v, ok, np.broadcast_to(t_s, ok.shape))
+
+
+@register_device(OdometryConfig)
+class OdometryDevice:
+    """Odometry in a vehicle's rig (held): speed from the commanded tail-beat frequency.
+
+    An empty calibration table is filled from the vehicle's speed table, given by the mission as
+    ``extra = {"speed_table": SpeedTable}``.
+
+    Value: speed through water, shape (1,), m/s.
+    """
+
+    kind = "held"
+
+    def __init__(self, cfg: OdometryConfig, build: DeviceBuild):
+        table = build.extra.get("speed_table")
+        if not cfg.frequency_hz:
+            if table is None:
+                raise ConfigError(
+                    f"sensors.{build.name}: empty calibration table and no speed table given"
+                )
+            cfg = cfg.model_copy(
+                update={
+                    "frequency_hz": tuple(float(f) for f in table.frequency_hz),
+                    "speed_m_s": tuple(float(v) for v in table.speed_m_s),
+                }
+            )
+        self.name = build.name
+        self.every = build.every(cfg.period_s)
+        self._odometry = Odometry(cfg, build.seed, (build.run,), build.stream)
+
+    def step(self, ctx: TickContext) -> Measurement:
+        """The speed of the commanded tail-beat frequency."""
+        f = np.array([[float(ctx.commands["tail_beat_frequency_hz"])]])
+        s = self._odometry.sample(ctx.tt, f)
+        return Measurement(self.name, ctx.t_s, ctx.t_s, s.values[0])

@@ -14,8 +14,10 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from bauv_sim.config import Config
+from bauv_sim.errors import ConfigError
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import ErrorProcess, LengthErrorConfig
+from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 
@@ -71,3 +73,27 @@ class Pressure:
             depth = depth - broadcast_runs(truth.take(prev).depth_m, self.n)
         value, produced = self.measure(depth, tr.t_s)
         return SensorSamples(tr.t_s, value, produced, np.broadcast_to(tr.t_s, produced.shape))
+
+
+@register_device(PressureConfig)
+class PressureDevice:
+    """The pressure sensor in a vehicle's rig (held; ``output = "depth"``).
+
+    Value: measured depth of the reference point, shape (1,), m (positive down).
+    """
+
+    kind = "held"
+
+    def __init__(self, cfg: PressureConfig, build: DeviceBuild):
+        if cfg.output != "depth":
+            raise ConfigError(
+                f"sensors.{build.name}.output = {cfg.output!r}: a vehicle's rig measures 'depth'"
+            )
+        self.name = build.name
+        self.every = build.every(cfg.period_s)
+        self._pressure = Pressure(cfg, build.seed, (build.run,), build.stream)
+
+    def step(self, ctx: TickContext) -> Measurement:
+        """Measure the true depth."""
+        value, _ = self._pressure.measure(np.array([[ctx.truth.depth_m]]), ctx.tt)
+        return Measurement(self.name, ctx.t_s, ctx.t_s, value[0])

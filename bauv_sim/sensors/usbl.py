@@ -21,6 +21,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import range_azimuth_elevation, wrap_2pi
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess, LengthErrorConfig
+from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 
@@ -111,3 +112,44 @@ class Usbl:
             produced &= ~lost
         t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
         return SensorSamples(tr.t_s, meas, produced, t_arr)
+
+
+@register_device(UsblConfig)
+class UsblDevice:
+    """The USBL in a vehicle's rig (event): a fix every ``period_s``, valid at the reply and
+    reaching the vehicle after the travel time and the processing delay.
+
+    The transponder's lever arm is the configured one, or the model's site when it is zero.
+    Value: ``(range m, azimuth rad, elevation rad)`` from the scene's transceiver, shape (3,).
+    """
+
+    kind = "event"
+
+    def __init__(self, cfg: UsblConfig, build: DeviceBuild):
+        arm = cfg.transponder_body_m
+        if arm == (0.0, 0.0, 0.0) and build.lever_arm_body_m is not None:
+            arm = build.lever_arm_body_m
+            cfg = cfg.model_copy(update={"transponder_body_m": arm})
+        self.lever_arm_body_m = np.asarray(arm, dtype=float)
+        self.transceiver_world_m = build.physics.transceiver_world()
+        self.name = build.name
+        self.every = build.every(cfg.period_s)
+        self._usbl = Usbl(cfg, self.transceiver_world_m, build.seed, (build.run,), build.stream)
+
+    def step(self, ctx: TickContext) -> Measurement | None:
+        """A fix at the USBL's ticks (``None`` when none is produced)."""
+        if ctx.k % self.every:
+            return None
+        u = self._usbl.sample(ctx.record, _FIRST)
+        if not u.produced[0, 0]:
+            return None
+        return Measurement(
+            self.name,
+            ctx.t_s,
+            float(u.t_arrival_s[0, 0]),
+            u.values[0, 0],
+            ctx.measured_attitude_rad,
+        )
+
+
+_FIRST = np.zeros(1, dtype=np.intp)

@@ -1,1 +1,12 @@
-"""The mission core: closed-loop missions composed of parts, for one or more vehicles."""
+"""The mission core: closed-loop missions composed of parts, for one or more vehicles.
+
+* :mod:`~tasks.closed_loop.scenario`: the scenario sections of a way-point mission;
+* :mod:`~tasks.closed_loop.parts`: the parts and their protocols (navigation, guidance, pilot),
+  the action and observation specs, :class:`~tasks.closed_loop.parts.MissionDesign`;
+* :mod:`~tasks.closed_loop.navigation`: the standard navigation part (EKF + DR on the rig);
+* :mod:`~tasks.closed_loop.world`: the dm_control task of N vehicles, the standard design,
+  :func:`~tasks.closed_loop.world.fly`;
+* :mod:`~tasks.closed_loop.result`: the run as plain data (typed columns with units);
+* :mod:`~tasks.closed_loop.report`: metrics, tables, figures, recording, Parquet;
+* :mod:`~tasks.closed_loop.experiment`: :class:`~tasks.closed_loop.experiment.MissionExperiment`.
+"""

@@ -35,13 +35,27 @@ from pydantic import BaseModel, Field
 from bauv_sim import rng as rng_mod
 from bauv_sim.config import Config, load_config, to_plain
 from bauv_sim.errors import ConfigError
+from bauv_sim.sensors.rig import RigTick
 from nav.correction import CurrentResponse, compensated_course
 from nav.drns import CorrectedDeadReckoning
-from nav.guidance import GuidanceCommand, direct_course
-from tasks.closed_loop import mission as cl
+from nav.guidance import GuidanceCommand, WaypointGuidance, direct_course
+from tasks.closed_loop.experiment import MissionExperiment
+from tasks.closed_loop.navigation import EkfNavigation, NavOutput
+from tasks.closed_loop.parts import MissionParts
+from tasks.closed_loop.report import circle, export_runs, record_mission
+from tasks.closed_loop.result import MissionRun, VehicleRun
+from tasks.closed_loop.scenario import MissionScenario
+from tasks.closed_loop.world import (
+    WaypointMission,
+    fly,
+    install_sea,
+    standard_vehicle,
+    waypoint_guidance,
+)
 from tasks.core.registry import ReportContext, ReportSummary, register
 
 METHODS = ("uncorrected", "corrected", "baseline")
+EN = ("east", "north")
 
 
 class CorrectionConfig(Config):
@@ -63,7 +77,7 @@ class CorrectionConfig(Config):
     acceptance_radius_m: float = Field(5.0, gt=0, description="reached by the DR, m")
 
 
-class CorrectionScenario(cl.MissionScenario):
+class CorrectionScenario(MissionScenario):
     """A mission scenario with the correction experiment (its way-points are made per run)."""
 
     correction: CorrectionConfig = Field(default_factory=CorrectionConfig)
@@ -87,14 +101,14 @@ def leg_courses(scn: CorrectionScenario, seed: int, run: int) -> tuple[float, fl
     return a1, a2, a3
 
 
-def run_scenario(scn: CorrectionScenario, seed: int, run: int, course_law: str):
-    """The mission scenario of one run: way-points of the three legs, the course law of leg 3."""
+def run_scenario(scn: CorrectionScenario, seed: int, run: int) -> CorrectionScenario:
+    """The scenario one run flies: the way-points of its three legs and its start heading."""
     c = scn.correction
     a = leg_courses(scn, seed, run)
     p = np.array([scn.start.east_m, scn.start.north_m])
     wps = []
     for i, course in enumerate(a):
-        p = p + c.leg_length_m * np.array([math.sin(course), math.cos(course)])
+        p = p + c.leg_length_m * np.array([math.sin(course), math.cos(course)])  # FRAMES
         wps.append(
             {
                 "east_m": float(p[0]),
@@ -107,52 +121,124 @@ def run_scenario(scn: CorrectionScenario, seed: int, run: int, course_law: str):
     data = to_plain(scn)
     data["guidance"]["waypoints"] = wps
     data["start"]["heading_deg"] = math.degrees(a[0]) % 360.0
-    data["correction_course_law"] = course_law
-    return load_config(CorrectionRun, data)
+    return load_config(CorrectionScenario, data)
 
 
-class CorrectionRun(CorrectionScenario):
-    """One flight of a run (internal): the scenario with its legs and leg 3's course law."""
+class CorrectionNavigation:
+    """Seed 001's DRNS (:class:`nav.drns.CorrectedDeadReckoning`) beside the standard EKF part:
+    it dead-reckons on the compass heading and the odometry speed at every tick, takes every GPS
+    fix (lever arm removed) and, after leg 2, corrects with the chosen procedure.
 
-    correction_course_law: Literal["direct", "compensated"] = "direct"
+    Args:
+        ekf: the standard navigation part (its initial estimate starts the DRNS).
+        cfg: the correction experiment.
+        courses: the three legs' courses, rad.
 
+    The navigation output's ``extra`` holds ``dr_uncorrected``, ``dr_corrected``,
+    ``dr_baseline`` (east, north, m), ``cp_current`` (the correction's current estimate for the
+    measured heading, m/s, NaN before leg 2), ``n_legs`` and ``correction`` (the estimate).
+    """
 
-class CorrectionTask(cl.MissionTask):
-    """The mission's world side plus seed 001's DRNS and its course laws."""
-
-    scn: CorrectionRun
-
-    def _setup(self, physics) -> None:
-        c = self.scn.correction
-        x0 = self.nav.estimate.x
+    def __init__(self, ekf: EkfNavigation, cfg: CorrectionConfig, courses: tuple[float, ...]):
+        self.ekf = ekf
+        self.courses = courses
+        x0 = ekf.nav.estimate.x
         self.drns = CorrectedDeadReckoning(
-            0.0, x0[:2], c.procedure, CurrentResponse(tuple(c.response_cos_coeffs))
+            0.0, x0[:2], cfg.procedure, CurrentResponse(tuple(cfg.response_cos_coeffs))
         )
-        self.courses = leg_courses(self.scn, self.seed, self.run)
-        self.guidance.course_law = self._course_law
-        self.guidance.waypoints = list(self.guidance.waypoints)
-        self.placed: set[int] = set()
-        self.leg_start: dict[int, NDArray[np.float64]] = {}
         self.leg3_start_s: float | None = None
 
-    def _predict(self, t: float, heading: float, speed: float) -> None:
-        super()._predict(t, heading, speed)
-        self.drns.predict(t, heading, self.odo_speed)
+    def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
+        out = self.ekf.step(tick, initial)
+        d = self.drns
+        if not initial:
+            d.predict(tick.t_s, out.heading_rad, out.odometry_speed_m_s)
+        if out.gps_reference_m is not None:
+            d.fix(tick.t_s, out.gps_reference_m)
+            if len(d.legs) >= 2:
+                self.leg3_start_s = tick.t_s  # the last fix before leg 3
+        est = d.estimate
+        cur = (
+            est.current_for_course(np.array([out.heading_rad]))[0]
+            if est is not None
+            else np.full(2, np.nan)
+        )
+        extra = {
+            "dr_uncorrected": d.uncorrected.copy(),
+            "dr_corrected": d.corrected.copy(),
+            "dr_baseline": d.baseline.copy(),
+            "cp_current": cur,
+            "n_legs": len(d.legs),
+            "correction": est,
+        }
+        return dataclasses.replace(out, extra=extra)
 
-    def _gps_fix(self, t: float, z_ref: NDArray[np.float64]) -> bool:
-        accepted = super()._gps_fix(t, z_ref)
-        self.drns.fix(t, z_ref)
-        if len(self.drns.legs) >= 2:
-            self.leg3_start_s = t  # the last fix before leg 3
-        return accepted
+    def outcome(self) -> dict[str, Any]:
+        """When leg 3 started, the CP's error message, and its current estimate on the first
+        leg's course (m/s, east and north)."""
+        est = self.drns.estimate
+        return {
+            "leg3_start_s": self.leg3_start_s,
+            "correction_error": self.drns.correction_error,
+            "current_estimate_m_s": (
+                None if est is None else est.current_for_course(np.array([self.courses[0]]))[0]
+            ),
+        }
 
-    def _steer(self, t: float, est) -> GuidanceCommand:
-        # seed 001's vehicle steers on its DRNS (corrected after leg 2), depth from pressure
-        p = np.array([*self.drns.corrected, -self.depth_meas])
-        return self.guidance.step(t, p)
+
+EXTRA_COLUMNS = {
+    "dr_uncorrected": ("dr_uncorrected", "m", "DRNS track without correction", EN, False),
+    "dr_corrected": ("dr_corrected", "m", "DRNS track, corrected after leg 2", EN, False),
+    "dr_baseline": ("dr_baseline", "m", "DRNS track, baseline-corrected", EN, False),
+    "cp_current": ("cp_current", "m/s", "the correction's current estimate", EN, True),
+    "n_legs": ("n_legs", "1", "legs the DRNS has closed with GPS fixes", (), False),
+}
+"""The per-tick columns the correction adds (see :class:`~tasks.closed_loop.parts.
+VehicleParts`)."""
+
+
+class LegGuidance:
+    """Seed 001's legs: steer on the DRNS (corrected after leg 2) position, depth from pressure.
+
+    Legs 1-2 hold their course (CP2: 45 and 225 deg) for ``leg_length_m`` from where each leg
+    starts (the way-point is placed once the turn onto the course is over); leg 3 goes to its
+    way-point on the direct course or on the current-compensating course (eq. 22-26).
+
+    Args:
+        guidance: the way-point state machine of the run's scenario.
+        courses: the three legs' courses, rad.
+        leg_length_m: length of a leg, m.
+        course_law: ``"direct"`` or ``"compensated"`` (leg 3).
+    """
+
+    def __init__(
+        self,
+        guidance: WaypointGuidance,
+        courses: tuple[float, ...],
+        leg_length_m: float,
+        course_law: str,
+    ):
+        self.g = guidance
+        guidance.course_law = self._course_law
+        guidance.waypoints = list(guidance.waypoints)
+        self.courses, self.leg_length_m, self.course_law = courses, leg_length_m, course_law
+        self.placed: set[int] = set()
+        self.leg_start: dict[int, NDArray[np.float64]] = {}
+        self._nav: NavOutput | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.g.done
+
+    def step(self, t_s: float, nav: NavOutput) -> GuidanceCommand:
+        if nav.gps_fix:
+            self.g.gps_fix()
+        self._nav = nav
+        return self.g.step(t_s, np.array([*nav.extra["dr_corrected"], -nav.depth_m]))
 
     def _course_law(self, position, wp) -> float:
-        leg = self.guidance.index
+        nav = self._nav
+        leg = self.g.index
         p = np.asarray(position, dtype=float)[:2]
         c = self.courses[leg]
         if leg not in self.placed:
@@ -160,48 +246,65 @@ class CorrectionTask(cl.MissionTask):
             # course and distance): the way-point goes on the line the vehicle holds once its turn
             # onto the course is over, at the rest of the 100 m from the leg's start
             start = self.leg_start.setdefault(leg, p.copy())
-            heading = self.meas.get("heading", c)
+            heading = nav.heading_rad
             if leg == 2 or abs(math.remainder(heading - c, 2 * math.pi)) < math.radians(10.0):
-                rest = max(self.scn.correction.leg_length_m - float(np.linalg.norm(p - start)), 0.0)
-                new = p + rest * np.array([math.sin(c), math.cos(c)])
-                self.guidance.waypoints[leg] = dataclasses.replace(
-                    self.guidance.waypoints[leg], east_m=float(new[0]), north_m=float(new[1])
+                rest = max(self.leg_length_m - float(np.linalg.norm(p - start)), 0.0)
+                new = p + rest * np.array([math.sin(c), math.cos(c)])  # FRAMES
+                self.g.waypoints[leg] = dataclasses.replace(
+                    self.g.waypoints[leg], east_m=float(new[0]), north_m=float(new[1])
                 )
                 self.placed.add(leg)
-                wp = self.guidance.waypoints[leg]
+                wp = self.g.waypoints[leg]
         if leg < 2:
             return c  # CP legs: hold the leg's course
         nu = direct_course(position, wp)
-        est = self.drns.estimate
-        if self.scn.correction_course_law == "compensated" and est is not None:
-            sol = compensated_course(np.array([nu]), np.array([self.odo_speed]), est)
+        est = nav.extra["correction"]
+        if self.course_law == "compensated" and est is not None:
+            sol = compensated_course(np.array([nu]), np.array([nav.odometry_speed_m_s]), est)
             if bool(sol.feasible[0]):
                 return float(sol.course_rad[0])
         return nu
 
-    def _extra_log(self) -> dict[str, Any]:
-        d = self.drns
-        est = d.estimate
-        heading = self.meas["heading"]
-        cur = (
-            est.current_for_course(np.array([heading]))[0]
-            if est is not None
-            else np.full(2, np.nan)
+    def waypoints(self) -> list[tuple[float, float, float]]:
+        return [(w.east_m, w.north_m, w.acceptance_radius_m) for w in self.g.waypoints]
+
+    def legs(self) -> list[dict[str, Any]]:
+        return [{"waypoint": x.waypoint, "reached": x.reached, "t_s": x.t_s} for x in self.g.legs]
+
+    def outcome(self) -> dict[str, Any]:
+        return {}
+
+
+@dataclass(frozen=True)
+class CorrectionMission(WaypointMission):
+    """The design of one flight: the standard vehicle with seed 001's DRNS and leg guidance.
+
+    Attributes:
+        course_law: leg 3's course law, ``"direct"`` or ``"compensated"``.
+    """
+
+    course_law: str = "compensated"
+
+    def build(self, scenario: CorrectionScenario, seed: int, run: int, physics) -> MissionParts:
+        v = standard_vehicle(scenario, seed, run, physics)
+        courses = leg_courses(scenario, seed, run)
+        v.navigation = CorrectionNavigation(v.navigation, scenario.correction, courses)
+        v.guidance = LegGuidance(
+            waypoint_guidance(scenario, v.rig),
+            courses,
+            scenario.correction.leg_length_m,
+            self.course_law,
         )
-        return {
-            "dr_uncorrected": d.uncorrected.copy(),
-            "dr_corrected": d.corrected.copy(),
-            "dr_baseline": d.baseline.copy(),
-            "cp_current": cur,
-            "n_legs": len(d.legs),
-        }
+        v.extra_columns = EXTRA_COLUMNS
+        install_sea(physics, scenario, seed, run)
+        return MissionParts([v])
 
 
 # ---------------------------------------------------------------------------------------------
 # Metrics of one run
 
 
-def leg3_metrics(res: cl.MissionRun, wp3: NDArray[np.float64]) -> dict[str, float]:
+def leg3_metrics(v: VehicleRun, wp3: NDArray[np.float64]) -> dict[str, float]:
     """Errors of the three DR tracks and the deviation from the desired course on leg 3.
 
     The deviation is the mean over leg 3 of the angle between the course over ground (averaged
@@ -209,24 +312,24 @@ def leg3_metrics(res: cl.MissionRun, wp3: NDArray[np.float64]) -> dict[str, floa
     Table 3's "deviation from desired course"), and the mean distance from the straight line
     between the leg's start and way-point 3.
     """
-    a = res.arrays
-    task = res.task
+    a = v
     t = a["t"]
-    if task.leg3_start_s is None:
+    leg3_start_s = v.outcome["leg3_start_s"]
+    if leg3_start_s is None:
         return {}
-    m = t >= task.leg3_start_s
+    m = t >= leg3_start_s
     out = {"leg3_duration_s": float(t[m][-1] - t[m][0])}
-    truth = a["truth"][m, :2]
+    truth = a["truth_pos"][m, :2]
     for name in METHODS:
         e = np.linalg.norm(a[f"dr_{name}"][m] - truth, axis=1)
         out[f"{name}_mean_error_m"] = float(e.mean())
         out[f"{name}_max_error_m"] = float(e.max())
         out[f"{name}_final_error_m"] = float(e[-1])
     n = max(1, round(1.0 / float(t[1] - t[0])))
-    v = a["vel"][m, :2]
+    vel = a["truth_vel"][m, :2]
     kernel = np.ones(n) / n
-    v = np.column_stack([np.convolve(v[:, i], kernel, mode="same") for i in range(2)])
-    cog = np.arctan2(v[:, 0], v[:, 1])
+    vel = np.column_stack([np.convolve(vel[:, i], kernel, mode="same") for i in range(2)])
+    cog = np.arctan2(vel[:, 0], vel[:, 1])  # FRAMES
     nu = np.arctan2(wp3[0] - truth[:, 0], wp3[1] - truth[:, 1])
     dev = np.degrees(np.abs(np.angle(np.exp(1j * (cog - nu)))))
     far = np.linalg.norm(wp3 - truth, axis=1) > 10.0  # the course to a point is ill-defined near it
@@ -238,16 +341,13 @@ def leg3_metrics(res: cl.MissionRun, wp3: NDArray[np.float64]) -> dict[str, floa
     return out
 
 
-def current_metrics(res: cl.MissionRun) -> dict[str, float]:
+def current_metrics(v: VehicleRun) -> dict[str, float]:
     """The CP's current estimate against the true current at the vehicle over legs 1-2."""
-    task = res.task
-    est = task.drns.estimate
-    if est is None or task.leg3_start_s is None:
+    c, leg3_start_s = v.outcome["current_estimate_m_s"], v.outcome["leg3_start_s"]
+    if c is None or leg3_start_s is None:
         return {}
-    a = res.arrays
-    m = a["t"] < task.leg3_start_s
-    true = a["current"][m, :2].mean(axis=0)
-    c = est.current_for_course(np.array([task.courses[0]]))[0]
+    m = v["t"] < leg3_start_s
+    true = v["truth_current"][m, :2].mean(axis=0)
     return {
         "current_true_east_m_s": float(true[0]),
         "current_true_north_m_s": float(true[1]),
@@ -259,14 +359,22 @@ def current_metrics(res: cl.MissionRun) -> dict[str, float]:
 
 @dataclass
 class CorrectionRunResult:
-    """Both flights of one run (compensated and direct course on leg 3)."""
+    """Both flights of one run (compensated and direct course on leg 3), as plain data.
+
+    Attributes:
+        run: run index.
+        failed: the first flight failure, or ``None``.
+        metrics: per course law, the leg-3 and current metrics.
+        correction_error: why the correction procedure could not be applied, or ``None``.
+        flights: per course law, the flight.
+        waypoints: per course law, the way-points as placed: (east m, north m, radius m).
+    """
 
     run: int
     failed: str | None
     metrics: dict[str, dict[str, float]]
     correction_error: str | None
-    flights: dict[str, cl.MissionRun]
-    scenarios: dict[str, CorrectionRun]
+    flights: dict[str, MissionRun]
     waypoints: dict[str, list[tuple[float, float, float]]]
 
 
@@ -298,16 +406,11 @@ class CorrectionMetrics(BaseModel):
 
 
 @dataclass(frozen=True)
-class CorrectionExperiment(cl.MissionExperiment):
+class CorrectionExperiment(MissionExperiment):
     """Seed 001's procedures on the physical vehicle (two flights per run)."""
 
     scenario_type = CorrectionScenario
     metrics_type = CorrectionMetrics
-    task_type = CorrectionTask
-
-    def flight_scenario(self, scenario: CorrectionScenario, seed: int, run: int) -> CorrectionRun:
-        """The compensated-course flight of a run (the report flies the direct one too)."""
-        return run_scenario(scenario, seed, run, "compensated")
 
     def check(self, scenario: CorrectionScenario, n_runs: int) -> None:
         super().check(scenario, n_runs)
@@ -317,24 +420,22 @@ class CorrectionExperiment(cl.MissionExperiment):
     def run_block(self, scenario: CorrectionScenario, seed: int, runs: tuple[int, ...]):
         out = []
         for r in runs:
-            flights, metrics, scns, wps, failed, cp_err = {}, {}, {}, {}, None, None
+            flight = run_scenario(scenario, seed, r)
+            flights, metrics, wps, failed, cp_err = {}, {}, {}, None, None
             for law in ("compensated", "direct"):
-                scns[law] = run_scenario(scenario, seed, r, law)
-                res = cl.run_mission(scns[law], seed, r, task_type=CorrectionTask)
+                res = fly(CorrectionMission(course_law=law), flight, seed, r)
+                v = res.lead
                 failed = failed or res.failed
                 wps[law] = [
-                    (w.east_m, w.north_m, w.acceptance_radius_m)
-                    for w in res.task.guidance.waypoints
+                    (w["east_m"], w["north_m"], w["acceptance_radius_m"]) for w in v.waypoints
                 ]
-                wp = res.task.guidance.waypoints[2]
+                wp3 = v.waypoints[2]
                 metrics[law] = leg3_metrics(
-                    res, np.array([wp.east_m, wp.north_m])
-                ) | current_metrics(res)
-                cp_err = cp_err or res.task.drns.correction_error
-                if r != scenario.report.record_run:
-                    res.arrays = {}
+                    v, np.array([wp3["east_m"], wp3["north_m"]])
+                ) | current_metrics(v)
+                cp_err = cp_err or v.outcome["correction_error"]
                 flights[law] = res
-            out.append(CorrectionRunResult(r, failed, metrics, cp_err, flights, scns, wps))
+            out.append(CorrectionRunResult(r, failed, metrics, cp_err, flights, wps))
         return out
 
     def report(self, ctx: ReportContext) -> ReportSummary:
@@ -382,6 +483,8 @@ def report_correction(exp: CorrectionExperiment, ctx: ReportContext) -> ReportSu
         ],
     )
     files = [write_metrics(ctx.out_dir, metrics)]
+    for law in ("compensated", "direct"):
+        files += export_runs(ctx.out_dir, exp.name, [r.flights[law] for r in runs], f"-{law}")
     p = scn.correction.procedure.upper()
     t1 = Table(
         f"Leg 3 dead-reckoning error after {p} ({len(ok)} runs, {scn.current.kind} current; "
@@ -469,8 +572,9 @@ def report_correction(exp: CorrectionExperiment, ctx: ReportContext) -> ReportSu
         flight = rec.flights["compensated"]
         if scn.report.figures:
             files.append(correction_figure(exp.name, scn, rec, ctx.out_dir))
-        if scn.report.recording and flight.arrays:
-            files += record_correction(exp.name, rec.scenarios["compensated"], flight, ctx.out_dir)
+        if scn.report.recording and flight.vehicles:
+            flown = run_scenario(scn, ctx.seed, rec.run)
+            files += record_correction(exp.name, flown, flight, ctx.out_dir)
     text = "".join(t.to_text() + "\n" for t in tables[:2])
     text += tc.note + "\n" + f"wrote {len(files)} files to {ctx.out_dir}\n"
     return ReportSummary(text, tuple(files))
@@ -486,10 +590,10 @@ def correction_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResu
     fig, axs = plt.subplots(1, 2, figsize=(13, 6.5))
     for ax, law in zip(axs, ("direct", "compensated"), strict=True):
         f = rec.flights[law]
-        a = f.arrays
-        if not a:
+        if not f.vehicles:
             continue
-        ax.plot(a["truth"][:, 0], a["truth"][:, 1], "k-", lw=1.5, label="truth")
+        a = f.lead
+        ax.plot(a["truth_pos"][:, 0], a["truth_pos"][:, 1], "k-", lw=1.5, label="truth")
         ax.plot(
             a["dr_uncorrected"][:, 0],
             a["dr_uncorrected"][:, 1],
@@ -504,15 +608,15 @@ def correction_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResu
             lw=1,
             label=f"DR after {scn.correction.procedure.upper()}",
         )
-        gps = np.array([fx["position"] for fx in f.fixes if fx["kind"] == "gps"]).reshape(-1, 3)
+        gps = a.fixes["gps"]["position"].values if "gps" in a.fixes else np.zeros((0, 3))
         if len(gps):
             ax.plot(gps[:, 0], gps[:, 1], "x", color="tab:orange", ms=7, label="GPS fixes")
         for e, n, radius in rec.waypoints[law]:
-            c = cl._circle(e, n, radius)
+            c = circle(e, n, radius)
             ax.plot(c[:, 0], c[:, 1], color="tab:green", lw=1)
-        true_c = a["current"][:, :2].mean(axis=0)
+        true_c = a["truth_current"][:, :2].mean(axis=0)
         est = a["cp_current"][~np.isnan(a["cp_current"][:, 0])]
-        x0, y0 = a["truth"][0, :2]
+        x0, y0 = a["truth_pos"][0, :2]
         k = 100.0
         ax.annotate(
             "",
@@ -542,34 +646,31 @@ def correction_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResu
     return "tracks.png"
 
 
-def record_correction(name: str, scn: CorrectionRun, flight: cl.MissionRun, out) -> list[str]:
+def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, out) -> list[str]:
     """The recordings of the recorded run's compensated flight: the mission recording, and a
     second one with the DR tracks and the estimated current beside the true one."""
 
     from tasks.core.recording import Recording
 
-    path = cl.record_mission(name, scn, flight, out)
-    a = flight.arrays
+    path = record_mission(name, scn, flight, out)
+    a = flight.lead
     rec = Recording(
         out / "recording-correction.rrd", name, f"{name}/seed{flight.seed}/run{flight.run}/dr"
     )
     t = a["t"]
-    z = a["truth"][:, 2:3]
-    rec.track("truth", t, a["truth"], (40, 40, 40))
+    z = a["truth_pos"][:, 2:3]
+    rec.track("truth", t, a["truth_pos"], (40, 40, 40))
     rec.track("dr_uncorrected", t, np.column_stack([a["dr_uncorrected"], z]), (214, 39, 40))
     rec.track("dr_corrected", t, np.column_stack([a["dr_corrected"], z]), (148, 103, 189))
-    gps = [f for f in flight.fixes if f["kind"] == "gps"]
+    gps = a.fixes.get("gps")
     if gps:
-        rec.fixes(
-            "gps",
-            np.array([f["t_valid_s"] for f in gps]),
-            np.array([f["position"] for f in gps]),
-            (255, 127, 14),
-        )
+        rec.fixes("gps", gps["t_valid"].values, gps["position"].values, (255, 127, 14))
     every = max(1, round(1.0 / float(t[1] - t[0])))
-    origins = a["truth"][::every] + [0.0, 0.0, 2.0]
+    origins = a["truth_pos"][::every] + [0.0, 0.0, 2.0]
     # the current at the vehicle and the correction's estimate of it (x20 to be visible)
-    rec.arrows("current/true", t[::every], origins, 20.0 * a["current"][::every], (0, 190, 220))
+    rec.arrows(
+        "current/true", t[::every], origins, 20.0 * a["truth_current"][::every], (0, 190, 220)
+    )
     rec.arrows(
         "current/estimated",
         t[::every],
@@ -581,7 +682,7 @@ def record_correction(name: str, scn: CorrectionRun, flight: cl.MissionRun, out)
         rec.scalars(
             f"errors/dr_{key}",
             t,
-            np.linalg.norm(a[f"dr_{key}"] - a["truth"][:, :2], axis=1),
+            np.linalg.norm(a[f"dr_{key}"] - a["truth_pos"][:, :2], axis=1),
             color,
             f"DR {key} horizontal error (m)",
         )

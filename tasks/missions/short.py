@@ -1,6 +1,7 @@
 """``mission/short``: a two-leg, two-minute mission for tests and quick checks."""
 
-from tasks.closed_loop.mission import MissionExperiment, mission_preset
+from tasks.closed_loop.experiment import MissionExperiment
+from tasks.closed_loop.scenario import mission_preset
 from tasks.core.registry import register
 
 register(

@@ -5,7 +5,8 @@ way-point for GPS fixes (ascend, hold until three fixes, dive) and dead-reckons 
 navigator's EKF takes only the GPS fixes and the depth.
 """
 
-from tasks.closed_loop.mission import MissionExperiment, mission_preset
+from tasks.closed_loop.experiment import MissionExperiment
+from tasks.closed_loop.scenario import mission_preset
 from tasks.core.registry import register
 
 register(

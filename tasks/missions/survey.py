@@ -6,7 +6,8 @@ current setting 60 deg. Guidance steers on the EKF estimate (USBL every 5 s, dep
 ``--set navigation.steer_on=dr`` flies the same mission on dead reckoning alone for comparison.
 """
 
-from tasks.closed_loop.mission import MissionExperiment, mission_preset
+from tasks.closed_loop.experiment import MissionExperiment
+from tasks.closed_loop.scenario import mission_preset
 from tasks.core.registry import register
 
 WAYPOINTS = [

@@ -1,0 +1,338 @@
+"""A vehicle's sensor rig: its devices, their lever arms, rates and latency, in the loop.
+
+The rig turns the true state of one vehicle at each control tick (:class:`~bauv_sim.physics.
+VehicleTruth`) into time-stamped measurement records (:class:`Measurement`: time of validity and
+time of arrival), the way the vehicle's computer would receive them:
+
+* **held** devices (compass, INS attitude, log, odometry, pressure) are sampled every
+  ``period_s`` (a whole number of ticks) and their latest value is held in between; a device that
+  produces nothing at a sampling tick (the log below its minimum speed) holds nothing until its
+  next good sample;
+* **event** devices (USBL, GPS; later acoustic modems, DOA) deliver measurements that are valid at
+  one instant and reach the vehicle later (acoustic travel time and modem delay): the rig queues
+  them and hands each one over at the first tick at or after its arrival, with its time of
+  validity and the vehicle's own measured attitude at that time (for the lever arm of the
+  transponder or antenna). Event devices are silent on the initial tick.
+
+Devices are built from their configurations through :data:`DEVICE_TYPES` (configuration type ->
+online device class, each class in its device's module). Adding a device type touches the
+device's module and this registry, nothing else. Lever arms that a configuration leaves at zero
+are read from the vehicle model's sites through the physics facade (:data:`LEVER_ARM_SITES`).
+
+Every device draws from its own streams, addressed by ``(seed, run, "sensor", <stream name>,
+...)``; a rig built with a ``stream_prefix`` (for a second vehicle in the same scene) names its
+streams ``"<prefix>/<device>"``, so that vehicles draw independent errors and a vehicle draws the
+same errors whatever other vehicles share its sea.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bauv_sim.config import Config
+from bauv_sim.errors import ConfigError
+from bauv_sim.sensors.base import check_multiple
+from bauv_sim.truth import Truth
+
+if TYPE_CHECKING:
+    from bauv_sim.physics import BauvPhysics, VehicleTruth
+
+Array = NDArray[np.float64]
+
+LEVER_ARM_SITES: Mapping[str, str] = {"usbl": "usbl_transponder", "gps": "gps_antenna"}
+"""Device name -> the vehicle model's site of its transponder or antenna."""
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One measurement record as the vehicle receives it.
+
+    Attributes:
+        device: the device's name in the rig (``"usbl"``, ``"gps"``, ``"compass"``...).
+        t_valid_s: time of validity (the instant the measurement refers to), s.
+        t_arrival_s: time it reaches the vehicle (>= ``t_valid_s``), s.
+        value: the measured values, shape (m,), SI units (see the device).
+        attitude_rad: the vehicle's own measured (roll, pitch, heading) at ``t_valid_s``, shape
+            (3,), rad (INS roll and pitch, compass heading), for lever-arm corrections; ``None``
+            for held devices.
+    """
+
+    device: str
+    t_valid_s: float
+    t_arrival_s: float
+    value: Array
+    attitude_rad: Array | None = None
+
+
+@dataclass(frozen=True)
+class RigTick:
+    """What the rig gives the vehicle at one control tick.
+
+    Attributes:
+        t_s: the tick's time, s.
+        held: latest value of each held device (``None`` where it has none), by device name.
+        sampled: held devices sampled at this tick.
+        arrived: event measurements reaching the vehicle at this tick, in arrival-queue order.
+    """
+
+    t_s: float
+    held: Mapping[str, Array | None]
+    sampled: frozenset[str]
+    arrived: tuple[Measurement, ...]
+
+    def value(self, device: str) -> float | None:
+        """The held scalar of a device, or ``None``."""
+        v = self.held.get(device)
+        return None if v is None else float(v[0])
+
+
+@dataclass
+class TickContext:
+    """What a device may read at a tick besides the truth (filled in device order).
+
+    Attributes:
+        k: tick index (0 at the start).
+        t_s: time, s.
+        truth: the vehicle's true state.
+        commands: the actuator settings in force (``tail_beat_frequency_hz`` ...), by name.
+        measured_attitude_rad: (roll, pitch, heading) as measured this tick (INS and compass),
+            shape (3,), set once those devices have been sampled.
+    """
+
+    k: int
+    t_s: float
+    truth: VehicleTruth
+    commands: Mapping[str, float]
+    measured_attitude_rad: Array | None = None
+    _record: Truth | None = field(default=None, repr=False)
+
+    @property
+    def tt(self) -> Array:
+        """The time as a sample grid, shape (1,), s."""
+        return np.array([self.t_s])
+
+    @property
+    def record(self) -> Truth:
+        """The truth as a one-run, one-sample record (built once per tick, on demand)."""
+        if self._record is None:
+            self._record = truth_record(self.truth)
+        return self._record
+
+
+class Device(Protocol):
+    """An online device of a rig (see the module docstring).
+
+    Attributes:
+        name: device name in the rig.
+        kind: ``"held"`` or ``"event"``.
+        every: sampling period in control ticks.
+    """
+
+    name: str
+    kind: Literal["held", "event"]
+    every: int
+
+    def step(self, ctx: TickContext) -> Measurement | None:
+        """Sample at this tick if due (or always, for devices that watch the truth every tick).
+
+        Returns:
+            A held device: its new value at a sampling tick, ``None`` when it produced nothing
+            (not called between its sampling ticks). An event device: a measurement to queue, or
+            ``None``.
+        """
+        ...
+
+
+@dataclass(frozen=True)
+class DeviceBuild:
+    """What a device class receives to build itself.
+
+    Attributes:
+        name: device name in the rig.
+        stream: stream name of the device (``name``, or ``"<prefix>/<name>"``).
+        seed: batch seed.
+        run: run index.
+        tick_s: control tick, s.
+        lever_arm_body_m: the device's lever arm from the model's site (body FLU, m), if it has
+            a site in :data:`LEVER_ARM_SITES`.
+        physics: the physics facade (scene geometry such as the USBL transceiver).
+        vehicle: the vehicle's name in the scene.
+        extra: per-device settings the mission supplies (e.g. the odometry's speed table).
+    """
+
+    name: str
+    stream: str
+    seed: int
+    run: int
+    tick_s: float
+    lever_arm_body_m: tuple[float, float, float] | None
+    physics: BauvPhysics
+    vehicle: str
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def every(self, period_s: float) -> int:
+        """The period in ticks (a whole multiple of the tick, else :class:`ConfigError`)."""
+        return check_multiple(period_s, self.tick_s, f"sensors.{self.name}.period_s")
+
+
+DEVICE_TYPES: dict[type[Config], Callable[[Config, DeviceBuild], Device]] = {}
+"""The rig's registry: configuration type -> online device factory."""
+
+
+def register_device(cfg_type: type[Config]) -> Callable[[type], type]:
+    """Class decorator adding an online device class to :data:`DEVICE_TYPES`."""
+
+    def add(cls: type) -> type:
+        DEVICE_TYPES[cfg_type] = cls
+        return cls
+
+    return add
+
+
+def _load_devices() -> None:
+    # the device modules register their online classes when imported
+    from bauv_sim.sensors import compass, gps, ins, log, odometry, pressure, usbl  # noqa: F401
+
+
+def truth_record(vt: VehicleTruth) -> Truth:
+    """A one-run, one-sample truth record (run axis 1, time axis 1) of a vehicle's state."""
+    return Truth(
+        t_s=np.array([vt.t_s]),
+        pos_world_m=vt.position_world_m[None, None],
+        vel_ground_world_m_s=vt.velocity_world_m_s[None, None],
+        vel_water_world_m_s=vt.velocity_through_water_world_m_s[None, None],
+        heading_rad=np.array([[vt.roll_pitch_heading_rad[2]]]),
+        roll_pitch_rad=vt.roll_pitch_heading_rad[None, None, :2],
+        current_world_m_s=vt.current_world_m_s[None, None],
+    )
+
+
+def lever_arm_from_site(
+    physics: BauvPhysics, site: str, vehicle: str
+) -> tuple[float, float, float]:
+    """A site's position relative to the vehicle's reference point, body FLU, m."""
+    R = physics.R_world_from_body(vehicle)
+    rel = physics.site_position_world(site, vehicle) - physics.position_world(vehicle)
+    return tuple(float(c) for c in R.T @ rel)
+
+
+class SensorRig:
+    """The devices of one vehicle, sampled in the loop (see the module docstring).
+
+    Args:
+        devices: device name -> configuration, in sampling order (a device that others read,
+            the compass and the INS, comes first).
+        physics: the physics facade, with the vehicle placed at its start pose.
+        vehicle: the vehicle's name in the scene.
+        seed: batch seed.
+        run: run index.
+        stream_prefix: prefix of the device streams ("" for the scene's only or first vehicle).
+        extra: per-device settings, by device name (see :class:`DeviceBuild`).
+
+    Raises:
+        ConfigError: for a configuration type without a device class, or a period that is not
+            a whole number of ticks.
+    """
+
+    def __init__(
+        self,
+        devices: Mapping[str, Config],
+        physics: BauvPhysics,
+        vehicle: str,
+        seed: int,
+        run: int,
+        stream_prefix: str = "",
+        extra: Mapping[str, Mapping[str, Any]] | None = None,
+    ):
+        _load_devices()
+        tick = physics.control_tick_s
+        self.vehicle = vehicle
+        self.devices: list[Device] = []
+        self.lever_arms_body_m: dict[str, tuple[float, float, float]] = {}
+        for name, cfg in devices.items():
+            factory = DEVICE_TYPES.get(type(cfg))
+            if factory is None:
+                known = ", ".join(sorted(t.__name__ for t in DEVICE_TYPES))
+                raise ConfigError(
+                    f"sensors.{name}: {type(cfg).__name__} has no online device (known: {known})"
+                )
+            site = LEVER_ARM_SITES.get(name)
+            arm = lever_arm_from_site(physics, site, vehicle) if site else None
+            build = DeviceBuild(
+                name=name,
+                stream=f"{stream_prefix}/{name}" if stream_prefix else name,
+                seed=seed,
+                run=run,
+                tick_s=tick,
+                lever_arm_body_m=arm,
+                physics=physics,
+                vehicle=vehicle,
+                extra=(extra or {}).get(name, {}),
+            )
+            dev = factory(cfg, build)
+            self.devices.append(dev)
+            arm_used = getattr(dev, "lever_arm_body_m", None)
+            if arm_used is not None:
+                self.lever_arms_body_m[name] = tuple(float(c) for c in arm_used)
+        self._held: dict[str, Array | None] = {
+            d.name: None for d in self.devices if d.kind == "held"
+        }
+        self._pending: list[Measurement] = []
+
+    def device(self, name: str) -> Device:
+        """The device of that name."""
+        for d in self.devices:
+            if d.name == name:
+                return d
+        raise ConfigError(f"the rig has no device {name!r}")
+
+    def has(self, name: str) -> bool:
+        """Whether the rig has a device of that name."""
+        return any(d.name == name for d in self.devices)
+
+    def sense(
+        self, k: int, truth: VehicleTruth, commands: Mapping[str, float], initial: bool = False
+    ) -> RigTick:
+        """Sample the devices due at tick ``k`` and hand over what arrives now.
+
+        Args:
+            k: tick index (0 on the initial tick).
+            truth: the vehicle's true state at the tick.
+            commands: actuator settings in force, by name.
+            initial: the initial tick (event devices stay silent).
+
+        Returns:
+            The tick's records.
+        """
+        t = truth.t_s
+        ctx = TickContext(k, t, truth, commands)
+        sampled = set()
+        for dev in self.devices:
+            if dev.kind == "held":
+                if k % dev.every:
+                    continue
+                m = dev.step(ctx)
+                self._held[dev.name] = None if m is None else m.value
+                sampled.add(dev.name)
+                if dev.name in ("compass", "ins"):
+                    ctx.measured_attitude_rad = self._attitude()
+            elif not initial:
+                m = dev.step(ctx)
+                if m is not None:
+                    self._pending.append(m)
+        arrived, still = [], []
+        for m in self._pending:
+            (arrived if m.t_arrival_s <= t + 1e-9 else still).append(m)
+        self._pending = still
+        return RigTick(t, dict(self._held), frozenset(sampled), tuple(arrived))
+
+    def _attitude(self) -> Array | None:
+        ins, heading = self._held.get("ins"), self._held.get("compass")
+        if ins is None or heading is None:
+            return None
+        return np.array([ins[0], ins[1], heading[0]])

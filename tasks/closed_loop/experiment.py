@@ -1,0 +1,40 @@
+"""The registered form of a mission: a scenario type, a design, one run per block."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from bauv_sim.errors import ConfigError
+from tasks.closed_loop.parts import MissionDesign
+from tasks.closed_loop.report import MissionMetrics, report_mission
+from tasks.closed_loop.result import MissionRun
+from tasks.closed_loop.scenario import MissionScenario
+from tasks.closed_loop.world import WaypointMission, fly
+from tasks.core.registry import Experiment, ReportContext, ReportSummary
+
+
+@dataclass(frozen=True)
+class MissionExperiment(Experiment):
+    """A registered closed-loop mission (one run per block).
+
+    Attributes:
+        design: what the mission is made of (default: one vehicle flying way-points).
+    """
+
+    scenario_type = MissionScenario
+    metrics_type = MissionMetrics
+    design: MissionDesign = field(default_factory=WaypointMission)
+
+    def check(self, scenario: MissionScenario, n_runs: int) -> None:
+        if scenario.report.record_run >= n_runs:
+            raise ConfigError(
+                f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
+            )
+
+    def run_block(
+        self, scenario: MissionScenario, seed: int, runs: tuple[int, ...]
+    ) -> list[MissionRun]:
+        return [fly(self.design, scenario, seed, r) for r in runs]
+
+    def report(self, ctx: ReportContext) -> ReportSummary:
+        return report_mission(self, ctx)

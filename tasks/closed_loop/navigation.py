@@ -1,0 +1,231 @@
+"""The navigation part of a vehicle: rig records in, estimate out (the vehicle's computer).
+
+:class:`EkfNavigation` is the standard part: the online :class:`~nav.navigator.Navigator` (EKF,
+optionally with the water current in its state, and a dead-reckoning track) fed from the rig:
+
+1. the speed is the log's (through water) when it has one, else the odometry's;
+2. predict with the compass heading and that speed (not on the initial tick);
+3. update with the pressure depth when it was sampled this tick;
+4. apply every fix that reached the vehicle this tick, in arrival order, at its time of validity:
+   USBL (range, azimuth, elevation; the transponder's lever arm rotated by the vehicle's own
+   measured attitude at that time moves the effective transceiver) and GPS (the antenna's lever
+   arm removed from the fix), each through the navigator's chi-square gate.
+
+Each tick returns a :class:`NavOutput`; each fix is kept as a :class:`FixRecord` for the run data.
+A mission can wrap this part (seed 001's DRNS beside the EKF, :mod:`tasks.missions.correction`) or
+replace it with any object that has :meth:`step` and :meth:`outcome`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bauv_sim.frames import R_from_roll_pitch_heading
+from bauv_sim.sensors.rig import RigTick
+from nav.errors import NavInputError
+from nav.models import (
+    CourseSpeedDepthMotion,
+    DepthMeasurement,
+    HorizontalPositionMeasurement,
+    UsblMeasurement,
+)
+from nav.navigator import Estimate, Navigator
+from tasks.closed_loop.scenario import NavigationConfig
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class FixRecord:
+    """A position fix as the navigator received it.
+
+    Attributes:
+        device: ``"usbl"`` or ``"gps"``.
+        t_valid_s: time of validity, s.
+        t_arrival_s: time it reached the vehicle, s.
+        z: the measurement, shape (m,): USBL (range m, azimuth rad, elevation rad), GPS antenna
+            (east m, north m).
+        accepted: whether the navigator applied it (not rejected by the gate or refused).
+        position_m: the fix's own position of the vehicle's reference point, shape (3,), m,
+            world (USBL inverted; GPS with the lever arm removed, up = 0).
+    """
+
+    device: str
+    t_valid_s: float
+    t_arrival_s: float
+    z: Array
+    accepted: bool
+    position_m: Array
+
+
+@dataclass(frozen=True)
+class NavOutput:
+    """The navigation part's output at one tick (what guidance and the autopilot read).
+
+    Attributes:
+        t_s: time, s.
+        estimate: the EKF's position estimate and covariance (world ENU, m, m^2).
+        dr_position_m: dead-reckoned position, shape (3,), m, world.
+        current_m_s: estimated current (east, north), shape (2,), m/s, or ``None``.
+        heading_rad: measured heading (compass), rad clockwise from north.
+        speed_m_s: the speed navigation used (log, else odometry), m/s.
+        speed_from_log: whether that speed is the log's.
+        odometry_speed_m_s: the odometry's speed (held), m/s.
+        depth_m: measured depth (held), m.
+        ins: INS ``(roll, pitch, roll rate, pitch rate, heading rate)``, shape (5,), rad, rad/s.
+        fixes: the fixes delivered this tick.
+        gps_fix: whether a GPS fix reached the vehicle this tick.
+        gps_reference_m: that fix with the antenna's lever arm removed (the reference point's
+            east, north), shape (2,), m, or ``None``.
+        extra: what a wrapping part adds (e.g. seed 001's corrected position).
+    """
+
+    t_s: float
+    estimate: Estimate
+    dr_position_m: Array
+    current_m_s: Array | None
+    heading_rad: float
+    speed_m_s: float
+    speed_from_log: bool
+    odometry_speed_m_s: float
+    depth_m: float
+    ins: Array
+    fixes: tuple[FixRecord, ...]
+    gps_fix: bool
+    gps_reference_m: Array | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class EkfNavigation:
+    """The standard navigation part (see the module docstring).
+
+    Args:
+        cfg: navigator settings.
+        x0: initial position estimate, shape (3,), m, world.
+        transceiver_world_m: the USBL transceiver, shape (3,), m, world.
+        lever_arms_body_m: the rig's lever arms by device (``usbl``, ``gps``), body FLU, m.
+        use_usbl: apply USBL fixes.
+        use_gps: apply GPS fixes (they are still recorded and reported to guidance).
+    """
+
+    def __init__(
+        self,
+        cfg: NavigationConfig,
+        x0: Array,
+        transceiver_world_m: Array,
+        lever_arms_body_m: dict[str, tuple[float, float, float]],
+        use_usbl: bool = True,
+        use_gps: bool = True,
+    ):
+        n = cfg
+        self.use_usbl, self.use_gps = use_usbl, use_gps
+        self.motion = CourseSpeedDepthMotion(
+            math.radians(n.sigma_heading_deg), n.sigma_speed_m_s, n.sigma_vertical_m_per_tick
+        )
+        self.usbl_model = UsblMeasurement(
+            transceiver_world_m,
+            n.sigma_range_m,
+            math.radians(n.sigma_azimuth_deg),
+            math.radians(n.sigma_elevation_deg),
+        )
+        self.transceiver_world_m = transceiver_world_m
+        self.gps_model = HorizontalPositionMeasurement(n.sigma_gps_m)
+        self.depth_model = DepthMeasurement(n.sigma_depth_m)
+        zero = (0.0, 0.0, 0.0)
+        self.transponder_arm = np.asarray(lever_arms_body_m.get("usbl", zero), dtype=float)
+        self.antenna_arm = np.asarray(lever_arms_body_m.get("gps", zero), dtype=float)
+        self.nav = Navigator(
+            0.0,
+            x0,
+            initial_covariance(cfg),
+            self.motion,
+            n.history_s,
+            n.gate_probability if n.gate_enabled else None,
+            current_sigma0_m_s=n.current_sigma0_m_s if n.estimate_current else None,
+            current_walk_m_s_per_sqrt_s=n.current_walk_m_s_per_sqrt_s,
+            max_consecutive_rejections=n.max_consecutive_rejections or None,
+        )
+        self.fixes: list[FixRecord] = []
+
+    def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
+        """One navigation tick (see the module docstring).
+
+        Args:
+            tick: the rig's records of this tick.
+            initial: the initial tick (no prediction).
+        """
+        t = tick.t_s
+        heading = tick.value("compass")
+        log_speed = tick.value("log")
+        odo_speed = tick.value("odometry")
+        speed, from_log = (log_speed, True) if log_speed is not None else (odo_speed, False)
+        depth = tick.value("pressure")
+        nav = self.nav
+        if not initial:
+            nav.predict(t, heading, speed, 0.0)
+        if "pressure" in tick.sampled:
+            nav.update(self.depth_model, np.array([depth]))
+        new: list[FixRecord] = []
+        gps_ref = None
+        for m in tick.arrived:
+            if m.device == "usbl":
+                if not self.use_usbl:
+                    continue
+                roll, pitch, h = m.attitude_rad
+                R = R_from_roll_pitch_heading(roll, pitch, h)
+                model = dataclasses.replace(
+                    self.usbl_model,
+                    transceiver_world_m=self.transceiver_world_m - R @ self.transponder_arm,
+                )
+                try:
+                    accepted = not bool(nav.update(model, m.value, m.t_valid_s).rejected[0])
+                except NavInputError:
+                    accepted = False
+                new.append(
+                    FixRecord("usbl", m.t_valid_s, t, m.value, accepted, model.invert(m.value))
+                )
+            elif m.device == "gps":
+                z = m.value
+                roll, pitch, h = m.attitude_rad
+                arm_world = R_from_roll_pitch_heading(roll, pitch, h) @ self.antenna_arm
+                z_ref = z - arm_world[:2]
+                accepted = True
+                if self.use_gps:
+                    accepted = not bool(nav.update(self.gps_model, z_ref).rejected[0])
+                new.append(
+                    FixRecord("gps", m.t_valid_s, t, z, accepted, np.array([z[0], z[1], 0.0]))
+                )
+                gps_ref = z_ref
+        self.fixes += new
+        cur = nav.current_estimate
+        return NavOutput(
+            t_s=t,
+            estimate=nav.estimate,
+            dr_position_m=nav.dr_position,
+            current_m_s=None if cur is None else cur[0],
+            heading_rad=heading,
+            speed_m_s=speed,
+            speed_from_log=from_log,
+            odometry_speed_m_s=odo_speed,
+            depth_m=depth,
+            ins=tick.held["ins"],
+            fixes=tuple(new),
+            gps_fix=gps_ref is not None,
+            gps_reference_m=gps_ref,
+        )
+
+    def outcome(self) -> dict[str, Any]:
+        """Plain data about the whole run (none for the standard part)."""
+        return {}
+
+
+def initial_covariance(cfg: NavigationConfig) -> Array:
+    """The navigator's initial position covariance: the GNSS fix horizontally, the pressure
+    sensor vertically, shape (3, 3), m^2."""
+    return np.diag([cfg.initial_sigma_m**2, cfg.initial_sigma_m**2, cfg.sigma_depth_m**2])

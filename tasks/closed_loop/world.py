@@ -1,0 +1,411 @@
+"""The world of a closed-loop mission: N vehicles in one sea, each flying on its own estimate.
+
+In dm_control terms (``control.Task`` + ``control.Environment``, like the suite's domains):
+
+* :class:`MissionWorld` is the task: at the start of an episode it asks the mission's design
+  (:class:`~tasks.closed_loop.parts.MissionDesign`) to place the vehicles, install the sea and
+  assemble the parts; before each physics step it hands each vehicle's five actuator settings to
+  the physics and applies the sea (current, free surface); after it, for every vehicle in turn,
+  the rig samples the truth, the navigation part estimates, guidance commands, and the tick is
+  logged;
+* the policy (:meth:`MissionWorld.policy`) is every vehicle's autopilot (:class:`~tasks.
+  closed_loop.parts.Pilot`): observation -> action;
+* the environment steps the physics ``steps_per_tick`` times per action.
+
+Specs are known before ``reset`` (from the design's vehicle names and the scene's command
+limits); observation elements are ``"<vehicle>/<element>"`` (:data:`~tasks.closed_loop.parts.
+OBSERVATIONS`) and the action is each vehicle's :data:`~tasks.closed_loop.parts.ACTIONS` in turn.
+
+:class:`WaypointMission` is the standard design of one vehicle flying way-points
+(``mission/survey``, ``mission/surfacing``, ``mission/short``); :func:`standard_vehicle` builds one
+vehicle's parts from the standard scenario sections, for designs of their own.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from dm_control.rl import control
+from numpy.typing import NDArray
+
+from bauv_sim import rng as rng_mod
+from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
+from bauv_sim.currents import make_current
+from bauv_sim.errors import BauvSimError, PhysicsError
+from bauv_sim.hydro import load_speed_table
+from bauv_sim.sensors.rig import SensorRig
+from nav.errors import NavError
+from nav.guidance import Waypoint, WaypointGuidance
+from tasks.closed_loop import parts as P
+from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance
+from tasks.closed_loop.result import MissionRun, TickLog, VehicleRun, fix_columns, summarise
+from tasks.closed_loop.scenario import MODES, MissionScenario, StartConfig
+
+Array = NDArray[np.float64]
+
+
+def streams(prefix: str, name: str) -> tuple[str, ...]:
+    """The stream path of a vehicle's component: ``(name,)``, or ``(prefix, name)``."""
+    return (prefix, name) if prefix else (name,)
+
+
+def place_vehicle(
+    physics, start: StartConfig, seed: int, run: int, vehicle: str, prefix: str = ""
+) -> Array:
+    """Place a vehicle at its start: the nominal pose scattered by its ``start`` stream.
+
+    Returns:
+        The true start position, shape (3,), m, world.
+    """
+    g = rng_mod.generator(seed, run, *streams(prefix, "start"))
+    pos = np.array([start.east_m, start.north_m, -start.depth_m])
+    pos[:2] += start.position_sigma_m * g.standard_normal(2)
+    heading = (
+        math.radians(start.heading_deg)
+        + math.radians(start.heading_sigma_deg) * g.standard_normal()
+    )
+    # FRAMES: course and speed -> velocity
+    vel = start.speed_m_s * np.array([math.sin(heading), math.cos(heading), 0.0])
+    physics.set_pose(pos, (0.0, 0.0, heading), vel, vehicle=vehicle)
+    return pos
+
+
+def standard_vehicle(
+    scn: MissionScenario,
+    seed: int,
+    run: int,
+    physics,
+    vehicle: str = "bauv",
+    prefix: str = "",
+    guidance: P.Guidance | None = None,
+    speed_table: Any = None,
+) -> P.VehicleParts:
+    """One vehicle's parts from the standard scenario sections (``start``, ``sensors``,
+    ``navigation``, ``guidance``, ``autopilot``): it is placed, its rig reads its lever arms from
+    the model's sites, its EKF starts from the GNSS fix (``initial`` stream), and it flies the
+    way-points (or ``guidance``).
+
+    Args:
+        scn: the scenario sections of this vehicle.
+        seed: batch seed.
+        run: run index.
+        physics: the physics, reset.
+        vehicle: the vehicle's name in the scene.
+        prefix: its stream prefix ("" for the scene's first vehicle).
+        guidance: a guidance part of the mission's own (default: :class:`~tasks.closed_loop.
+            parts.WaypointSteering` on ``scn.guidance``).
+        speed_table: the speed calibration (default: the model's).
+    """
+    table = speed_table if speed_table is not None else load_speed_table()
+    pos = place_vehicle(physics, scn.start, seed, run, vehicle, prefix)
+    s = scn.sensors
+    devices = {"compass": s.compass, "ins": s.ins}
+    if s.use_log:
+        devices["log"] = s.log
+    devices |= {"odometry": s.odometry, "pressure": s.pressure}
+    if s.use_usbl:
+        devices["usbl"] = s.usbl
+    devices["gps"] = s.gps
+    rig = SensorRig(
+        devices, physics, vehicle, seed, run, prefix, extra={"odometry": {"speed_table": table}}
+    )
+    n = scn.navigation
+    P0 = initial_covariance(n)
+    e0 = rng_mod.generator(seed, run, *streams(prefix, "initial")).standard_normal(3) @ np.sqrt(P0)
+    navigation = EkfNavigation(
+        n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, s.use_usbl, s.use_gps
+    )
+    if guidance is None:
+        guidance = P.WaypointSteering(waypoint_guidance(scn, rig), n.steer_on)
+    return P.VehicleParts(vehicle, rig, navigation, guidance, scn.autopilot, table)
+
+
+def waypoint_guidance(scn: MissionScenario, rig: SensorRig) -> WaypointGuidance:
+    """The way-point state machine of ``scn.guidance``; surfaced means the GPS antenna (its lever
+    arm in the rig) out of the water with 5 cm to spare, unless configured."""
+    gd = scn.guidance
+    antenna = rig.lever_arms_body_m.get("gps", (0.0, 0.0, 0.0))
+    surface_depth = (
+        gd.surface_depth_m if gd.surface_depth_m is not None else max(antenna[2] - 0.05, 0.0)
+    )
+    return WaypointGuidance(
+        [
+            Waypoint(w.east_m, w.north_m, w.depth_m, w.acceptance_radius_m, w.surface)
+            for w in gd.waypoints
+        ],
+        speed_m_s=gd.speed_m_s,
+        surface_speed_m_s=gd.surface_speed_m_s,
+        surface_depth_m=surface_depth,
+        hold_s=gd.hold_s,
+        fixes_needed=gd.fixes_needed,
+        max_leg_time_s=gd.max_leg_time_s,
+        reach_probability=gd.reach_probability,
+        min_reach_m=gd.min_reach_m,
+    )
+
+
+def install_sea(physics, scn, seed: int, run: int) -> None:
+    """The sea of a run: the scenario's current field (its own ``current`` stream)."""
+    physics.set_current(make_current(scn.current, rng_mod.generator(seed, run, "current")))
+
+
+@dataclass(frozen=True)
+class WaypointMission:
+    """The standard design: one vehicle (``bauv``) flying the scenario's way-points, steering on
+    its EKF (or DR) estimate, in the scenario's current.
+
+    Attributes:
+        guidance: a factory ``(scenario, rig) -> guidance part`` replacing way-point steering.
+    """
+
+    guidance: Callable[[MissionScenario, SensorRig], P.Guidance] | None = None
+
+    def vehicle_names(self, scenario: MissionScenario) -> tuple[str, ...]:
+        return ("bauv",)
+
+    def scene(self, scenario: MissionScenario) -> SceneConfig:
+        st = scenario.start
+        return SceneConfig(
+            vehicles=(
+                VehicleSpec(
+                    name="bauv",
+                    east_m=st.east_m,
+                    north_m=st.north_m,
+                    depth_m=st.depth_m,
+                    heading_deg=st.heading_deg,
+                ),
+            ),
+            seabed=scenario.seabed,
+            transceiver_east_m=scenario.transceiver_east_m,
+            transceiver_north_m=scenario.transceiver_north_m,
+        )
+
+    def build(self, scenario: MissionScenario, seed: int, run: int, physics) -> P.MissionParts:
+        v = standard_vehicle(scenario, seed, run, physics)
+        if self.guidance is not None:
+            v.guidance = self.guidance(scenario, v.rig)
+        install_sea(physics, scenario, seed, run)
+        return P.MissionParts([v])
+
+
+class MissionWorld(control.Task):
+    """The task of a mission run (see the module docstring).
+
+    Args:
+        design: the mission's design.
+        scenario: its scenario (with ``timing``; ``faults`` if it injects any).
+        seed: batch seed.
+        run: run index.
+    """
+
+    def __init__(self, design: P.MissionDesign, scenario: Any, seed: int, run: int):
+        super().__init__()
+        self.design, self.scn, self.seed, self.run = design, scenario, seed, run
+        self.names = tuple(design.vehicle_names(scenario))
+        self.parts: P.MissionParts | None = None
+
+    # -- dm_control interface ------------------------------------------------------------------
+
+    def action_spec(self, physics):
+        return P.action_spec(self.names, [physics.command_limits(v) for v in self.names])
+
+    def observation_spec(self, physics) -> collections.OrderedDict:
+        return P.observation_spec(self.names)
+
+    def initialize_episode(self, physics) -> None:
+        physics.set_control_tick(self.scn.timing.control_tick_s)
+        self.parts = self.design.build(self.scn, self.seed, self.run, physics)
+        got = tuple(v.name for v in self.parts.vehicles)
+        if got != self.names:
+            raise BauvSimError(f"the design built vehicles {got}, it declared {self.names}")
+        self.k = 0
+        zero = np.zeros(len(P.ACTIONS))
+        self._actions = {v: zero for v in self.names}
+        self._logs = {v.name: TickLog(v.extra_columns) for v in self.parts.vehicles}
+        self._fixes: dict[str, list] = {v: [] for v in self.names}
+        self._nav: dict[str, NavOutput] = {}
+        self._cmd: dict[str, Any] = {}
+        for v in self.parts.vehicles:
+            self._tick(physics, v, initial=True)
+
+    def before_step(self, action, physics) -> None:
+        a = np.asarray(action, dtype=float)
+        n = len(P.ACTIONS)
+        for i, v in enumerate(self.names):
+            ai = a[i * n : (i + 1) * n]
+            self._actions[v] = ai
+            physics.set_tail_beat_frequency_hz(float(ai[0]), vehicle=v)
+            physics.set_tail_bias_rad(float(ai[1]), vehicle=v)
+            physics.set_lateral_fins_rad(float(ai[2]), float(ai[3]), vehicle=v)
+            physics.set_battery_position_m(float(ai[4]), vehicle=v)
+        physics.apply_environment()
+        f = getattr(self.scn, "faults", None)
+        if (
+            f is not None
+            and f.physics_nan_at_s is not None
+            and self.run in f.physics_nan_runs
+            and physics.time_s() >= f.physics_nan_at_s
+        ):
+            physics.inject_fault()
+
+    def after_step(self, physics) -> None:
+        self.k += 1
+        for v in self.parts.vehicles:
+            self._tick(physics, v)
+
+    def get_observation(self, physics) -> collections.OrderedDict:
+        obs = collections.OrderedDict()
+        for v in self.names:
+            nav, cmd = self._nav[v], self._cmd[v]
+            roll, pitch, roll_rate, pitch_rate, heading_rate = nav.ins
+            est = nav.estimate
+            values = (
+                np.array([nav.heading_rad]),
+                np.array([heading_rate]),
+                np.array([nav.depth_m]),
+                np.array([pitch]),
+                np.array([pitch_rate]),
+                np.array([roll]),
+                np.array([roll_rate]),
+                np.array([nav.speed_m_s]),
+                est.x,
+                np.sqrt(np.diag(est.P)),
+                nav.dr_position_m,
+                np.array([cmd.course_rad, cmd.depth_m, cmd.speed_m_s]),
+                np.array([MODES.index(cmd.mode)]),
+            )
+            for k, value in zip(P.OBSERVATIONS, values, strict=True):
+                obs[f"{v}/{k}"] = value
+        return obs
+
+    def get_reward(self, physics) -> float:
+        return 0.0
+
+    def get_termination(self, physics) -> float | None:
+        return 0.0 if all(v.guidance.done for v in self.parts.vehicles) else None
+
+    # -- the loop of one vehicle ---------------------------------------------------------------
+
+    def _tick(self, physics, v: P.VehicleParts, initial: bool = False) -> None:
+        """Rig, navigation, guidance and the log of one vehicle at this tick."""
+        vt = physics.truth(v.name)
+        a = self._actions[v.name]
+        commands = {"tail_beat_frequency_hz": float(a[0])}
+        tick = v.rig.sense(self.k, vt, commands, initial)
+        nav = v.navigation.step(tick, initial)
+        cmd = v.guidance.step(vt.t_s, nav)
+        self._nav[v.name], self._cmd[v.name] = nav, cmd
+        self._fixes[v.name] += nav.fixes
+        c = physics.commands(v.name)
+        log = self._logs[v.name]
+        if nav.current_m_s is not None:
+            log.current.append(nav.current_m_s)
+        row = {
+            "t": vt.t_s,
+            "truth_pos": vt.position_world_m,
+            "truth_quat_wxyz": vt.quat_wxyz,
+            "truth_rph": vt.roll_pitch_heading_rad,
+            "truth_vel": vt.velocity_world_m_s,
+            "truth_vel_water": vt.velocity_through_water_world_m_s,
+            "truth_current": vt.current_world_m_s,
+            "ekf_pos": nav.estimate.x,
+            "ekf_P": nav.estimate.P,
+            "dr_pos": nav.dr_position_m,
+            "meas_heading": nav.heading_rad,
+            "meas_depth": nav.depth_m,
+            "meas_speed": nav.speed_m_s,
+            "speed_from_log": nav.speed_from_log,
+            "motor_power": physics.motor_power_w(v.name),
+            "cmd_tail_beat_frequency": c["tail_beat_frequency_hz"],
+            "cmd_tail_bias": c["tail_bias_rad"],
+            "cmd_fin_port": c["fin_port_rad"],
+            "cmd_fin_starboard": c["fin_starboard_rad"],
+            "cmd_battery": c["battery_position_m"],
+            "guidance_course": cmd.course_rad,
+            "guidance_depth": cmd.depth_m,
+            "guidance_speed": cmd.speed_m_s,
+            "guidance_mode": MODES.index(cmd.mode),
+            "guidance_waypoint": cmd.waypoint,
+            "usbl_event": any(f.device == "usbl" for f in nav.fixes),
+            "gps_event": nav.gps_fix,
+        }
+        for col, (key, *_) in v.extra_columns.items():
+            row[col] = nav.extra[key]
+        log.add(row)
+
+    # -- policy and result ---------------------------------------------------------------------
+
+    def policy(self, action_spec) -> Callable[[collections.OrderedDict], Array]:
+        """Every vehicle's autopilot as one policy over the scene's action."""
+        n = len(P.ACTIONS)
+        lo, hi = action_spec.minimum, action_spec.maximum
+        pilots = [
+            P.Pilot(
+                v.autopilot,
+                v.speed_table,
+                self.scn.timing.control_tick_s,
+                lo[i * n : (i + 1) * n],
+                hi[i * n : (i + 1) * n],
+                f"{v.name}/",
+            )
+            for i, v in enumerate(self.parts.vehicles)
+        ]
+        if len(pilots) == 1:
+            return pilots[0]
+        return lambda obs: np.concatenate([p(obs) for p in pilots])
+
+    def result(self, failed: str | None) -> MissionRun:
+        """The run as plain data (see :mod:`tasks.closed_loop.result`)."""
+        out = MissionRun(self.run, self.seed, failed)
+        for v in self.parts.vehicles:
+            outcome = dict(v.navigation.outcome())
+            outcome |= v.guidance.outcome()
+            vr = VehicleRun(
+                v.name,
+                self._logs[v.name].columns(),
+                fix_columns(self._fixes[v.name]),
+                outcome=outcome,
+            )
+            summarise(vr, v.guidance.waypoints(), v.guidance.legs(), v.guidance.done)
+            out.vehicles[v.name] = vr
+        return out
+
+
+def build_environment(
+    design: P.MissionDesign, scenario: Any, seed: int, run: int
+) -> control.Environment:
+    """The physics, the world and the dm_control environment of one run."""
+    physics = build_physics(design.scene(scenario), control_tick_s=scenario.timing.control_tick_s)
+    world = MissionWorld(design, scenario, seed, run)
+    return control.Environment(
+        physics,
+        world,
+        time_limit=scenario.timing.max_duration_s,
+        n_sub_steps=physics.steps_per_tick,
+        flat_observation=False,
+    )
+
+
+def fly(design: P.MissionDesign, scenario: Any, seed: int, run: int) -> MissionRun:
+    """Fly one run to its end, its time limit, or a failure.
+
+    A physics or navigation failure does not raise: it is returned in :attr:`MissionRun.failed`
+    with the simulation time, with the data up to it, so that a Monte Carlo batch completes.
+    """
+    env = build_environment(design, scenario, seed, run)
+    world: MissionWorld = env.task
+    ts = env.reset()
+    policy = world.policy(env.action_spec())
+    failed = None
+    try:
+        while not ts.last():
+            ts = env.step(policy(ts.observation))
+    except (PhysicsError, NavError, BauvSimError) as exc:
+        t = env.physics.time_s()
+        failed = f"run {run} (seed {seed}) failed at t = {t:.2f} s: {type(exc).__name__}: {exc}"
+    return world.result(failed)
