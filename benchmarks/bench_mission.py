@@ -21,14 +21,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from tasks.closed_loop import mission as cl
+from tasks.closed_loop.report import record_mission
+from tasks.closed_loop.scenario import MissionScenario
+from tasks.closed_loop.world import WaypointMission, build_environment
 from tasks.core.runner import plan_batch, run
 
 
-def raw_physics(scn: cl.MissionScenario, actions: list) -> float:
+def raw_physics(scn: MissionScenario, actions: list) -> float:
     """Wall time of stepping the mission's scene through the same actuator commands, tick by tick
     (current and free surface applied per tick), with no sensing, navigation or guidance, s."""
-    env = cl.make_environment(scn, 0, 0)
+    env = build_environment(WaypointMission(), scn, 0, 0)
     env.reset()
     p = env.physics
     t0 = time.perf_counter()
@@ -42,13 +44,11 @@ def raw_physics(scn: cl.MissionScenario, actions: list) -> float:
     return time.perf_counter() - t0
 
 
-def mission_loop(scn: cl.MissionScenario, out: Path) -> tuple[float, float, float, list]:
+def mission_loop(scn: MissionScenario, out: Path) -> tuple[float, float, float, list]:
     """``(loop wall s, recording wall s, simulated s, actions)`` of one mission run."""
-    env = cl.make_environment(scn, 0, 0)
+    env = build_environment(WaypointMission(), scn, 0, 0)
     ts = env.reset()
-    pilot = cl.Pilot(
-        scn.autopilot, env.task.speed_table, scn.timing.control_tick_s, env.action_spec()
-    )
+    pilot = env.task.policy(env.action_spec())
     actions = []
     t0 = time.perf_counter()
     while not ts.last():
@@ -56,12 +56,11 @@ def mission_loop(scn: cl.MissionScenario, out: Path) -> tuple[float, float, floa
         actions.append(a)
         ts = env.step(a)
     loop = time.perf_counter() - t0
-    task = env.task
-    res = cl._summarise(scn, 0, 0, None, task.log.arrays(), task, True)
+    res = env.task.result(None)
     t0 = time.perf_counter()
-    cl.record_mission("mission/survey", scn, res, out)
+    record_mission("mission/survey", scn, res, out)
     rec = time.perf_counter() - t0
-    return loop, rec, float(res.arrays["t"][-1]), actions
+    return loop, rec, float(res.lead["t"][-1]), actions
 
 
 def main() -> None:

@@ -25,6 +25,13 @@ class MissionExperiment(Experiment):
     metrics_type = MissionMetrics
     design: MissionDesign = field(default_factory=WaypointMission)
 
+    def flight(
+        self, scenario: MissionScenario, seed: int, run: int
+    ) -> tuple[MissionDesign, MissionScenario]:
+        """The design and the scenario that run ``run`` flies (the batch's, by default; a
+        mission whose way-points are drawn per run returns its own)."""
+        return self.design, scenario
+
     def check(self, scenario: MissionScenario, n_runs: int) -> None:
         if scenario.report.record_run >= n_runs:
             raise ConfigError(
@@ -34,7 +41,7 @@ class MissionExperiment(Experiment):
     def run_block(
         self, scenario: MissionScenario, seed: int, runs: tuple[int, ...]
     ) -> list[MissionRun]:
-        return [fly(self.design, scenario, seed, r) for r in runs]
+        return [fly(*self.flight(scenario, seed, r), seed, r) for r in runs]
 
     def report(self, ctx: ReportContext) -> ReportSummary:
         return report_mission(self, ctx)

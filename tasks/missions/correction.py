@@ -412,6 +412,10 @@ class CorrectionExperiment(MissionExperiment):
     scenario_type = CorrectionScenario
     metrics_type = CorrectionMetrics
 
+    def flight(self, scenario: CorrectionScenario, seed: int, run: int):
+        """The compensated flight of a run (:meth:`run_block` flies the direct one too)."""
+        return CorrectionMission(course_law="compensated"), run_scenario(scenario, seed, run)
+
     def check(self, scenario: CorrectionScenario, n_runs: int) -> None:
         super().check(scenario, n_runs)
         if scenario.sensors.use_usbl:

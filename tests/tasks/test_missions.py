@@ -1,14 +1,28 @@
-"""Closed-loop missions: contracts over every registered mission, sensors in the physics loop,
-recording read-back, robustness and failure reporting."""
+"""Closed-loop missions: contracts over every registered mission (dm_env conformance, in the
+style of dm_control's ``suite_test.py``), sensors in the physics loop, recording read-back,
+robustness and failure reporting, and missions composed in a test (two vehicles; a guidance law of
+the test's own)."""
 
 import json
 import math
+from dataclasses import dataclass
 
+import dm_env
 import numpy as np
 import pytest
 
+from bauv_sim.build import SceneConfig, VehicleSpec
 from bauv_sim.frames import R_from_quat_wxyz
-from tasks.closed_loop import mission as cl
+from nav.guidance import GuidanceCommand
+from tasks.closed_loop.parts import ACTIONS, OBSERVATIONS, MissionParts
+from tasks.closed_loop.report import record_mission
+from tasks.closed_loop.world import (
+    WaypointMission,
+    build_environment,
+    fly,
+    install_sea,
+    standard_vehicle,
+)
 from tasks.core import registry
 from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
@@ -21,49 +35,82 @@ def scenario(name, *overrides):
     return plan_batch(name, overrides=list(overrides)).scenario
 
 
+def flight(name, seed, run_index, *overrides):
+    """The design and scenario that run ``run_index`` of mission ``name`` flies."""
+    return registry.get(name).flight(scenario(name, *overrides), seed, run_index)
+
+
 @pytest.fixture(scope="module")
 def short_run():
-    return cl.run_mission(scenario(SHORT), 0, 0)
+    return fly(WaypointMission(), scenario(SHORT), 0, 0).lead
 
 
 # ---------------------------------------------------------------------------------------------
 # contracts over every registered mission
 
 
+def _check_observation(env, obs):
+    spec = env.observation_spec()
+    assert list(obs) == list(spec)
+    for key, value in obs.items():
+        assert value.shape == spec[key].shape, key
+        assert value.dtype == spec[key].dtype, key
+        assert np.all(np.isfinite(value)), (key, value)
+
+
 @pytest.mark.parametrize("name", MISSIONS)
-def test_mission_contract(name):
-    exp = registry.get(name)
-
-    def flight(seed, run):
-        return exp.flight_scenario(scenario(name, "timing.max_duration_s=20"), seed, run)
-
-    scn = flight(0, 0)
-    env = cl.make_environment(scn, 0, 0, exp.task_type)
+def test_mission_specs_before_reset_and_observations_match_them(name):
+    design, scn = flight(name, 0, 0, "timing.max_duration_s=20")
+    env = build_environment(design, scn, 0, 0)
+    obs_spec, act_spec = env.observation_spec(), env.action_spec()  # before reset (dm_env)
+    names = design.vehicle_names(scn)
+    assert list(obs_spec) == [f"{v}/{k}" for v in names for k in OBSERVATIONS]
+    assert act_spec.shape == (len(ACTIONS) * len(names),)
+    for v in names:
+        for k, unit in ACTIONS:
+            assert f"{v}/{k} [{unit}]" in act_spec.name
     ts = env.reset()
-    pilot = cl.Pilot(
-        scn.autopilot, env.task.speed_table, scn.timing.control_tick_s, env.action_spec()
-    )
+    assert ts.step_type == dm_env.StepType.FIRST
+    policy = env.task.policy(act_spec)
     steps = 0
     while not ts.last():
-        for key, value in ts.observation.items():
-            assert np.all(np.isfinite(value)), (name, key, value)
-        action = pilot(ts.observation)
-        assert env.action_spec().minimum.shape == action.shape
-        assert np.all(action >= env.action_spec().minimum - 1e-12)
-        assert np.all(action <= env.action_spec().maximum + 1e-12)
+        _check_observation(env, ts.observation)
+        action = policy(ts.observation)
+        act_spec.validate(action)
         ts = env.step(action)
         steps += 1
     assert steps == round(20 / scn.timing.control_tick_s)
-    a = cl.run_mission(scn, 0, 0, task_type=exp.task_type)
-    b = cl.run_mission(flight(0, 0), 0, 0, task_type=exp.task_type)
-    c = cl.run_mission(flight(1, 0), 1, 0, task_type=exp.task_type)
+    _check_observation(env, ts.observation)
+
+
+@pytest.mark.parametrize("name", MISSIONS)
+def test_mission_steps_with_actions_at_the_bounds_and_random_actions(name):
+    design, scn = flight(name, 0, 0, "timing.max_duration_s=8")
+    env = build_environment(design, scn, 0, 0)
+    spec = env.action_spec()
+    rng = np.random.default_rng(0)
+    env.reset()
+    for k in range(30):
+        action = (spec.minimum, spec.maximum, rng.uniform(spec.minimum, spec.maximum))[k % 3]
+        ts = env.step(action)
+        _check_observation(env, ts.observation)
+        if ts.last():
+            break
+
+
+@pytest.mark.parametrize("name", MISSIONS)
+def test_mission_runs_are_deterministic_and_seeded(name):
+    a = fly(*flight(name, 0, 0, "timing.max_duration_s=20"), 0, 0)
+    b = fly(*flight(name, 0, 0, "timing.max_duration_s=20"), 0, 0)
+    c = fly(*flight(name, 1, 0, "timing.max_duration_s=20"), 1, 0)
     assert a.failed is None and b.failed is None and c.failed is None
-    for key in ("truth", "ekf", "dr", "heading_meas", "P"):
-        assert np.array_equal(a.arrays[key], b.arrays[key]), key  # same seed: bit for bit
-    assert a.summary == b.summary
-    state0 = [np.r_[r.arrays["truth"][0], r.arrays["quat"][0]] for r in (a, c)]
+    va, vb, vc = a.lead, b.lead, c.lead
+    for key in ("truth_pos", "ekf_pos", "dr_pos", "meas_heading", "ekf_P"):
+        assert np.array_equal(va[key], vb[key]), key  # same seed: bit for bit
+    assert va.summary == vb.summary
+    state0 = [np.r_[v["truth_pos"][0], v["truth_quat_wxyz"][0]] for v in (va, vc)]
     assert not np.array_equal(*state0)  # initial state (position and attitude)
-    assert not np.array_equal(a.arrays["heading_meas"], c.arrays["heading_meas"])  # noise
+    assert not np.array_equal(va["meas_heading"], vc["meas_heading"])  # noise
 
 
 # ---------------------------------------------------------------------------------------------
@@ -71,13 +118,13 @@ def test_mission_contract(name):
 
 
 def test_compass_and_pressure_errors_have_their_configured_statistics(short_run):
-    a = short_run.arrays
-    e = np.degrees(np.angle(np.exp(1j * (a["heading_meas"] - a["rph"][:, 2]))))
+    a = short_run
+    e = np.degrees(np.angle(np.exp(1j * (a["meas_heading"] - a["truth_rph"][:, 2]))))
     n = e.size
     assert abs(e.mean()) < 5 * 2.0 / math.sqrt(n)
     assert e.std() == pytest.approx(2.0, rel=5 * math.sqrt(1 / (2 * n)))
     k = np.arange(len(a["t"])) % 5 == 0  # the pressure sensor samples every 1 s (5 ticks)
-    d = a["depth_meas"][k] + a["truth"][k, 2]
+    d = a["meas_depth"][k] + a["truth_pos"][k, 2]
     assert abs(d.mean()) < 5 * 0.05 / math.sqrt(d.size)
     assert d.std() == pytest.approx(0.05, rel=5 * math.sqrt(1 / (2 * d.size)))
 
@@ -87,14 +134,14 @@ def test_log_reads_speed_through_water_not_over_ground():
     scn = scenario(
         SHORT, "current.direction_deg=0", "current.speed_m_s=0.3", "timing.max_duration_s=60"
     )
-    a = cl.run_mission(scn, 0, 0).arrays
+    a = fly(WaypointMission(), scn, 0, 0).lead
     k = (np.arange(len(a["t"])) % 5 == 0) & a["speed_from_log"] & (a["t"] > 10)
-    h, p = a["rph"][k, 2], a["rph"][k, 1]
+    h, p = a["truth_rph"][k, 2], a["truth_rph"][k, 1]
     x_axis = np.column_stack([np.cos(p) * np.sin(h), np.cos(p) * np.cos(h), np.sin(p)])
-    stw = np.einsum("ij,ij->i", a["vel_water"][k], x_axis)
-    sog = np.einsum("ij,ij->i", a["vel"][k], x_axis)
-    err_stw = a["speed_meas"][k] - 1.01 * stw  # 1 % scale factor configured
-    err_sog = a["speed_meas"][k] - sog
+    stw = np.einsum("ij,ij->i", a["truth_vel_water"][k], x_axis)
+    sog = np.einsum("ij,ij->i", a["truth_vel"][k], x_axis)
+    err_stw = a["meas_speed"][k] - 1.01 * stw  # 1 % scale factor configured
+    err_sog = a["meas_speed"][k] - sog
     assert abs(err_stw.mean()) < 5 * 0.05 / math.sqrt(k.sum())
     assert err_stw.std() == pytest.approx(0.05, rel=0.35)
     assert err_sog.mean() == pytest.approx(-0.3, abs=0.05)  # the current the log cannot see
@@ -104,20 +151,24 @@ def test_gps_only_with_the_antenna_out_of_the_water():
     scn = scenario(
         SHORT, "guidance.waypoints.0.surface=true", "guidance.hold_s=5", "guidance.fixes_needed=2"
     )
-    run = cl.run_mission(scn, 0, 0)
-    a = run.arrays
-    env = cl.make_environment(scn, 0, 0)
+    design = WaypointMission()
+    res = fly(design, scn, 0, 0)
+    a = res.lead
+    env = build_environment(design, scn, 0, 0)
     env.reset()
-    arm = np.array(env.task.sensors_cfg.gps.antenna_body_m)
-    antenna_z = a["truth"][:, 2] + np.einsum("ij,j->i", R_from_quat_wxyz(a["quat"])[:, 2], arm)
-    gps = [f for f in run.fixes if f["kind"] == "gps"]
-    assert len(gps) >= 2
+    arm = np.array(env.task.parts.vehicles[0].rig.lever_arms_body_m["gps"])
+    assert np.linalg.norm(arm) > 0.1  # read from the model's site
+    antenna_z = a["truth_pos"][:, 2] + np.einsum(
+        "ij,j->i", R_from_quat_wxyz(a["truth_quat_wxyz"])[:, 2], arm
+    )
+    gps = a.fixes["gps"]
+    assert len(gps["t_valid"].values) >= 2
     ticks = {round(t, 6): i for i, t in enumerate(a["t"])}
-    for f in gps:
-        assert antenna_z[ticks[round(f["t_valid_s"], 6)]] > 0.0
-    deep = a["truth"][:, 2] < -0.5
+    for t in gps["t_valid"].values:
+        assert antenna_z[ticks[round(t, 6)]] > 0.0
+    deep = a["truth_pos"][:, 2] < -0.5
     assert deep.sum() > 100 and not a["gps_event"][deep].any()
-    assert run.waypoints[0]["reached_by_estimate"] and run.summary["completed"] == 1.0
+    assert a.waypoints[0]["reached_by_estimate"] and a.summary["completed"] == 1.0
 
 
 def test_usbl_stops_beyond_its_range():
@@ -127,17 +178,17 @@ def test_usbl_stops_beyond_its_range():
         "sensors.usbl.period_s=1.0",
         "sensors.usbl.processing_delay_s=0.0",
     )
-    run = cl.run_mission(scn, 0, 0)
-    a = run.arrays
-    env = cl.make_environment(scn, 0, 0)
+    design = WaypointMission()
+    a = fly(design, scn, 0, 0).lead
+    env = build_environment(design, scn, 0, 0)
     env.reset()
-    tx = env.task.transceiver
-    rng = np.linalg.norm(a["truth"] - tx, axis=1)
+    tx = env.physics.transceiver_world()
+    rng = np.linalg.norm(a["truth_pos"] - tx, axis=1)
     ticks = {round(t, 6): i for i, t in enumerate(a["t"])}
-    usbl = [f for f in run.fixes if f["kind"] == "usbl"]
-    assert usbl
-    for f in usbl:
-        assert rng[ticks[round(f["t_valid_s"], 6)]] <= 40.0 + 0.5  # transponder lever arm
+    usbl = a.fixes["usbl"]["t_valid"].values
+    assert len(usbl)
+    for t in usbl:
+        assert rng[ticks[round(t, 6)]] <= 40.0 + 0.5  # transponder lever arm
     scheduled = np.arange(len(a["t"])) % 5 == 0
     assert (rng[scheduled] > 41.0).sum() > 10  # many scheduled moments were out of range
 
@@ -146,19 +197,20 @@ def test_usbl_stops_beyond_its_range():
 # recording, robustness, failures
 
 
-def test_recording_holds_the_physics_trajectory_and_the_estimates(short_run, tmp_path):
+def test_recording_holds_the_physics_trajectory_and_the_estimates(tmp_path):
     scn = scenario(SHORT)
-    rec = tmp_path / cl.record_mission(SHORT, scn, short_run, tmp_path)
-    a = short_run.arrays
+    res = fly(WaypointMission(), scn, 0, 0)
+    rec = tmp_path / record_mission(SHORT, scn, res, tmp_path)
+    a = res.lead
     t, truth = read_time_series(rec, "world/truth/position", "Points3D:positions")
-    assert np.allclose(t, a["t"]) and np.allclose(truth, a["truth"], atol=1e-4)
+    assert np.allclose(t, a["t"]) and np.allclose(truth, a["truth_pos"], atol=1e-4)
     _, ekf = read_time_series(rec, "world/ekf/position", "Points3D:positions")
-    assert np.allclose(ekf, a["ekf"], atol=1e-4)
+    assert np.allclose(ekf, a["ekf_pos"], atol=1e-4)
     _, trans = read_time_series(rec, "world/vehicle", "Transform3D:translation")
-    assert np.allclose(trans, a["truth"], atol=1e-4)
+    assert np.allclose(trans, a["truth_pos"], atol=1e-4)
     _, quat = read_time_series(rec, "world/vehicle", "Transform3D:quaternion")
     assert np.allclose(
-        np.abs(np.einsum("ij,ij->i", quat, a["quat"][:, [1, 2, 3, 0]])), 1.0, atol=1e-5
+        np.abs(np.einsum("ij,ij->i", quat, a["truth_quat_wxyz"][:, [1, 2, 3, 0]])), 1.0, atol=1e-5
     )
     _, half = read_time_series(rec, "world/ekf/covariance", "Ellipsoids3D:half_sizes")
     assert len(half) > 50 and np.all(half > 0)
@@ -170,8 +222,8 @@ def test_gate_keeps_the_mission_on_track_with_usbl_outliers():
         "sensors.usbl.range.outlier_probability=0.1",
         "sensors.usbl.range.outlier_sigma_m=40",
     ]
-    gated = cl.run_mission(scenario(SHORT, *bad), 3, 0)
-    ungated = cl.run_mission(scenario(SHORT, *bad, "navigation.gate_enabled=false"), 3, 0)
+    gated = fly(WaypointMission(), scenario(SHORT, *bad), 3, 0)
+    ungated = fly(WaypointMission(), scenario(SHORT, *bad, "navigation.gate_enabled=false"), 3, 0)
     assert gated.summary["usbl_rejected"] >= 5
     assert ungated.summary["usbl_rejected"] == 0
     assert gated.summary["ekf_max_error_m"] < 5.0
@@ -206,9 +258,9 @@ def test_mission_navigator_is_not_overconfident():
     while the USBL transponder's lever arm was missing from the measurement model."""
     nees = []
     for run_index in range(4):
-        a = cl.run_mission(scenario(SHORT), 5, run_index).arrays
-        e = (a["ekf"] - a["truth"])[:, :2]
-        P = a["P"][:, :2, :2]
+        a = fly(WaypointMission(), scenario(SHORT), 5, run_index).lead
+        e = (a["ekf_pos"] - a["truth_pos"])[:, :2]
+        P = a["ekf_P"][:, :2, :2]
         late = a["t"] > 20.0
         nees.append(np.einsum("ni,ni->n", e, np.linalg.solve(P, e[..., None])[..., 0])[late])
     mean = float(np.mean(np.concatenate(nees)))
@@ -237,3 +289,116 @@ def test_correction_mission_corrects_dr_and_the_course(tmp_path):
     assert m["improvement_factor"] == pytest.approx(
         comp["uncorrected_mean_error_m"] / comp["corrected_mean_error_m"]
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# missions composed in the test
+
+
+@dataclass(frozen=True)
+class Fleet:
+    """Vehicles in one scene, each flying its own scenario sections with its own rig, navigator,
+    guidance and autopilot (streams under its name); the sea of ``sea_scenario``."""
+
+    scenarios: tuple  # ((name, MissionScenario), ...)
+
+    def vehicle_names(self, scn):
+        return tuple(name for name, _ in self.scenarios)
+
+    def scene(self, scn):
+        vehicles = tuple(
+            VehicleSpec(
+                name=name,
+                east_m=s.start.east_m,
+                north_m=s.start.north_m,
+                depth_m=s.start.depth_m,
+                heading_deg=s.start.heading_deg,
+            )
+            for name, s in self.scenarios
+        )
+        return SceneConfig(vehicles=vehicles, seabed=scn.seabed)
+
+    def build(self, scn, seed, run_index, physics):
+        vs = [
+            standard_vehicle(s, seed, run_index, physics, vehicle=name, prefix=name)
+            for name, s in self.scenarios
+        ]
+        install_sea(physics, scn, seed, run_index)
+        return MissionParts(vs)
+
+
+def test_two_vehicles_in_one_sea_fly_as_they_fly_alone():
+    """Two BAUVs 300 m apart, each with its own rig and navigator, in one scene: each vehicle's
+    trajectory equals its lone run (the lone run ends when its mission is done)."""
+    base = "timing.max_duration_s=60"
+    a = scenario(SHORT, base, "start.east_m=-150", "guidance.waypoints.0.east_m=-150")
+    b = scenario(SHORT, base, "start.east_m=150", "guidance.waypoints.0.east_m=150")
+    pair = fly(Fleet((("a", a), ("b", b))), a, 2, 0)
+    assert pair.failed is None and list(pair.vehicles) == ["a", "b"]
+    err = {
+        n: np.angle(np.exp(1j * (v["meas_heading"] - v["truth_rph"][:, 2])))
+        for n, v in pair.vehicles.items()
+    }
+    assert not np.allclose(err["a"], err["b"])  # each vehicle draws its own compass errors
+    assert not np.allclose(pair.vehicles["a"]["truth_pos"][-1], pair.vehicles["b"]["truth_pos"][-1])
+    for name, scn in (("a", a), ("b", b)):
+        alone = fly(Fleet(((name, scn),)), scn, 2, 0)
+        assert alone.failed is None
+        x_alone = alone.vehicles[name]["truth_pos"]
+        x_pair = pair.vehicles[name]["truth_pos"][: len(x_alone)]
+        assert len(x_alone) > 200
+        assert np.max(np.abs(x_pair - x_alone)) <= 1e-9, name
+        # its own error streams, whoever else is in the sea
+        heading = pair.vehicles[name]["meas_heading"][: len(x_alone)]
+        assert np.max(np.abs(heading - alone.vehicles[name]["meas_heading"])) <= 1e-9
+
+
+@dataclass
+class Loiter:
+    """A guidance law of this test's own: circle a point clockwise at a radius, steering on the
+    EKF estimate, for a given time."""
+
+    east_m: float
+    north_m: float
+    radius_m: float
+    until_s: float
+    depth_m: float = 3.0
+    _t: float = 0.0
+
+    @property
+    def done(self):
+        return self._t >= self.until_s
+
+    def step(self, t_s, nav):
+        self._t = t_s
+        d = nav.estimate.x[:2] - (self.east_m, self.north_m)
+        bearing = math.atan2(d[0], d[1])  # from the centre, clockwise from north
+        push = max(-1.0, min(1.0, 0.05 * (math.hypot(*d) - self.radius_m)))
+        course = (bearing + math.pi / 2 + push) % (2 * math.pi)
+        mode = "done" if self.done else "transit"
+        return GuidanceCommand(course, self.depth_m, 1.0, mode, 0)
+
+    def waypoints(self):
+        return []
+
+    def legs(self):
+        return []
+
+    def outcome(self):
+        return {"loiter_radius_m": self.radius_m}
+
+
+def test_a_mission_with_its_own_guidance_law_defined_in_the_test():
+    scn = scenario(SHORT, "timing.max_duration_s=400", "start.heading_deg=90")
+    design = WaypointMission(guidance=lambda s, rig: Loiter(0.0, 30.0, 25.0, until_s=300.0))
+    res = fly(design, scn, 0, 0)
+    v = res.lead
+    assert res.failed is None and v.outcome["loiter_radius_m"] == 25.0
+    t, x = v["t"], v["truth_pos"]
+    assert t[-1] == pytest.approx(300.0, abs=0.3)  # the law said it was done
+    late = t > 150.0
+    r = np.hypot(x[late, 0] - 0.0, x[late, 1] - 30.0)
+    assert np.all(np.abs(r - 25.0) < 8.0), (r.min(), r.max())
+    turned = np.unwrap(v["truth_rph"][late, 2])
+    assert turned[-1] - turned[0] > 2 * math.pi  # clockwise, at least once around
+    assert "waypoints_reached_by_truth" not in v.summary  # no way-points to judge
