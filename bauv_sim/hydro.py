@@ -16,8 +16,8 @@ MuJoCo:
   backwards). :func:`prepare_model` zeroes the virtual mass and inertia of the geoms that need it;
   ``mj_setConst`` restores them, so call :func:`prepare_model` again after it.
 * **Current**: ``option wind`` is the velocity of the medium in MuJoCo's fluid forces, i.e. the
-  current. :func:`set_water_velocity` sets it; :mod:`bauv_sim.physics` evaluates the current field
-  at the vehicle at every control tick.
+  current. :func:`set_water_velocity` sets it; :mod:`bauv_sim.sea` evaluates the current field at
+  every vehicle at every control tick and sets it through the facade.
 
 All vectors are in the world frame (ENU, m, m/s, N) unless the name says otherwise.
 """

@@ -42,6 +42,7 @@ from bauv_sim.currents import CurrentConfig, UniformCurrentConfig, make_current
 from bauv_sim.errors import BauvSimError, ConfigError, PhysicsError
 from bauv_sim.frames import R_from_roll_pitch_heading
 from bauv_sim.hydro import load_speed_table
+from bauv_sim.sea import Sea
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
@@ -336,7 +337,7 @@ class MissionTask(control.Task):
         )
         vel = st.speed_m_s * np.array([math.sin(heading), math.cos(heading), 0.0])
         physics.set_pose(pos, (0.0, 0.0, heading), vel)
-        physics.set_current(make_current(scn.current, rng_mod.generator(seed, run, "current")))
+        physics.set_sea(Sea(make_current(scn.current, rng_mod.generator(seed, run, "current"))))
         runs = (run,)
         s = scn.sensors
         # lever arms of the antennas from the model's sites (body frame)
@@ -446,7 +447,7 @@ class MissionTask(control.Task):
         physics.set_tail_bias_rad(float(a[1]))
         physics.set_lateral_fins_rad(float(a[2]), float(a[3]))
         physics.set_battery_position_m(float(a[4]))
-        physics.apply_environment()
+        physics.apply_sea()
         f = self.scn.faults
         if (
             f.physics_nan_at_s is not None

@@ -52,6 +52,7 @@ hydro = _Lazy("bauv_sim.hydro")
 manoeuvres = _Lazy("bauv_sim.manoeuvres")
 hull = _Lazy("bauv_sim.hull")
 rng = _Lazy("bauv_sim.rng")
+sea = _Lazy("bauv_sim.sea")
 
 MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "bauv"
 README = MODEL_DIR / "README.md"
@@ -387,7 +388,7 @@ def check_current(frequency_hz: float | None = None, long_s: float = 1500.0) -> 
     # time until the drift is within 3 %
     phys = _scene()
     phys.set_tail_beat_frequency_hz(0.0)
-    phys.set_current(field)
+    phys.set_sea(sea.Sea(field))
     tick = phys.control_tick_s
     t3 = math.inf
     prev = phys.position_world()
@@ -465,7 +466,7 @@ def check_determinism(seed: int = 11, duration_s: float = 60.0) -> DeterminismRe
     for _ in range(2):
         phys = _scene(depth_m=40.0)
         cfg = currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1)
-        phys.set_current(currents.make_current(cfg, rng.generator(seed, 0, "current")))
+        phys.set_sea(sea.Sea(currents.make_current(cfg, rng.generator(seed, 0, "current"))))
         runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0, record=True))
     a, b = runs
     return DeterminismResult(
