@@ -39,9 +39,9 @@ from bauv_sim.autopilot import Autopilot, AutopilotConfig, Measured
 from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig, make_current
+from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import BauvSimError, ConfigError, PhysicsError
 from bauv_sim.frames import R_from_roll_pitch_heading
-from bauv_sim.hydro import load_speed_table
 from bauv_sim.sea import Sea
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (

@@ -73,7 +73,7 @@ def _fly(
 ) -> dict[str, NDArray]:
     from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
     from bauv_sim.currents import UniformCurrent
-    from bauv_sim.hydro import load_speed_table
+    from bauv_sim.design.speed_table import load_speed_table
     from bauv_sim.sea import Sea
     from bauv_sim.seabed import SeabedConfig
 

@@ -29,6 +29,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from bauv_sim.errors import ConfigError
+
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics
 
@@ -48,11 +50,12 @@ class _Lazy:
 
 
 currents = _Lazy("bauv_sim.currents")
-hydro = _Lazy("bauv_sim.hydro")
+fluid = _Lazy("bauv_sim.design.fluid")
 manoeuvres = _Lazy("bauv_sim.manoeuvres")
 hull = _Lazy("bauv_sim.hull")
 rng = _Lazy("bauv_sim.rng")
 sea = _Lazy("bauv_sim.sea")
+speed_table = _Lazy("bauv_sim.design.speed_table")
 
 MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "bauv"
 README = MODEL_DIR / "README.md"
@@ -262,7 +265,7 @@ class TowResult:
     points: list[manoeuvres.TowPoint]
     target_cd: float
     target_range: tuple[float, float]
-    budget: hydro.DragBudget
+    budget: fluid.DragBudget
     same_in_current: bool
 
 
@@ -275,7 +278,7 @@ def check_tow(speeds: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)) -> 
         abs(a.drag_n - b.drag_n) <= 1e-9 * max(1.0, a.drag_n)
         for a, b in zip(pts, in_current, strict=True)
     )
-    budget = hydro.drag_budget(1.0)
+    budget = fluid.drag_budget(1.0)
     return TowResult(pts, budget.cd, CD_TARGET_RANGE, budget, same)
 
 
@@ -309,14 +312,15 @@ def check_speed_table(
 
 
 def write_speed_table(result: CruiseResult, path: Path = SPEED_TABLE) -> None:
-    """Write the speed calibration CSV read by :func:`bauv_sim.hydro.load_speed_table`."""
+    """Write the speed calibration CSV read by
+    :func:`bauv_sim.design.speed_table.load_speed_table`."""
     with path.open("w", newline="") as fh:
         fh.write(
             "# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
             " written by tasks/vehicle_checks.py\n"
         )
         w = csv.writer(fh)
-        w.writerow(hydro.SPEED_TABLE_COLUMNS)
+        w.writerow(speed_table.SPEED_TABLE_COLUMNS)
         for r in result.table:
             w.writerow(
                 [
@@ -367,8 +371,8 @@ def cruise_frequency_hz() -> float:
     """The tail-beat frequency for 1.0 m/s from ``models/bauv/speed_table.csv`` (1.2 Hz if there is
     no table yet), Hz, rounded to 0.01 Hz."""
     try:
-        return round(float(hydro.load_speed_table().frequency_for(CRUISE_SPEED_M_S)), 2)
-    except hydro.ConfigError:
+        return round(float(speed_table.load_speed_table().frequency_for(CRUISE_SPEED_M_S)), 2)
+    except ConfigError:
         return 1.2
 
 
@@ -538,7 +542,7 @@ def render(name: str, res: object) -> str:
         return (
             _table(["speed m/s", "drag N", "Cd (frontal 0.0587 m^2)"], rows)
             + "\n\n"
-            + f"Target (first principles, `hydro.drag_budget`): Cd = {r.target_cd:.4f} "
+            + f"Target (first principles, `design.fluid.drag_budget`): Cd = {r.target_cd:.4f} "
             f"(body {r.budget.body_n:.2f} N + fins {r.budget.fins_n:.2f} N at 1 m/s); "
             f"accepted range {r.target_range[0]}-{r.target_range[1]}. "
             "Same drag with the water moving at 0.5 m/s: "

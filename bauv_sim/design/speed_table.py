@@ -1,0 +1,96 @@
+"""The BAUV's speed table: steady speed through water versus tail-beat frequency.
+
+The table is a design-time product of the model, measured by ``python -m tasks.vehicle_checks
+cruise`` and written to ``models/bauv/speed_table.csv``. At run time :func:`load_speed_table`
+reads it as a :class:`SpeedTable`: the speed feed-forward of the autopilot and the odometry's
+frequency-to-speed law.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bauv_sim.errors import ConfigError
+from bauv_sim.hull import MODEL_DIR
+
+SPEED_TABLE_CSV = MODEL_DIR / "speed_table.csv"
+"""The model's speed table."""
+
+SPEED_TABLE_COLUMNS: Sequence[str] = ("frequency_hz", "speed_m_s", "power_w", "strouhal")
+"""Columns of the CSV file, in order."""
+
+
+@dataclass(frozen=True)
+class SpeedTable:
+    """Self-propelled straight-swim calibration: steady speed through water versus tail-beat
+    frequency (written by ``tasks/vehicle_checks.py``, read by :func:`load_speed_table`).
+
+    Attributes:
+        frequency_hz: tail-beat frequencies, increasing, shape (n,), Hz.
+        speed_m_s: steady speed through water at each frequency, shape (n,), m/s.
+        power_w: mean motor power at each frequency, shape (n,), W.
+        strouhal: Strouhal number f A / U at each frequency, shape (n,).
+    """
+
+    frequency_hz: NDArray[np.float64]
+    speed_m_s: NDArray[np.float64]
+    power_w: NDArray[np.float64]
+    strouhal: NDArray[np.float64]
+
+    def speed_at(self, frequency_hz: ArrayLike) -> NDArray[np.float64]:
+        """Steady speed through water (m/s) at given tail-beat frequencies (Hz), by linear
+        interpolation (0 at 0 Hz; clamped at the last row)."""
+        f = np.concatenate([[0.0], self.frequency_hz])
+        u = np.concatenate([[0.0], self.speed_m_s])
+        return np.interp(np.asarray(frequency_hz, dtype=float), f, u)
+
+    @property
+    def max_speed_m_s(self) -> float:
+        """Largest steady speed in the table, m/s."""
+        return float(np.max(self.speed_m_s))
+
+    def frequency_for(self, speed_m_s: ArrayLike) -> NDArray[np.float64]:
+        """Tail-beat frequency (Hz) that gives a steady speed through water (m/s): the inverse of
+        :meth:`speed_at` on the rows up to the fastest one (beyond it a higher frequency no longer
+        makes the vehicle faster); larger speeds are clamped to that row."""
+        k = int(np.argmax(self.speed_m_s)) + 1
+        f = np.concatenate([[0.0], self.frequency_hz[:k]])
+        u = np.concatenate([[0.0], self.speed_m_s[:k]])
+        if np.any(np.diff(u) <= 0):
+            raise ConfigError("speed table: speed must increase with frequency up to its maximum")
+        return np.interp(np.asarray(speed_m_s, dtype=float), u, f)
+
+
+def load_speed_table(path: str | Path = SPEED_TABLE_CSV) -> SpeedTable:
+    """Read a speed table written by ``tasks/vehicle_checks.py``.
+
+    Args:
+        path: CSV file; the model's ``models/bauv/speed_table.csv`` by default.
+
+    Returns:
+        The :class:`SpeedTable`.
+
+    Raises:
+        ConfigError: if the file is missing or malformed.
+    """
+    p = Path(path)
+    try:
+        with p.open() as fh:
+            rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
+    except FileNotFoundError:
+        raise ConfigError(
+            f"speed table {str(p)!r}: not found (run python -m tasks.vehicle_checks)"
+        ) from None
+    try:
+        cols = {c: np.array([float(r[c]) for r in rows]) for c in SPEED_TABLE_COLUMNS}
+    except (KeyError, ValueError) as exc:
+        raise ConfigError(f"speed table {str(p)!r}: bad column or value ({exc})") from None
+    if cols["frequency_hz"].size < 2 or np.any(np.diff(cols["frequency_hz"]) <= 0):
+        raise ConfigError(f"speed table {str(p)!r}: need >= 2 rows with increasing frequency")
+    return SpeedTable(**cols)
