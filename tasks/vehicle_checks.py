@@ -16,7 +16,6 @@ Fast versions of the same checks are the unit tests in ``tests/bauv_sim``.
 from __future__ import annotations
 
 import argparse
-import csv
 import importlib
 import math
 import re
@@ -59,7 +58,6 @@ speed_table = _Lazy("bauv_sim.design.speed_table")
 
 MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "bauv"
 README = MODEL_DIR / "README.md"
-SPEED_TABLE = MODEL_DIR / "speed_table.csv"
 VEHICLE_XML = MODEL_DIR / "bauv.xml"
 
 CD_TARGET_RANGE = (0.08, 0.25)
@@ -76,9 +74,6 @@ CRUISE_SPEED_M_S = 1.0
 
 MOTOR_POWER_W = 250.0
 """Seed 000: "electric motor with nominal power 250 W"."""
-
-SPEED_TABLE_FREQUENCIES_HZ = (0.3, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0)
-"""Tail-beat frequencies of the speed table, Hz (3 Hz is the motor's commanded limit)."""
 
 
 def _scene(**kw: float) -> BauvPhysics:
@@ -296,40 +291,16 @@ class CruiseResult:
     trim_fin_rad: float
 
 
-def check_speed_table(
-    frequencies: tuple[float, ...] = SPEED_TABLE_FREQUENCIES_HZ,
-    settle_s: float = 30.0,
-    measure_s: float = 20.0,
-) -> CruiseResult:
-    """Speed vs frequency (depth held by the fins), the frequency that gives 1.0 m/s (rounded to
-    0.01 Hz) and a separate run at that frequency."""
-    table = manoeuvres.speed_table(_scene(), list(frequencies), settle_s, measure_s)
+def check_speed_table(settle_s: float = 30.0, measure_s: float = 20.0) -> CruiseResult:
+    """Speed vs frequency (:func:`bauv_sim.design.speed_table.measure_speed_table`, depth held by
+    the fins), the frequency that gives 1.0 m/s (rounded to 0.01 Hz) and a separate run at that
+    frequency."""
+    table = speed_table.measure_speed_table(settle_s, measure_s)
     f = np.array([r.frequency_hz for r in table])
     u = np.array([r.speed_through_water_m_s for r in table])
     f_cruise = round(float(np.interp(CRUISE_SPEED_M_S, u, f)), 2)
     cruise = manoeuvres.straight_swim(_scene(speed_m_s=CRUISE_SPEED_M_S), f_cruise, 40.0, 30.0)
     return CruiseResult(table, f_cruise, cruise, cruise.mean_fin_rad)
-
-
-def write_speed_table(result: CruiseResult, path: Path = SPEED_TABLE) -> None:
-    """Write the speed calibration CSV read by
-    :func:`bauv_sim.design.speed_table.load_speed_table`."""
-    with path.open("w", newline="") as fh:
-        fh.write(
-            "# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
-            " written by tasks/vehicle_checks.py\n"
-        )
-        w = csv.writer(fh)
-        w.writerow(speed_table.SPEED_TABLE_COLUMNS)
-        for r in result.table:
-            w.writerow(
-                [
-                    f"{r.frequency_hz:.4g}",
-                    f"{r.speed_through_water_m_s:.4f}",
-                    f"{r.mean_motor_power_w:.3f}",
-                    f"{r.strouhal:.4f}",
-                ]
-            )
 
 
 def write_trim_keyframe(result: CruiseResult, path: Path = VEHICLE_XML) -> None:
@@ -732,7 +703,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         sections[name] = render(name, res)
         print(f"## {name} ({time.perf_counter() - t0:.1f} s wall)\n{sections[name]}\n", flush=True)
         if name == "cruise" and not args.no_write:
-            write_speed_table(res)  # type: ignore[arg-type]
+            speed_table.write_speed_table(res.table)  # type: ignore[attr-defined]
             write_trim_keyframe(res)  # type: ignore[arg-type]
     if not args.no_write:
         rewrite_readme(sections)

@@ -1,9 +1,11 @@
 """The BAUV's speed table: steady speed through water versus tail-beat frequency.
 
-The table is a design-time product of the model, measured by ``python -m tasks.vehicle_checks
-cruise`` and written to ``models/bauv/speed_table.csv``. At run time :func:`load_speed_table`
-reads it as a :class:`SpeedTable`: the speed feed-forward of the autopilot and the odometry's
-frequency-to-speed law.
+The table is a design-time product of the model: :func:`measure_speed_table` swims the vehicle
+straight and level in still water at each of :data:`SPEED_TABLE_FREQUENCIES_HZ` (one run, each
+frequency settling from the previous one) and :func:`write_speed_table` writes the result to
+``models/bauv/speed_table.csv`` (``python -m tasks.vehicle_checks cruise`` does both and rewrites
+the model README's tables). At run time :func:`load_speed_table` reads it as a :class:`SpeedTable`:
+the speed feed-forward of the autopilot and the odometry's frequency-to-speed law.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bauv_sim import manoeuvres
 from bauv_sim.errors import ConfigError
 from bauv_sim.hull import MODEL_DIR
 
@@ -25,11 +28,14 @@ SPEED_TABLE_CSV = MODEL_DIR / "speed_table.csv"
 SPEED_TABLE_COLUMNS: Sequence[str] = ("frequency_hz", "speed_m_s", "power_w", "strouhal")
 """Columns of the CSV file, in order."""
 
+SPEED_TABLE_FREQUENCIES_HZ = (0.3, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0)
+"""Tail-beat frequencies of the speed table, Hz (3 Hz is the motor's commanded limit)."""
+
 
 @dataclass(frozen=True)
 class SpeedTable:
     """Self-propelled straight-swim calibration: steady speed through water versus tail-beat
-    frequency (written by ``tasks/vehicle_checks.py``, read by :func:`load_speed_table`).
+    frequency (measured by :func:`measure_speed_table`, read by :func:`load_speed_table`).
 
     Attributes:
         frequency_hz: tail-beat frequencies, increasing, shape (n,), Hz.
@@ -68,7 +74,7 @@ class SpeedTable:
 
 
 def load_speed_table(path: str | Path = SPEED_TABLE_CSV) -> SpeedTable:
-    """Read a speed table written by ``tasks/vehicle_checks.py``.
+    """Read a speed table written by :func:`write_speed_table`.
 
     Args:
         path: CSV file; the model's ``models/bauv/speed_table.csv`` by default.
@@ -94,3 +100,52 @@ def load_speed_table(path: str | Path = SPEED_TABLE_CSV) -> SpeedTable:
     if cols["frequency_hz"].size < 2 or np.any(np.diff(cols["frequency_hz"]) <= 0):
         raise ConfigError(f"speed table {str(p)!r}: need >= 2 rows with increasing frequency")
     return SpeedTable(**cols)
+
+
+def measure_speed_table(
+    settle_s: float = 30.0,
+    measure_s: float = 20.0,
+    frequencies_hz: Sequence[float] = SPEED_TABLE_FREQUENCIES_HZ,
+) -> list[manoeuvres.StraightSwimResult]:
+    """Measure the speed table: straight swims at increasing tail-beat frequencies, one after the
+    other in one run of the open-water scene (:func:`bauv_sim.manoeuvres.open_water_scene`, at
+    rest at 20 m depth in still water, the lateral fins holding the depth).
+
+    Args:
+        settle_s: settling time per frequency, s.
+        measure_s: measured window per frequency, s.
+        frequencies_hz: increasing tail-beat frequencies, Hz.
+
+    Returns:
+        One :class:`~bauv_sim.manoeuvres.StraightSwimResult` per frequency.
+    """
+    return manoeuvres.speed_table(
+        manoeuvres.open_water_scene(), list(frequencies_hz), settle_s, measure_s
+    )
+
+
+def write_speed_table(
+    swims: Sequence[manoeuvres.StraightSwimResult], path: str | Path = SPEED_TABLE_CSV
+) -> None:
+    """Write measured straight swims as a speed table CSV (read by :func:`load_speed_table`).
+
+    Args:
+        swims: from :func:`measure_speed_table`, increasing frequencies.
+        path: CSV file; the model's ``models/bauv/speed_table.csv`` by default.
+    """
+    with Path(path).open("w", newline="") as fh:
+        fh.write(
+            "# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
+            " written by tasks/vehicle_checks.py\n"
+        )
+        w = csv.writer(fh)
+        w.writerow(SPEED_TABLE_COLUMNS)
+        for r in swims:
+            w.writerow(
+                [
+                    f"{r.frequency_hz:.4g}",
+                    f"{r.speed_through_water_m_s:.4f}",
+                    f"{r.mean_motor_power_w:.3f}",
+                    f"{r.strouhal:.4f}",
+                ]
+            )

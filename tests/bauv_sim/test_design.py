@@ -12,9 +12,15 @@ import pytest
 
 from bauv_sim import hull
 from bauv_sim.design import ballast, fluid
-from bauv_sim.design.speed_table import load_speed_table
+from bauv_sim.design.speed_table import (
+    SPEED_TABLE_CSV,
+    load_speed_table,
+    measure_speed_table,
+    write_speed_table,
+)
 from bauv_sim.errors import ConfigError
 from bauv_sim.hull import MODEL_DIR, SEAWATER_DENSITY_KG_M3
+from bauv_sim.manoeuvres import StraightSwimResult
 from bauv_sim.physics import BauvPhysics
 
 VEHICLE = MODEL_DIR / "bauv.xml"
@@ -106,3 +112,40 @@ def test_tow_drag_is_the_drag_budget():
     assert budget.cd == pytest.approx(
         budget.total_n / (0.5 * SEAWATER_DENSITY_KG_M3 * area), rel=1e-12
     )
+
+
+def test_the_writer_reproduces_the_models_speed_table(tmp_path):
+    """Rows written by write_speed_table from the model's table give the model's file back."""
+    t = load_speed_table()
+    swims = [
+        StraightSwimResult(
+            frequency_hz=float(f),
+            speed_through_water_m_s=float(u),
+            speed_over_ground_m_s=float(u),
+            mean_motor_power_w=float(p),
+            peak_motor_torque_nm=0.0,
+            tail_tip_amplitude_m=0.0,
+            strouhal=float(st),
+            mean_pitch_rad=0.0,
+            mean_fin_rad=0.0,
+            yaw_amplitude_rad=0.0,
+            depth_change_m=0.0,
+            window_s=0.0,
+        )
+        for f, u, p, st in zip(t.frequency_hz, t.speed_m_s, t.power_w, t.strouhal, strict=True)
+    ]
+    out = tmp_path / "speed_table.csv"
+    write_speed_table(swims, out)
+    assert out.read_text() == SPEED_TABLE_CSV.read_text()
+
+
+def test_a_short_measured_speed_table_is_written_and_read_back(tmp_path):
+    swims = measure_speed_table(settle_s=2.0, measure_s=2.0, frequencies_hz=(1.0, 2.0))
+    assert [s.frequency_hz for s in swims] == [1.0, 2.0]
+    assert 0.0 < swims[0].speed_through_water_m_s < swims[1].speed_through_water_m_s
+    out = tmp_path / "speed_table.csv"
+    write_speed_table(swims, out)
+    t = load_speed_table(out)
+    assert np.array_equal(t.frequency_hz, [1.0, 2.0])
+    assert t.speed_m_s == pytest.approx([s.speed_through_water_m_s for s in swims], abs=5e-5)
+    assert t.power_w == pytest.approx([s.mean_motor_power_w for s in swims], abs=5e-4)
