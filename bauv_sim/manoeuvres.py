@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from bauv_sim import build, currents
 from bauv_sim.errors import ConfigError
 from bauv_sim.physics import BauvPhysics
+from bauv_sim.sea import Sea
 from bauv_sim.seabed import SeabedConfig
 
 
@@ -307,16 +308,17 @@ def tow_test(
     """
     rho = physics.water_density_kg_m3()
     out = []
+    sea = Sea(currents.UniformCurrent(current_m_s, 0.0) if current_m_s else None)
     physics.reset()
-    physics.set_current(currents.UniformCurrent(current_m_s, 0.0) if current_m_s else None)
+    physics.set_sea(sea)
     for u in speeds_m_s:
         physics.reset()
-        physics.set_current(physics.current_field)
+        physics.set_sea(sea)
         physics.set_pose([0.0, 0.0, -20.0], [0.0, 0.0, 0.0], [0.0, u + current_m_s, 0.0])
         f = physics.fluid_force_world()
         drag = -float(f[1])
         out.append(TowPoint(u, drag, float(f[0]), drag / (0.5 * rho * u * u * reference_area_m2)))
-    physics.set_current(None)
+    physics.set_sea(Sea())
     return out
 
 
@@ -601,7 +603,7 @@ def idle_drift(
     """
     z0 = physics.depth_m()
     physics.set_tail_beat_frequency_hz(0.0)
-    physics.set_current(field)
+    physics.set_sea(Sea(field))
     tick = physics.control_tick_s
     n = round(duration_s / tick)
     last = max(1, round(1.0 / tick))
@@ -664,15 +666,15 @@ def swim_in_current(
         The :class:`CurrentSwimResult`.
     """
     results = []
-    for fld in (None, field):
+    for sea in (Sea(), Sea(field)):
         phys = make_physics()
-        phys.set_current(fld)
+        phys.set_sea(sea)
         phys.set_pose(
             phys.position_world(),
             phys.roll_pitch_heading(),
             phys.velocity_world() + phys.current_at_vehicle_world(),
         )
-        phys.set_current(fld)
+        phys.set_sea(sea)
         phys.set_tail_beat_frequency_hz(frequency_hz)
         tick = phys.control_tick_s
         phys.advance(round(settle_s / tick) * tick)

@@ -10,10 +10,14 @@ indexes MuJoCo's state arrays (``qpos``, ``qvel``, ``act``, ``ctrl``, ``actuator
 * one scene may hold several vehicles (``leader``, ``follower``): every accessor and setter takes
   ``vehicle=None`` (the first vehicle) or a vehicle name from :meth:`BauvPhysics.vehicle_names`.
 
-Time advances in control ticks (:meth:`BauvPhysics.advance`): at the start of each tick the sea
-current is evaluated at every vehicle and applied (MuJoCo ``option wind``, plus a per-vehicle
-correction force when vehicles sit in different water), then the physics runs the tick's
-``n`` steps of ``timestep``. The control tick is an integer multiple of the timestep, checked.
+The vehicles are in a sea (:class:`bauv_sim.sea.Sea`: current and free surface; still water until
+one is injected with :meth:`BauvPhysics.set_sea`). The sea acts through the facade's primitives:
+the water velocity of the fluid model, the water velocity recorded at each vehicle, a held
+generalized force per vehicle and a scale of each vehicle's buoyancy.
+
+Time advances in control ticks (:meth:`BauvPhysics.advance`): at the start of each tick the sea is
+applied (:meth:`BauvPhysics.apply_sea`), then the physics runs the tick's ``n`` steps of
+``timestep``. The control tick is an integer multiple of the timestep, checked.
 Divergence, non-finite state and any MuJoCo warning raise :class:`~bauv_sim.errors.PhysicsError`
 with the simulation time of the step where it happened (auto-reset is disabled in the model).
 """
@@ -36,8 +40,8 @@ with warnings.catch_warnings():
     from dm_control import mjcf
 
 from bauv_sim import frames, hydro
-from bauv_sim.currents import CurrentField
 from bauv_sim.errors import ConfigError, PhysicsError
+from bauv_sim.sea import Sea
 
 DEFAULT_CONTROL_TICK_S = 0.1
 """Default control tick, s (50 physics steps of 2 ms)."""
@@ -101,11 +105,6 @@ class VehicleTruth:
     angular_velocity_body_rad_s: NDArray[np.float64]
 
 
-HULL_HALF_HEIGHT_M = 0.17
-"""Half-height of the hull's largest section, m (``bauv_sim.hull.HullProfile``: 0.34 m high),
-used by the free-surface model."""
-
-
 @dataclass
 class _Vehicle:
     """Index tables of one vehicle (built once from names)."""
@@ -125,10 +124,9 @@ class _Vehicle:
     lever_m: float
     crank_m: float
     current_world: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    correction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     float_bodies: NDArray[np.int_] = field(default_factory=lambda: np.zeros(0, dtype=int))
     float_gravcomp: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
-    submerged: float = 1.0
+    buoyancy_scale: float = 1.0
 
 
 class BauvPhysics(mjcf.Physics):
@@ -140,8 +138,8 @@ class BauvPhysics(mjcf.Physics):
     """
 
     _control_tick_s: float = DEFAULT_CONTROL_TICK_S
-    _current: CurrentField | None = None
-    _applied_field: CurrentField | None = None
+    _sea: Sea = Sea()
+    _sea_applied: bool = False
     _track_energy: bool = False
 
     # ----------------------------------------------------------------------------------------
@@ -168,7 +166,7 @@ class BauvPhysics(mjcf.Physics):
 
     def _reload_from_data(self, data) -> None:
         hydro.prepare_model(data.model.ptr)
-        self._applied_field = None
+        self._sea_applied = False
         self._vehicles: dict[str, _Vehicle] = {}
         super()._reload_from_data(data)
         self._index_vehicles()
@@ -253,7 +251,6 @@ class BauvPhysics(mjcf.Physics):
             sites,
             lever,
             crank,
-            correction=np.zeros(dofs.size),
             float_bodies=bodies[m.body_gravcomp[bodies] > 0].copy(),
             float_gravcomp=m.body_gravcomp[bodies][m.body_gravcomp[bodies] > 0].copy(),
         )
@@ -348,7 +345,7 @@ class BauvPhysics(mjcf.Physics):
         return frames.body_from_world(self.R_world_from_body(vehicle), self.velocity_world(vehicle))
 
     def current_at_vehicle_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
-        """Water velocity applied to the vehicle during the current control tick (the current field
+        """Water velocity applied to the vehicle during the current control tick (the sea's current
         evaluated at the vehicle at the start of the tick), shape (3,), m/s, world ENU."""
         return self._v(vehicle).current_world.copy()
 
@@ -748,108 +745,127 @@ class BauvPhysics(mjcf.Physics):
         self.reset_energy()
 
     # ----------------------------------------------------------------------------------------
-    # current
-
-    def set_current(self, current: CurrentField | None) -> None:
-        """Use a current field (None: still water). It is evaluated at every vehicle at the start
-        of each control tick of :meth:`advance`, and now."""
-        self._current = current
-        self._applied_field = None
-        self.apply_current()
+    # the sea
 
     @property
-    def current_field(self) -> CurrentField | None:
-        """The current field in use, or None."""
-        return self._current
+    def sea(self) -> Sea:
+        """The sea the vehicles are in (still water with the free surface until :meth:`set_sea`)."""
+        return self._sea
 
-    def apply_environment(self) -> None:
-        """Everything the sea does that is evaluated once per control tick: the current
-        (:meth:`apply_current`) and the free surface (:meth:`apply_free_surface`). :meth:`advance`
-        calls it at the start of every tick; a ``dm_control`` task that steps the physics itself
-        calls it in ``before_step``."""
-        self.apply_current()
-        self.apply_free_surface()
+    def set_sea(self, sea: Sea) -> None:
+        """Put the vehicles in a sea. It is applied now and at the start of every control tick of
+        :meth:`advance` (or by :meth:`apply_sea`).
 
-    def submerged_fraction(self, vehicle: str | None = None) -> float:
-        """Fraction of the vehicle's displacement under water, held for the current tick."""
-        return self._v(vehicle).submerged
-
-    def apply_free_surface(self) -> None:
-        """Scale every buoyant body's gravity compensation by the submerged fraction of the hull.
-
-        MuJoCo has no free surface: the buoyancy of ``models/bauv`` (gravity compensation of its
-        float bodies) would hold above z = 0 too. The hull is taken as a section of half-height
-        ``HULL_HALF_HEIGHT_M`` at the reference point's depth d: with u = clip(d / h, -1, 1) the
-        submerged fraction of an elliptic section is ``1/2 + (u sqrt(1 - u^2) + asin u) / pi``
-        (1 when the hull top is under water, 0 when its keel is out). Pitch, roll, waves and the
-        shift of the centre of buoyancy are ignored; the fraction is held for the tick.
+        Args:
+            sea: the sea (current and free surface).
         """
-        m = self.model.ptr
-        for v in self._vehicles.values():
-            depth = -float(self.data.ptr.qpos[v.qpos_adr + 2])
-            u = min(1.0, max(-1.0, depth / HULL_HALF_HEIGHT_M))
-            frac = 0.5 + (u * math.sqrt(1.0 - u * u) + math.asin(u)) / math.pi
-            if frac != v.submerged:
-                v.submerged = frac
-                m.body_gravcomp[v.float_bodies] = v.float_gravcomp * frac
+        self._sea = sea
+        self._sea_applied = False
+        self.apply_sea()
 
-    def apply_current(self) -> None:
-        """Evaluate the current field at every vehicle now and apply it until the next call.
+    def apply_sea(self) -> None:
+        """Evaluate the sea at every vehicle now and apply it until the next call
+        (:meth:`bauv_sim.sea.Sea.apply`). :meth:`advance` calls it at the start of every tick; a
+        ``dm_control`` task that steps the physics itself calls it in ``before_step``."""
+        self._sea.apply(self, again=self._sea_applied)
+        self._sea_applied = True
 
-        :meth:`advance` calls this at the start of every control tick; a ``dm_control`` task that
-        steps the physics through ``control.Environment`` calls it in ``before_step``. The first
-        vehicle's water velocity becomes MuJoCo's ``option wind``; every other vehicle whose water
-        differs gets the difference of the fluid forces in its own water and in the first
-        vehicle's, computed now and held as an applied force (``qfrc_applied``) until the next
-        call.
+    def set_water_velocity_world(self, velocity_world_m_s: ArrayLike) -> None:
+        """Set the velocity of the water in MuJoCo's fluid forces, one for the whole scene
+        (``option wind``; :func:`bauv_sim.hydro.set_water_velocity`).
+
+        Args:
+            velocity_world_m_s: water velocity, shape (3,), m/s, world ENU.
+
+        Raises:
+            ConfigError: if it is not 3 finite numbers.
         """
+        hydro.set_water_velocity(self.model.ptr, velocity_world_m_s)
+
+    def set_current_at_vehicle_world(
+        self, velocity_world_m_s: ArrayLike, vehicle: str | None = None
+    ) -> None:
+        """Record the water velocity at a vehicle for the current control tick (what
+        :meth:`current_at_vehicle_world`, :meth:`velocity_through_water_world` and :meth:`truth`
+        report). It changes no force: the sea sets the forces with :meth:`set_water_velocity_world`
+        and :meth:`hold_generalized_force`.
+
+        Args:
+            velocity_world_m_s: water velocity at the vehicle, shape (3,), m/s, world ENU.
+            vehicle: vehicle name or None for the first.
+        """
+        self._v(vehicle).current_world[:] = velocity_world_m_s
+
+    def fluid_force_change_generalized(
+        self, water_velocity_world_m_s: ArrayLike, vehicle: str | None = None
+    ) -> NDArray[np.float64]:
+        """How the fluid forces on a vehicle would change if its water moved at a given velocity
+        instead of the model's water velocity (``option wind``), at the current state.
+
+        Position and velocity dependent forces are recomputed (``mj_fwdPosition``,
+        ``mj_fwdVelocity``) with the given water velocity, then the velocity dependent ones again
+        with the model's, which is left as it was.
+
+        Args:
+            water_velocity_world_m_s: the vehicle's water velocity, shape (3,), m/s, world ENU.
+            vehicle: vehicle name or None for the first.
+
+        Returns:
+            Generalized fluid force (``qfrc_fluid``) in that water minus the one in the model's,
+            over the vehicle's degrees of freedom in MuJoCo's order (its free joint's 3
+            translations, N, and 3 rotations, N m, then its joints'), shape (n,).
+        """
+        v = self._v(vehicle)
         m, d = self.model.ptr, self.data.ptr
-        if self._current is not None and getattr(self._current, "steady_uniform", False):
-            if self._applied_field is self._current:
-                return  # the same water everywhere and always: nothing changes between ticks
-            self._applied_field = self._current
-        else:
-            self._applied_field = None
-        vs = list(self._vehicles.values())
-        if self._current is None:
-            for v in vs:
-                v.current_world[:] = 0.0
-                v.correction[:] = 0.0
-            hydro.set_water_velocity(m, np.zeros(3))
-            self._apply_corrections()
-            return
-        t = float(d.time)
-        for v in vs:
-            v.current_world[:] = np.asarray(
-                self._current.velocity_world(t, self.position_world(v.name)), dtype=float
-            )
-        ref = vs[0].current_world
-        hydro.set_water_velocity(m, ref)
-        # other vehicles in different water: correction = fluid force in their water minus the
-        # fluid force in the reference water, held for the tick (MuJoCo's wind is global)
-        for v in vs[1:]:
-            if np.array_equal(v.current_world, ref):
-                v.correction[:] = 0.0
-                continue
-            hydro.set_water_velocity(m, v.current_world)
-            mujoco.mj_fwdPosition(m, d)
-            mujoco.mj_fwdVelocity(m, d)
-            own = np.array(d.qfrc_fluid[v.dofs])
-            hydro.set_water_velocity(m, ref)
-            mujoco.mj_fwdVelocity(m, d)
-            v.correction[:] = own - d.qfrc_fluid[v.dofs]
-        self._apply_corrections()
+        wind = np.array(m.opt.wind)
+        hydro.set_water_velocity(m, water_velocity_world_m_s)
+        mujoco.mj_fwdPosition(m, d)
+        mujoco.mj_fwdVelocity(m, d)
+        own = np.array(d.qfrc_fluid[v.dofs])
+        hydro.set_water_velocity(m, wind)
+        mujoco.mj_fwdVelocity(m, d)
+        return own - d.qfrc_fluid[v.dofs]
 
-    def _apply_corrections(self) -> None:
-        for v in self._vehicles.values():
-            self.data.qfrc_applied[v.dofs] = v.correction
+    def hold_generalized_force(self, force: ArrayLike, vehicle: str | None = None) -> None:
+        """Apply an external generalized force to a vehicle's degrees of freedom at every step
+        until it is replaced (``qfrc_applied``; :meth:`reset` clears it).
+
+        Args:
+            force: over the vehicle's degrees of freedom in the order of
+                :meth:`fluid_force_change_generalized`, shape (n,), N and N m; or 0.0 for none.
+            vehicle: vehicle name or None for the first.
+        """
+        self.data.qfrc_applied[self._v(vehicle).dofs] = force
+
+    def set_buoyancy_scale(self, scale: float, vehicle: str | None = None) -> None:
+        """Scale a vehicle's buoyancy (the gravity compensation of its buoyant bodies) to ``scale``
+        times the model's; held until changed.
+
+        Args:
+            scale: 1 fully submerged, 0 out of the water.
+            vehicle: vehicle name or None for the first.
+
+        Raises:
+            ConfigError: if it is not a finite number >= 0.
+        """
+        v = self._v(vehicle)
+        if scale != v.buoyancy_scale:
+            if not (math.isfinite(scale) and scale >= 0.0):
+                raise ConfigError(f"buoyancy scale = {scale!r}: must be finite and >= 0")
+            v.buoyancy_scale = scale
+            self.model.ptr.body_gravcomp[v.float_bodies] = v.float_gravcomp * scale
+
+    def buoyancy_scale(self, vehicle: str | None = None) -> float:
+        """The scale of a vehicle's buoyancy set by :meth:`set_buoyancy_scale` (the submerged
+        fraction the sea applies), 1 at load."""
+        return self._v(vehicle).buoyancy_scale
 
     # ----------------------------------------------------------------------------------------
     # stepping
 
     def step(self, nstep: int = 1) -> None:
-        """Advance ``nstep`` physics steps with the current commands (no current update), keeping
-        the motor-energy accounts if they are on, and checking the state.
+        """Advance ``nstep`` physics steps with the current commands (the sea is not applied),
+        keeping the motor-energy accounts if they are on, and checking the state.
 
         Args:
             nstep: number of steps.
@@ -923,7 +939,7 @@ class BauvPhysics(mjcf.Physics):
         )
 
     def advance(self, duration_s: float) -> None:
-        """Advance the simulation by whole control ticks, applying the current at every vehicle at
+        """Advance the simulation by whole control ticks, applying the sea (:meth:`apply_sea`) at
         the start of each tick.
 
         Args:
@@ -940,7 +956,7 @@ class BauvPhysics(mjcf.Physics):
                 f"control ticks of {self._control_tick_s} s"
             )
         for _ in range(n):
-            self.apply_environment()
+            self.apply_sea()
             self.step(self._steps_per_tick)
 
     def time_s(self) -> float:

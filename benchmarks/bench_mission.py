@@ -39,7 +39,7 @@ def raw_physics(scn: MissionScenario, actions: list) -> float:
         p.set_tail_bias_rad(float(a[1]))
         p.set_lateral_fins_rad(float(a[2]), float(a[3]))
         p.set_battery_position_m(float(a[4]))
-        p.apply_environment()
+        p.apply_sea()
         p.step(p.steps_per_tick)
     return time.perf_counter() - t0
 

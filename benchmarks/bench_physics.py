@@ -87,8 +87,9 @@ def facade_steps_per_s(seconds: float, repeats: int, energy: bool) -> float:
     phys.set_energy_tracking(energy)
     phys.reset_to_keyframe("trim")
     from bauv_sim.currents import UniformCurrent
+    from bauv_sim.sea import Sea
 
-    phys.set_current(UniformCurrent(0.3, 0.5))
+    phys.set_sea(Sea(UniformCurrent(0.3, 0.5)))
     n = round(seconds / phys.timestep())
 
     def run() -> int:

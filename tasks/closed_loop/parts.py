@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from bauv_sim.autopilot import Autopilot, AutopilotConfig, Measured
 from bauv_sim.build import SceneConfig
+from bauv_sim.sea import Sea
 from bauv_sim.sensors.rig import RigTick, SensorRig
 from nav.guidance import GuidanceCommand, WaypointGuidance, horizontal_sigma_m
 from tasks.closed_loop.navigation import NavOutput
@@ -203,17 +204,22 @@ class VehicleParts:
 
 @dataclass
 class MissionParts:
-    """Everything a run of a mission flies with: the sea and the vehicles, in action order."""
+    """Everything a run of a mission flies with.
+
+    Attributes:
+        vehicles: the vehicles, in action order.
+        sea: the water they swim in (current field, free surface).
+    """
 
     vehicles: Sequence[VehicleParts]
+    sea: Sea
 
 
 class MissionDesign(Protocol):
     """What a mission module declares (see :class:`~tasks.closed_loop.world.WaypointMission`).
 
     The world calls :meth:`scene` to build the physics, then :meth:`build` at the start of every
-    episode, with the physics reset: it places the vehicles, installs the sea and returns the
-    parts.
+    episode, with the physics reset: it places the vehicles and returns the parts and the sea.
     """
 
     def vehicle_names(self, scenario: Any) -> tuple[str, ...]:
@@ -225,7 +231,7 @@ class MissionDesign(Protocol):
         ...
 
     def build(self, scenario: Any, seed: int, run: int, physics) -> MissionParts:
-        """Place the vehicles, install the sea, and assemble the parts of one run."""
+        """Place the vehicles and assemble the parts (and the sea) of one run."""
         ...
 
 

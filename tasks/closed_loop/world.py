@@ -3,9 +3,10 @@
 In dm_control terms (``control.Task`` + ``control.Environment``, like the suite's domains):
 
 * :class:`MissionWorld` is the task: at the start of an episode it asks the mission's design
-  (:class:`~tasks.closed_loop.parts.MissionDesign`) to place the vehicles, install the sea and
-  assemble the parts; before each physics step it hands each vehicle's five actuator settings to
-  the physics and applies the sea (current, free surface); after it, for every vehicle in turn,
+  (:class:`~tasks.closed_loop.parts.MissionDesign`) to place the vehicles and assemble the parts
+  (the sea among them), and puts the vehicles in that sea; before each physics step it hands
+  each vehicle's five actuator settings to the physics and applies the sea (current, free
+  surface); after it, for every vehicle in turn,
   the rig samples the truth, the navigation part estimates, guidance commands, and the tick is
   logged;
 * the policy (:meth:`MissionWorld.policy`) is every vehicle's autopilot (:class:`~tasks.
@@ -36,8 +37,9 @@ from numpy.typing import NDArray
 from bauv_sim import rng as rng_mod
 from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.currents import make_current
+from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import BauvSimError, PhysicsError
-from bauv_sim.hydro import load_speed_table
+from bauv_sim.sea import Sea
 from bauv_sim.sensors.rig import SensorRig
 from nav.errors import NavError
 from nav.guidance import Waypoint, WaypointGuidance
@@ -149,9 +151,10 @@ def waypoint_guidance(scn: MissionScenario, rig: SensorRig) -> WaypointGuidance:
     )
 
 
-def install_sea(physics, scn, seed: int, run: int) -> None:
-    """The sea of a run: the scenario's current field (its own ``current`` stream)."""
-    physics.set_current(make_current(scn.current, rng_mod.generator(seed, run, "current")))
+def scenario_sea(scn, seed: int, run: int) -> Sea:
+    """The sea of a run: the scenario's current field (its own ``current`` stream) and the free
+    surface."""
+    return Sea(make_current(scn.current, rng_mod.generator(seed, run, "current")))
 
 
 @dataclass(frozen=True)
@@ -189,8 +192,7 @@ class WaypointMission:
         v = standard_vehicle(scenario, seed, run, physics)
         if self.guidance is not None:
             v.guidance = self.guidance(scenario, v.rig)
-        install_sea(physics, scenario, seed, run)
-        return P.MissionParts([v])
+        return P.MissionParts([v], scenario_sea(scenario, seed, run))
 
 
 class MissionWorld(control.Task):
@@ -220,6 +222,7 @@ class MissionWorld(control.Task):
     def initialize_episode(self, physics) -> None:
         physics.set_control_tick(self.scn.timing.control_tick_s)
         self.parts = self.design.build(self.scn, self.seed, self.run, physics)
+        physics.set_sea(self.parts.sea)
         got = tuple(v.name for v in self.parts.vehicles)
         if got != self.names:
             raise BauvSimError(f"the design built vehicles {got}, it declared {self.names}")
@@ -243,7 +246,7 @@ class MissionWorld(control.Task):
             physics.set_tail_bias_rad(float(ai[1]), vehicle=v)
             physics.set_lateral_fins_rad(float(ai[2]), float(ai[3]), vehicle=v)
             physics.set_battery_position_m(float(ai[4]), vehicle=v)
-        physics.apply_environment()
+        physics.apply_sea()
         f = getattr(self.scn, "faults", None)
         if (
             f is not None

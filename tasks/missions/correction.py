@@ -48,7 +48,7 @@ from tasks.closed_loop.scenario import MissionScenario
 from tasks.closed_loop.world import (
     WaypointMission,
     fly,
-    install_sea,
+    scenario_sea,
     standard_vehicle,
     waypoint_guidance,
 )
@@ -296,8 +296,7 @@ class CorrectionMission(WaypointMission):
             self.course_law,
         )
         v.extra_columns = EXTRA_COLUMNS
-        install_sea(physics, scenario, seed, run)
-        return MissionParts([v])
+        return MissionParts([v], scenario_sea(scenario, seed, run))
 
 
 # ---------------------------------------------------------------------------------------------

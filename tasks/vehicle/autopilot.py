@@ -73,7 +73,8 @@ def _fly(
 ) -> dict[str, NDArray]:
     from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
     from bauv_sim.currents import UniformCurrent
-    from bauv_sim.hydro import load_speed_table
+    from bauv_sim.design.speed_table import load_speed_table
+    from bauv_sim.sea import Sea
     from bauv_sim.seabed import SeabedConfig
 
     scene = SceneConfig(
@@ -88,7 +89,7 @@ def _fly(
         [0.0, 0.0, heading0_rad],
         [math.sin(heading0_rad), math.cos(heading0_rad), 0.0],
     )
-    p.set_current(UniformCurrent(current_north_m_s, 0.0) if current_north_m_s else None)
+    p.set_sea(Sea(UniformCurrent(current_north_m_s, 0.0) if current_north_m_s else None))
     table = load_speed_table()
     ap = Autopilot(s.autopilot, lambda v: float(table.frequency_for(v)))
     lim = p.command_limits()

@@ -16,7 +16,6 @@ Fast versions of the same checks are the unit tests in ``tests/bauv_sim``.
 from __future__ import annotations
 
 import argparse
-import csv
 import importlib
 import math
 import re
@@ -28,6 +27,8 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from bauv_sim.errors import ConfigError
 
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics
@@ -48,14 +49,15 @@ class _Lazy:
 
 
 currents = _Lazy("bauv_sim.currents")
-hydro = _Lazy("bauv_sim.hydro")
+fluid = _Lazy("bauv_sim.design.fluid")
 manoeuvres = _Lazy("bauv_sim.manoeuvres")
 hull = _Lazy("bauv_sim.hull")
 rng = _Lazy("bauv_sim.rng")
+sea = _Lazy("bauv_sim.sea")
+speed_table = _Lazy("bauv_sim.design.speed_table")
 
 MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "bauv"
 README = MODEL_DIR / "README.md"
-SPEED_TABLE = MODEL_DIR / "speed_table.csv"
 VEHICLE_XML = MODEL_DIR / "bauv.xml"
 
 CD_TARGET_RANGE = (0.08, 0.25)
@@ -72,9 +74,6 @@ CRUISE_SPEED_M_S = 1.0
 
 MOTOR_POWER_W = 250.0
 """Seed 000: "electric motor with nominal power 250 W"."""
-
-SPEED_TABLE_FREQUENCIES_HZ = (0.3, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0)
-"""Tail-beat frequencies of the speed table, Hz (3 Hz is the motor's commanded limit)."""
 
 
 def _scene(**kw: float) -> BauvPhysics:
@@ -261,7 +260,7 @@ class TowResult:
     points: list[manoeuvres.TowPoint]
     target_cd: float
     target_range: tuple[float, float]
-    budget: hydro.DragBudget
+    budget: fluid.DragBudget
     same_in_current: bool
 
 
@@ -274,7 +273,7 @@ def check_tow(speeds: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)) -> 
         abs(a.drag_n - b.drag_n) <= 1e-9 * max(1.0, a.drag_n)
         for a, b in zip(pts, in_current, strict=True)
     )
-    budget = hydro.drag_budget(1.0)
+    budget = fluid.drag_budget(1.0)
     return TowResult(pts, budget.cd, CD_TARGET_RANGE, budget, same)
 
 
@@ -292,39 +291,16 @@ class CruiseResult:
     trim_fin_rad: float
 
 
-def check_speed_table(
-    frequencies: tuple[float, ...] = SPEED_TABLE_FREQUENCIES_HZ,
-    settle_s: float = 30.0,
-    measure_s: float = 20.0,
-) -> CruiseResult:
-    """Speed vs frequency (depth held by the fins), the frequency that gives 1.0 m/s (rounded to
-    0.01 Hz) and a separate run at that frequency."""
-    table = manoeuvres.speed_table(_scene(), list(frequencies), settle_s, measure_s)
+def check_speed_table(settle_s: float = 30.0, measure_s: float = 20.0) -> CruiseResult:
+    """Speed vs frequency (:func:`bauv_sim.design.speed_table.measure_speed_table`, depth held by
+    the fins), the frequency that gives 1.0 m/s (rounded to 0.01 Hz) and a separate run at that
+    frequency."""
+    table = speed_table.measure_speed_table(settle_s, measure_s)
     f = np.array([r.frequency_hz for r in table])
     u = np.array([r.speed_through_water_m_s for r in table])
     f_cruise = round(float(np.interp(CRUISE_SPEED_M_S, u, f)), 2)
     cruise = manoeuvres.straight_swim(_scene(speed_m_s=CRUISE_SPEED_M_S), f_cruise, 40.0, 30.0)
     return CruiseResult(table, f_cruise, cruise, cruise.mean_fin_rad)
-
-
-def write_speed_table(result: CruiseResult, path: Path = SPEED_TABLE) -> None:
-    """Write the speed calibration CSV read by :func:`bauv_sim.hydro.load_speed_table`."""
-    with path.open("w", newline="") as fh:
-        fh.write(
-            "# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
-            " written by tasks/vehicle_checks.py\n"
-        )
-        w = csv.writer(fh)
-        w.writerow(hydro.SPEED_TABLE_COLUMNS)
-        for r in result.table:
-            w.writerow(
-                [
-                    f"{r.frequency_hz:.4g}",
-                    f"{r.speed_through_water_m_s:.4f}",
-                    f"{r.mean_motor_power_w:.3f}",
-                    f"{r.strouhal:.4f}",
-                ]
-            )
 
 
 def write_trim_keyframe(result: CruiseResult, path: Path = VEHICLE_XML) -> None:
@@ -366,8 +342,8 @@ def cruise_frequency_hz() -> float:
     """The tail-beat frequency for 1.0 m/s from ``models/bauv/speed_table.csv`` (1.2 Hz if there is
     no table yet), Hz, rounded to 0.01 Hz."""
     try:
-        return round(float(hydro.load_speed_table().frequency_for(CRUISE_SPEED_M_S)), 2)
-    except hydro.ConfigError:
+        return round(float(speed_table.load_speed_table().frequency_for(CRUISE_SPEED_M_S)), 2)
+    except ConfigError:
         return 1.2
 
 
@@ -387,7 +363,7 @@ def check_current(frequency_hz: float | None = None, long_s: float = 1500.0) -> 
     # time until the drift is within 3 %
     phys = _scene()
     phys.set_tail_beat_frequency_hz(0.0)
-    phys.set_current(field)
+    phys.set_sea(sea.Sea(field))
     tick = phys.control_tick_s
     t3 = math.inf
     prev = phys.position_world()
@@ -465,7 +441,7 @@ def check_determinism(seed: int = 11, duration_s: float = 60.0) -> DeterminismRe
     for _ in range(2):
         phys = _scene(depth_m=40.0)
         cfg = currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1)
-        phys.set_current(currents.make_current(cfg, rng.generator(seed, 0, "current")))
+        phys.set_sea(sea.Sea(currents.make_current(cfg, rng.generator(seed, 0, "current"))))
         runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0, record=True))
     a, b = runs
     return DeterminismResult(
@@ -537,7 +513,7 @@ def render(name: str, res: object) -> str:
         return (
             _table(["speed m/s", "drag N", "Cd (frontal 0.0587 m^2)"], rows)
             + "\n\n"
-            + f"Target (first principles, `hydro.drag_budget`): Cd = {r.target_cd:.4f} "
+            + f"Target (first principles, `design.fluid.drag_budget`): Cd = {r.target_cd:.4f} "
             f"(body {r.budget.body_n:.2f} N + fins {r.budget.fins_n:.2f} N at 1 m/s); "
             f"accepted range {r.target_range[0]}-{r.target_range[1]}. "
             "Same drag with the water moving at 0.5 m/s: "
@@ -727,7 +703,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         sections[name] = render(name, res)
         print(f"## {name} ({time.perf_counter() - t0:.1f} s wall)\n{sections[name]}\n", flush=True)
         if name == "cruise" and not args.no_write:
-            write_speed_table(res)  # type: ignore[arg-type]
+            speed_table.write_speed_table(res.table)  # type: ignore[attr-defined]
             write_trim_keyframe(res)  # type: ignore[arg-type]
     if not args.no_write:
         rewrite_readme(sections)

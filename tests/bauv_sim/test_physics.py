@@ -9,9 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from bauv_sim import build, currents, frames
+from bauv_sim import currents, frames
 from bauv_sim.errors import ConfigError, PhysicsError
 from bauv_sim.physics import SENSOR_SITES, BauvPhysics
+from bauv_sim.sea import Sea
 
 
 @pytest.fixture
@@ -177,15 +178,34 @@ def test_scene_sites_and_injected_fault(phys):
         phys.advance(0.1)
 
 
-def test_apply_current_for_an_environment_that_steps_by_itself(phys):
-    phys.set_current(currents.GyreCurrent((0.0, 0.0), 10.0, 0.3))
-    phys.set_pose([10.0, 0.0, -3.0])
-    first = phys.current_at_vehicle_world()
-    phys.set_pose([0.0, 10.0, -3.0])
-    phys.step(5)
-    assert np.allclose(phys.current_at_vehicle_world(), first)  # held until applied again
-    phys.apply_current()
-    assert np.allclose(phys.current_at_vehicle_world(), [0.3, 0.0, 0.0], atol=1e-12)
+def test_the_primitives_the_sea_acts_through(phys):
+    """Buoyancy scale, water velocity, fluid-force change and held force (``bauv_sim.sea``)."""
+    full = phys.hydrostatics().buoyancy_n
+    phys.set_buoyancy_scale(0.25)
+    assert phys.buoyancy_scale() == 0.25
+    assert phys.hydrostatics().buoyancy_n == pytest.approx(0.25 * full, rel=1e-12)
+    with pytest.raises(ConfigError, match="buoyancy scale"):
+        phys.set_buoyancy_scale(-0.1)
+    phys.set_buoyancy_scale(1.0)
+    assert phys.hydrostatics().buoyancy_n == full
+    with pytest.raises(ConfigError, match="water velocity"):
+        phys.set_water_velocity_world([0.0, math.nan, 0.0])
+    phys.set_pose([0, 0, -3], [0, 0, 0], [0.5, 0.0, 0.0])
+    # the same water as the model's: no change; other water: the model's is left as it was
+    same = phys.fluid_force_change_generalized(np.zeros(3))
+    assert np.array_equal(same, np.zeros_like(same))
+    change = phys.fluid_force_change_generalized([0.5, 0.0, 0.0])
+    assert change[0] > 0.0  # moving with the water: the drag against the motion is gone
+    assert np.array_equal(phys.model.opt.wind, np.zeros(3))
+    # a held force acts at every step until replaced
+    push = np.zeros_like(same)
+    push[1] = 50.0  # N, world y, on the free joint
+    phys.set_pose([0, 0, -3])
+    phys.hold_generalized_force(push)
+    phys.step(100)
+    assert phys.velocity_world()[1] > 0.05
+    phys.hold_generalized_force(0.0)
+    assert not np.any(phys.data.qfrc_applied)
 
 
 def test_model_without_disabled_autoreset_is_refused():
@@ -203,47 +223,6 @@ def _wrap(m: mujoco.MjModel):
     return MjModel(m)
 
 
-def test_current_is_applied_and_velocity_through_water_is_ground_minus_current(phys):
-    field = currents.UniformCurrent(0.5, math.radians(30))
-    phys.set_current(field)
-    cur = field.velocity_world(0.0, np.zeros(3))
-    assert np.allclose(phys.current_at_vehicle_world(), cur)
-    assert np.allclose(phys.model.opt.wind, cur)
-    phys.set_pose([0, 0, -3], [0, 0, 0], cur)  # moving with the water
-    phys.advance(1.0)
-    assert np.allclose(phys.velocity_world(), cur, atol=1e-6)
-    assert np.allclose(
-        phys.velocity_through_water_world(), phys.velocity_world() - phys.current_at_vehicle_world()
-    )
-    assert phys.truth().current_world_m_s == pytest.approx(cur)
-
-
-def test_each_vehicle_feels_the_current_at_its_own_position():
-    """Two vehicles in a gyre: the fluid force on each equals the force on a lone vehicle in the
-    same state whose water has that vehicle's current (the per-vehicle correction is exact at the
-    tick start)."""
-    gyre = currents.GyreCurrent((0.0, 0.0), 50.0, 0.4)
-    cfg = build.SceneConfig(
-        vehicles=(
-            build.VehicleSpec(name="a", east_m=60.0, depth_m=3.0),
-            build.VehicleSpec(
-                name="b", east_m=-40.0, north_m=10.0, depth_m=3.0, heading_deg=40.0, speed_m_s=0.8
-            ),
-        )
-    )
-    two = build.build_physics(cfg)
-    two.set_current(gyre)
-    ca, cb = two.current_at_vehicle_world("a"), two.current_at_vehicle_world("b")
-    assert not np.allclose(ca, cb)
-    mujoco.mj_forward(two.model.ptr, two.data.ptr)
-    v = two._vehicles["b"]
-    total_b = (two.data.qfrc_fluid + two.data.qfrc_applied)[v.dof_adr : v.dof_adr + 3]
-    lone = BauvPhysics.from_scene_xml()
-    lone.set_current(currents.UniformCurrent(float(np.hypot(*cb[:2])), math.atan2(cb[0], cb[1])))
-    lone.set_pose([-40.0, 10.0, -3.0], [0.0, 0.0, math.radians(40.0)], two.velocity_world("b"))
-    assert np.allclose(lone.fluid_force_world(), total_b, rtol=1e-9, atol=1e-12)
-
-
 @pytest.mark.parametrize("energy", [False, True])
 def test_same_commands_give_bit_identical_trajectories(energy):
     """Also: stepping one step at a time (energy accounts on) or in MuJoCo's loop gives the same
@@ -252,10 +231,12 @@ def test_same_commands_give_bit_identical_trajectories(energy):
     def run(track: bool) -> np.ndarray:
         p = BauvPhysics.from_scene_xml()
         p.set_energy_tracking(track)
-        p.set_current(
-            currents.make_current(
-                currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
-                np.random.default_rng(7),
+        p.set_sea(
+            Sea(
+                currents.make_current(
+                    currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
+                    np.random.default_rng(7),
+                )
             )
         )
         rows = []
@@ -309,38 +290,6 @@ def test_keyframes(phys):
     assert phys.commands()["tail_beat_frequency_hz"] > 0.5
     with pytest.raises(ConfigError):
         phys.reset_to_keyframe("nope")
-
-
-def test_free_surface_buoyancy_fraction_and_motion():
-    """Above the surface the hull loses its buoyancy: the submerged fraction follows the area of
-    an elliptic section, a vehicle released in the air falls back, and one deep stays put."""
-    import math
-
-    from bauv_sim.build import build_physics
-    from bauv_sim.physics import HULL_HALF_HEIGHT_M
-
-    p = build_physics()
-    h = HULL_HALF_HEIGHT_M
-    for depth, want in [
-        (1.0, 1.0),
-        (h, 1.0),
-        (0.0, 0.5),
-        (-h, 0.0),
-        (-1.0, 0.0),
-        (0.5 * h, 0.5 + (0.5 * math.sqrt(0.75) + math.asin(0.5)) / math.pi),
-    ]:
-        p.set_pose([0.0, 0.0, -depth])
-        p.apply_free_surface()
-        assert p.submerged_fraction() == pytest.approx(want, abs=1e-12)
-    # released 0.5 m above the surface, still water, no commands: it falls into the water
-    p.set_pose([0.0, 0.0, 0.5])
-    p.advance(2.0)
-    assert p.depth_m() > -0.2
-    # released at 2 m depth it is neutral: it stays within a few millimetres
-    p.set_pose([0.0, 0.0, -2.0])
-    p.advance(2.0)
-    assert p.depth_m() == pytest.approx(2.0, abs=0.02)
-    assert p.submerged_fraction() == 1.0
 
 
 def test_truth_attitude_equals_the_frames_conversion():

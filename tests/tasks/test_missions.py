@@ -20,7 +20,7 @@ from tasks.closed_loop.world import (
     WaypointMission,
     build_environment,
     fly,
-    install_sea,
+    scenario_sea,
     standard_vehicle,
 )
 from tasks.core import registry
@@ -323,8 +323,7 @@ class Fleet:
             standard_vehicle(s, seed, run_index, physics, vehicle=name, prefix=name)
             for name, s in self.scenarios
         ]
-        install_sea(physics, scn, seed, run_index)
-        return MissionParts(vs)
+        return MissionParts(vs, scenario_sea(scn, seed, run_index))
 
 
 def test_two_vehicles_in_one_sea_fly_as_they_fly_alone():
