@@ -1,0 +1,1 @@
+"""The framework: registry, runner, store, report, figures, recording, CLI."""
