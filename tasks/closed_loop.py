@@ -71,6 +71,7 @@ from nav.models import (
     UsblMeasurement,
 )
 from nav.navigator import Navigator
+from tasks.core import store
 from tasks.registry import Experiment, ReportContext, ReportSummary
 
 MODES = ("transit", "ascend", "surface", "dive", "done")
@@ -703,6 +704,7 @@ class Pilot:
 # Running a mission
 
 
+@store.plain_data("closed_loop.MissionRun")
 @dataclass
 class MissionRun:
     """The outcome of one mission run.
@@ -725,7 +727,7 @@ class MissionRun:
     fixes: list[dict[str, Any]] = field(default_factory=list)
     waypoints: list[dict[str, Any]] = field(default_factory=list)
     summary: dict[str, float] = field(default_factory=dict)
-    task: Any = field(default=None, repr=False, compare=False)
+    task: Any = field(default=None, repr=False, compare=False, metadata=store.NOT_STORED)
 
     def __getstate__(self) -> dict[str, Any]:
         # the finished task (physics, streams) stays in the worker: only results travel
@@ -784,7 +786,7 @@ def run_mission(
 
     Returns:
         The run's outcome (``task`` holds the finished task for the caller's own metrics; it is
-        not pickled).
+        not stored).
     """
     env = make_environment(scn, seed, run, task_type)
     task: MissionTask = env.task

@@ -39,6 +39,7 @@ from nav.correction import CurrentResponse, compensated_course
 from nav.drns import CorrectedDeadReckoning
 from nav.guidance import GuidanceCommand, direct_course
 from tasks import closed_loop as cl
+from tasks.core import store
 from tasks.registry import ReportContext, ReportSummary, register
 
 METHODS = ("uncorrected", "corrected", "baseline")
@@ -111,6 +112,7 @@ def run_scenario(scn: CorrectionScenario, seed: int, run: int, course_law: str):
     return load_config(CorrectionRun, data)
 
 
+@store.plain_data("mission_correction.CorrectionRun")
 class CorrectionRun(CorrectionScenario):
     """One flight of a run (internal): the scenario with its legs and leg 3's course law."""
 
@@ -257,6 +259,7 @@ def current_metrics(res: cl.MissionRun) -> dict[str, float]:
     }
 
 
+@store.plain_data("mission_correction.CorrectionRunResult")
 @dataclass
 class CorrectionRunResult:
     """Both flights of one run (compensated and direct course on leg 3)."""
