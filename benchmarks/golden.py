@@ -13,8 +13,8 @@ Usage::
     .venv/bin/python benchmarks/golden.py compare --only mission/survey paper-000/test-1
 
 Strings (file names, failure messages) must be equal; numbers are compared as floats, NaN equal
-to NaN. The commands run through the ``bauv`` CLI of this checkout (``python -m tasks.core.cli``,
-or ``tasks.core.cli`` before the framework moved), with the checkout as working directory.
+to NaN. The commands run through the ``bauv`` CLI of this checkout (``python -m tasks.core.cli``),
+with the checkout as working directory.
 """
 
 from __future__ import annotations
@@ -48,8 +48,7 @@ RUNS: dict[str, list[str]] = {
 def _bauv() -> list[str]:
     # the CLI of this checkout (run with the checkout as working directory, so that its packages
     # are imported even when another checkout is installed in the environment)
-    cli = "tasks.core.cli" if (ROOT / "tasks" / "core" / "cli.py").exists() else "tasks.cli"
-    return [sys.executable, "-m", cli]
+    return [sys.executable, "-m", "tasks.core.cli"]
 
 
 def run_metrics(args: list[str]) -> dict:

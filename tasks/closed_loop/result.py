@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tasks.core import store
 from tasks.core.export import Column
 
 ENU = ("east", "north", "up")
@@ -35,7 +36,7 @@ TICK_COLUMNS: Mapping[str, tuple[str, str, tuple[str, ...]]] = {
     "truth_vel_water": ("m/s", "true velocity through water, world ENU", ENU),
     "truth_current": ("m/s", "water velocity at the vehicle, world ENU", ENU),
     "ekf_pos": ("m", "EKF position estimate, world ENU", ENU),
-    "ekf_P": ("m^2", "EKF position covariance, world ENU", ENU),
+    "ekf_P": ("m^2", "EKF position covariance, world ENU (symmetrised: (P + P^T) / 2)", ENU),
     "dr_pos": ("m", "dead-reckoned position, world ENU", ENU),
     "meas_heading": ("rad", "compass heading, clockwise from north", ()),
     "meas_depth": ("m", "pressure depth (held between samples), positive down", ()),
@@ -82,6 +83,7 @@ FIX_COLUMNS: Mapping[str, Mapping[str, tuple[str, str, tuple[str, ...]]]] = {
 """Columns of the fix tables, by device."""
 
 
+@store.plain_data("closed_loop.VehicleRun")
 @dataclass
 class VehicleRun:
     """One vehicle of one mission run, as plain data.
@@ -109,6 +111,7 @@ class VehicleRun:
         return self.ticks[name].values
 
 
+@store.plain_data("closed_loop.MissionRun")
 @dataclass
 class MissionRun:
     """One run of a mission, as plain data.

@@ -1,23 +1,69 @@
-"""Run data a user can take away: typed columns with units, written as Apache Parquet."""
+"""Parquet export of time series with their units, readable by any Parquet tool.
+
+A table is a mapping of named :class:`Column` objects sharing their first axis (time, ``T`` rows).
+Each column becomes one or more flat Parquet fields:
+
+* ``(T,)``: one field named as the column;
+* ``(T, k)``: ``k`` fields ``"{name}.{component}"``, in component order;
+* ``(T, k, k)``, a symmetric matrix per row (a covariance): its upper triangle, the fields
+  ``"{name}.{ci}.{cj}"`` for ``i <= j`` in row-major order (a non-symmetric matrix is refused).
+
+Every field carries Parquet field metadata: ``unit`` (SI, ``"1"`` for dimensionless,
+``"bool"``, ``"enum"``, ...), ``description``, and what :func:`read_parquet` needs to regroup the
+fields into the same arrays, bit for bit: ``group`` (the column's name), ``shape`` (the column's
+shape after ``T``, JSON), ``index`` (this field's index in it, JSON), ``components`` (JSON),
+``dtype`` (numpy's ``dtype.str``) and ``nullable``. The table's metadata is the caller's
+``metadata`` plus ``bauv-sim.export = "1"``.
+
+NaN never reaches an output silently: a float column holding NaN is refused, naming the column,
+unless the column is declared ``nullable=True``; then NaN is written as a Parquet null (and read
+back as NaN).
+"""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import os
+import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from bauv_sim.errors import BauvSimError
+from tasks.core import store
+
+FORMAT_KEY = "bauv-sim.export"
+"""Key of the table metadata marking a file written by :func:`write_parquet`."""
+
+FORMAT_VERSION = "1"
+_FIELD_KEYS = ("unit", "description", "group", "shape", "index", "components", "dtype", "nullable")
 
 
+class ExportError(BauvSimError, ValueError):
+    """A column cannot be exported, or a file cannot be read back (the message names which)."""
+
+
+@store.plain_data("export.Column")  # results made of columns can be kept as runner blocks
 @dataclass(frozen=True)
 class Column:
-    """A column of run data.
+    """One named quantity of a table, with its unit.
 
     Attributes:
-        values: shape (T,), (T, k) or, for symmetric matrices, (T, k, k).
-        unit: SI unit (``"m"``, ``"rad"``, ``"m/s"``...), ``"1"`` for dimensionless, ``"bool"``,
-            ``"enum"``, ``"index"``, ``"text"``.
-        description: what it is, with its frame.
-        components: names of the last axis for (T, k) and (T, k, k) columns.
-        nullable: whether NaN (float) marks a missing value (written as null).
+        values: shape (T,), (T, k) or, for a symmetric matrix per row, (T, k, k); dtype bool,
+            signed or unsigned integer, float32, float64 or unicode.
+        unit: SI unit (``"m"``, ``"m/s"``, ``"rad"``, ``"m2"``), ``"1"`` for dimensionless,
+            ``"bool"``, ``"enum"``, ...
+        description: what the quantity is (frame, sign convention, ...).
+        components: names of the last axis for (T, k) and (T, k, k) (e.g. ``("x", "y", "z")``);
+            empty for (T,).
+        nullable: whether NaN marks a missing value (written as null); otherwise a NaN is an
+            error.
     """
 
     values: np.ndarray
@@ -27,22 +73,212 @@ class Column:
     nullable: bool = False
 
 
-def write_parquet(path, columns, metadata) -> None:  # provisional: replaced by the full writer
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+def _fail(name: str, what: str) -> ExportError:
+    return ExportError(f"column {name!r}: {what}")
 
-    fields, arrays = [], []
-    for name, c in columns.items():
-        v = np.asarray(c.values)
-        flat = v.reshape(len(v), -1) if v.ndim > 1 else v[:, None]
-        for j in range(flat.shape[1]):
-            fields.append(
-                pa.field(
-                    f"{name}.{j}" if v.ndim > 1 else name,
-                    pa.from_numpy_dtype(flat.dtype),
-                    metadata={"unit": c.unit},
-                )
+
+def _check(name: Any, col: Any) -> int:
+    """Validate one column; return its number of rows."""
+    if type(name) is not str or not name:
+        raise ExportError(f"column name {name!r}: must be a non-empty string")
+    if not isinstance(col, Column):
+        raise _fail(name, f"{type(col).__name__} is not a Column")
+    v = col.values
+    if not isinstance(v, np.ndarray):
+        raise _fail(name, f"values are a {type(v).__name__}, not a numpy array")
+    k = v.dtype.kind
+    if not (k in "biuU" or (k == "f" and v.dtype.itemsize in (4, 8))):
+        raise _fail(name, f"dtype {v.dtype} is not bool, int, uint, float32, float64 or unicode")
+    if v.ndim not in (1, 2, 3):
+        raise _fail(name, f"shape {v.shape}: must be (T,), (T, k) or (T, k, k)")
+    if type(col.unit) is not str or not col.unit:
+        raise _fail(name, f"unit {col.unit!r}: must be a non-empty string")
+    if type(col.description) is not str:
+        raise _fail(name, "description must be a string")
+    comps = col.components
+    if type(comps) is not tuple or any(type(c) is not str or not c for c in comps):
+        raise _fail(name, f"components {comps!r}: must be a tuple of non-empty strings")
+    if len(set(comps)) != len(comps):
+        raise _fail(name, f"components {comps!r} repeat a name")
+    if v.ndim == 1 and comps:
+        raise _fail(name, f"shape {v.shape} has no components, got {comps!r}")
+    if v.ndim >= 2 and len(comps) != v.shape[1]:
+        raise _fail(name, f"shape {v.shape} needs {v.shape[1]} component names, got {comps!r}")
+    if v.ndim == 3:
+        if v.shape[2] != v.shape[1]:
+            raise _fail(name, f"shape {v.shape}: a (T, k, k) column must be square")
+        if not np.array_equal(_bits(v), _bits(v.transpose(0, 2, 1))):
+            t, i, j = np.argwhere(_bits(v) != _bits(v.transpose(0, 2, 1)))[0]
+            raise _fail(
+                name,
+                f"not symmetric (bit for bit): row {t} [{i}, {j}] = {v[t, i, j]!r} but "
+                f"[{j}, {i}] = {v[t, j, i]!r}",
             )
-            arrays.append(pa.array(flat[:, j]))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    pq.write_table(pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata=metadata)), path)
+    if k == "f" and not col.nullable:
+        nan = np.isnan(v)
+        if nan.any():
+            at = tuple(int(x) for x in np.argwhere(nan)[0])
+            raise _fail(
+                name, f"NaN at index {at} (declare the column nullable=True if NaN means missing)"
+            )
+    return v.shape[0]
+
+
+def _bits(v: np.ndarray) -> np.ndarray:
+    """The array's values as unsigned integers of the same size (floats compare by their bits)."""
+    if v.dtype.kind == "f":
+        return np.ascontiguousarray(v).view(f"u{v.dtype.itemsize}")
+    return v
+
+
+def _field_parts(name: str, col: Column) -> list[tuple[str, tuple[int, ...], np.ndarray]]:
+    v, comps = col.values, col.components
+    if v.ndim == 1:
+        return [(name, (), v)]
+    if v.ndim == 2:
+        return [(f"{name}.{c}", (i,), v[:, i]) for i, c in enumerate(comps)]
+    k = v.shape[1]
+    return [
+        (f"{name}.{comps[i]}.{comps[j]}", (i, j), v[:, i, j]) for i in range(k) for j in range(i, k)
+    ]
+
+
+def _arrow(values: np.ndarray, nullable: bool) -> pa.Array:
+    native = np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("="))
+    if nullable and native.dtype.kind == "f":
+        return pa.array(native, mask=np.isnan(native))
+    return pa.array(native)
+
+
+def write_parquet(
+    path: str | Path, columns: Mapping[str, Column], metadata: Mapping[str, str]
+) -> None:
+    """Write columns with their units as one Parquet file, atomically.
+
+    Args:
+        path: the file to write (replaced whole, or not at all; its folder is created).
+        columns: the table's columns by name, in field order; all with the same number of rows.
+        metadata: the table's metadata (string keys and values), e.g. experiment, seed, run.
+
+    Raises:
+        ExportError: naming the column (or key) and what is wrong, before anything is written.
+    """
+    if not columns:
+        raise ExportError("no columns to write")
+    rows = {name: _check(name, col) for name, col in columns.items()}
+    if len(set(rows.values())) > 1:
+        raise ExportError(f"columns have different numbers of rows: {rows}")
+    for key, value in metadata.items():
+        if type(key) is not str or type(value) is not str:
+            raise ExportError(f"metadata {key!r} = {value!r}: keys and values must be strings")
+        if key == FORMAT_KEY or key.startswith("ARROW:"):
+            raise ExportError(f"metadata key {key!r} is reserved")
+    fields, arrays = [], []
+    for name, col in columns.items():
+        shape = list(col.values.shape[1:])
+        for fname, index, values in _field_parts(name, col):
+            meta = {
+                "unit": col.unit,
+                "description": col.description,
+                "group": name,
+                "shape": json.dumps(shape),
+                "index": json.dumps(list(index)),
+                "components": json.dumps(list(col.components)),
+                "dtype": col.values.dtype.str,
+                "nullable": json.dumps(col.nullable),
+            }
+            arr = _arrow(values, col.nullable)
+            fields.append(pa.field(fname, arr.type, nullable=col.nullable, metadata=meta))
+            arrays.append(arr)
+    names = [f.name for f in fields]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise ExportError(f"field names {dup} occur twice (a column name and a component clash)")
+    schema = pa.schema(fields, metadata={**metadata, FORMAT_KEY: FORMAT_VERSION})
+    table = pa.Table.from_arrays(arrays, schema=schema)
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, out)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def _group_meta(path: Path, field: pa.Field) -> dict[str, Any]:
+    raw = field.metadata or {}
+    try:
+        meta = {k: raw[k.encode()].decode("utf-8") for k in _FIELD_KEYS}
+        for k in ("shape", "index", "components", "nullable"):
+            meta[k] = json.loads(meta[k])
+        dtype = np.dtype(meta["dtype"])
+    except (KeyError, ValueError, TypeError) as exc:
+        raise ExportError(
+            f"{path}: field {field.name!r} lacks the metadata of tasks.core.export ({exc})"
+        ) from None
+    if dtype.kind not in "biufU" or dtype.fields is not None:
+        raise ExportError(f"{path}: field {field.name!r}: dtype {meta['dtype']!r} is not supported")
+    meta["dtype"] = dtype
+    return meta
+
+
+def read_parquet(path: str | Path) -> tuple[dict[str, Column], dict[str, str]]:
+    """Read a file written by :func:`write_parquet` back into its columns, bit for bit.
+
+    Args:
+        path: the Parquet file.
+
+    Returns:
+        ``(columns in their written order, the table's metadata)``; values have the dtype and
+        shape they were written with (a nullable column's nulls read back as NaN).
+
+    Raises:
+        ExportError: if the file cannot be read or was not written by :func:`write_parquet`.
+    """
+    p = Path(path)
+    try:
+        table = pq.read_table(p)
+    except (OSError, pa.ArrowException) as exc:
+        raise ExportError(f"{p}: cannot read Parquet: {' '.join(str(exc).split())}") from None
+    raw_meta = {k.decode(): v.decode() for k, v in (table.schema.metadata or {}).items()}
+    if raw_meta.pop(FORMAT_KEY, None) != FORMAT_VERSION:
+        raise ExportError(f"{p}: not written by tasks.core.export (no {FORMAT_KEY} = 1)")
+    metadata = {k: v for k, v in raw_meta.items() if not k.startswith("ARROW:")}
+    groups: dict[str, dict[str, Any]] = {}
+    parts: dict[str, dict[tuple[int, ...], np.ndarray]] = {}
+    for i, field in enumerate(table.schema):
+        meta = _group_meta(p, field)
+        name = meta["group"]
+        first = groups.setdefault(name, meta)
+        if any(first[k] != meta[k] for k in _FIELD_KEYS if k != "index"):
+            raise ExportError(f"{p}: field {field.name!r} disagrees with column {name!r}")
+        chunked = table.column(i)
+        if chunked.null_count and not meta["nullable"]:
+            raise ExportError(f"{p}: field {field.name!r} holds nulls but is not nullable")
+        values = np.asarray(chunked.to_numpy(), dtype=meta["dtype"])
+        parts.setdefault(name, {})[tuple(meta["index"])] = values
+    columns = {}
+    for name, meta in groups.items():
+        shape, got = meta["shape"], parts[name]
+        if len(shape) == 0:
+            want = [()]
+        elif len(shape) == 1:
+            want = [(i,) for i in range(shape[0])]
+        else:
+            want = [(i, j) for i in range(shape[0]) for j in range(i, shape[0])]
+        if sorted(got) != want:
+            raise ExportError(f"{p}: column {name!r} has fields {sorted(got)}, expected {want}")
+        n = table.num_rows
+        values = np.empty((n, *shape), dtype=meta["dtype"])
+        for idx, v in got.items():
+            values[(slice(None), *idx)] = v
+            if len(idx) == 2:
+                values[:, idx[1], idx[0]] = v
+        columns[name] = Column(
+            values, meta["unit"], meta["description"], tuple(meta["components"]), meta["nullable"]
+        )
+    return columns, metadata

@@ -11,9 +11,10 @@ registered, whatever its file name.
 An experiment is split in two pure parts so that the runner can distribute it:
 
 * :meth:`Experiment.run_block` computes a block of Monte Carlo runs (a tuple of run indices) and
-  returns plain data (:mod:`tasks.core.store`). It must depend only on ``(scenario, seed, runs)``:
-  each run draws from its own streams (:mod:`bauv_sim.rng`), so a block's result does not depend
-  on which worker ran it.
+  returns its result as plain data (:mod:`tasks.core.store`: numbers, strings, arrays, lists,
+  tuples, dicts and registered dataclasses), which the runner keeps on disk. It must depend only on
+  ``(scenario, seed, runs)``: each run draws from its own streams (:mod:`bauv_sim.rng`), so a
+  block's result does not depend on which worker ran it.
 * :meth:`Experiment.report` turns the block results, in block order, into ``metrics.json``, tables,
   figures and the recording of one run.
 """

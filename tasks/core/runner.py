@@ -1,12 +1,15 @@
 """The Monte Carlo runner: blocks of runs on an :class:`~concurrent.futures.Executor`, on disk.
 
 A batch is split into blocks of a size fixed by the scenario (:meth:`Experiment.block_size`). Each
-block is computed by :meth:`Experiment.run_block` in a worker and written to
-``<out>/blocks/block-NNNNNN.pkl`` as soon as it finishes (atomically: a file that exists is whole).
-When every block is there, :meth:`Experiment.report` reads them back **in block order** and writes
-the outputs. Because a run's numbers depend only on ``(scenario, seed, run index)`` and blocks are
-reduced in a fixed order, the outputs are bit-identical whatever the executor and worker count, and
-a batch interrupted and resumed with ``--resume`` equals one run straight through.
+block is computed by :meth:`Experiment.run_block` in a worker, encoded there as plain data
+(:mod:`tasks.core.store`, a format that cannot execute code when read) and written to
+``<out>/blocks/block-NNNNNN.zip`` as soon as it finishes, then its sha256 to
+``block-NNNNNN.sha256`` (``sha256sum -c`` reads it); both are written atomically, and a block
+counts as saved only when both files are there. When every block is saved,
+:meth:`Experiment.report` reads them back **in block order** and writes the outputs. Because a
+run's numbers depend only on ``(scenario, seed, run index)``, blocks are reduced in a fixed order
+and the encoding keeps every bit, the outputs are bit-identical whatever the executor and worker
+count, and a batch interrupted and resumed with ``--resume`` equals one run straight through.
 
 Executors: ``local`` (in-process for one worker, else a :class:`ProcessPoolExecutor` with the
 ``spawn`` start method) and ``dask`` (``distributed.Client(address)``, or a local cluster with
@@ -15,6 +18,14 @@ Executors: ``local`` (in-process for one worker, else a :class:`ProcessPoolExecu
 The run folder holds ``run.json`` (``state`` is ``incomplete`` until the report is written, then
 ``complete``), ``scenario.toml`` (the resolved scenario: ``bauv run NAME --scenario FILE`` repeats
 it), ``blocks/`` and the report's files.
+
+What ``--resume`` checks before it writes anything (any failure is a :class:`ConfigError`):
+``run.json`` is whole and every field is there with its type (format version, experiment, seed,
+runs, block size, number of blocks, the sha256 of ``scenario.toml``, the store version); the
+request agrees with it (experiment, seed, runs; no new scenario); ``scenario.toml`` still has its
+recorded sha256 and gives the recorded block layout; and every saved block's bytes have their
+recorded sha256, decode, and carry a header (format version, experiment, seed, block index, run
+indices, scenario sha256) that agrees with the batch. No file of a run folder is ever unpickled.
 """
 
 from __future__ import annotations
@@ -22,10 +33,11 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import datetime as _dt
+import hashlib
 import json
 import multiprocessing
 import os
-import pickle
+import re
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -33,17 +45,24 @@ from pathlib import Path
 from typing import Any
 
 import tomli_w
+import tomllib
 
-from bauv_sim.config import Config, load_config, read_toml, to_plain, validate
+from bauv_sim.config import Config, load_config, to_plain, validate
 from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.rng import check_seed
-from tasks.core import registry
+from tasks.core import registry, store
 from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 RUN_FILE = "run.json"
 SCENARIO_FILE = "scenario.toml"
 BLOCK_DIR = "blocks"
-FORMAT_VERSION = 1
+BLOCK_SUFFIX = ".zip"
+DIGEST_SUFFIX = ".sha256"
+FORMAT_VERSION = 2
+"""Version of the run folder's layout. 1 kept pickled blocks (never read: a crafted pickle runs
+code when loaded); 2 keeps plain-data blocks with a sha256 file each and the scenario's sha256."""
+STATES = ("incomplete", "complete")
+_HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
 class BatchInterrupted(BauvSimError):
@@ -64,6 +83,7 @@ class BatchPlan:
         seed: the batch seed.
         n_runs: the number of runs.
         blocks: the run indices of each block, in order.
+        scenario_sha256: sha256 (hex) of the scenario as written to ``scenario.toml``.
     """
 
     experiment: Experiment
@@ -71,6 +91,7 @@ class BatchPlan:
     seed: int
     n_runs: int
     blocks: tuple[tuple[int, ...], ...]
+    scenario_sha256: str
 
 
 def plan_batch(
@@ -104,7 +125,17 @@ def plan_batch(
         raise ConfigError(f"runs = {n}: {name} allows at most {exp.max_runs}")
     scenario = load_config(exp.scenario_type, exp.preset, scenario_files, overrides)
     exp.check(scenario, n)
-    return BatchPlan(exp, scenario, seed, n, _blocks(n, exp.block_size(scenario)))
+    digest = _sha256(scenario_text(scenario).encode("utf-8"))
+    return BatchPlan(exp, scenario, seed, n, _blocks(n, exp.block_size(scenario)), digest)
+
+
+def scenario_text(scenario: Config) -> str:
+    """The resolved scenario as TOML, as written to ``scenario.toml``."""
+    return tomli_w.dumps(to_plain(scenario))
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
 
 
 def _blocks(n_runs: int, size: int) -> tuple[tuple[int, ...], ...]:
@@ -136,7 +167,93 @@ def atomic_write_text(path: Path, text: str) -> None:
 
 
 def _block_path(out_dir: Path, index: int) -> Path:
-    return out_dir / BLOCK_DIR / f"block-{index:06d}.pkl"
+    return out_dir / BLOCK_DIR / f"block-{index:06d}{BLOCK_SUFFIX}"
+
+
+def _digest_path(out_dir: Path, index: int) -> Path:
+    return out_dir / BLOCK_DIR / f"block-{index:06d}{DIGEST_SUFFIX}"
+
+
+def _saved(out_dir: Path, index: int) -> bool:
+    """Whether block ``index`` is saved: its file and its sha256 file are both there."""
+    return _block_path(out_dir, index).is_file() and _digest_path(out_dir, index).is_file()
+
+
+def _save_block(out_dir: Path, index: int, payload: bytes) -> None:
+    """Write a block's bytes, then its sha256 (a crash in between leaves it unsaved)."""
+    path = _block_path(out_dir, index)
+    _digest_path(out_dir, index).unlink(missing_ok=True)
+    _atomic_write_bytes(path, payload)
+    atomic_write_text(_digest_path(out_dir, index), f"{_sha256(payload)}  {path.name}\n")
+
+
+def _block_header(plan: BatchPlan, index: int) -> dict[str, Any]:
+    """What a block's file must say about itself."""
+    return {
+        "format_version": FORMAT_VERSION,
+        "experiment": plan.experiment.name,
+        "seed": plan.seed,
+        "block": index,
+        "runs": list(plan.blocks[index]),
+        "scenario_sha256": plan.scenario_sha256,
+    }
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal and of the same types (``True`` is not ``1``)."""
+    if type(a) is not type(b):
+        return False
+    if type(a) is list:
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    return a == b
+
+
+def load_block(plan: BatchPlan, out_dir: Path, index: int) -> Any:
+    """Read back a saved block, checking its sha256, its encoding and its header.
+
+    Args:
+        plan: the batch.
+        out_dir: its folder.
+        index: the block index.
+
+    Returns:
+        The block's result as :meth:`Experiment.run_block` returned it.
+
+    Raises:
+        ConfigError: naming the file and what is wrong.
+    """
+    path, dpath = _block_path(out_dir, index), _digest_path(out_dir, index)
+    try:
+        recorded = dpath.read_bytes()
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(f"{exc.filename!r}: cannot read it ({exc.strerror})") from None
+    match = re.fullmatch(rb"([0-9a-f]{64})  " + re.escape(path.name.encode()) + rb"\n", recorded)
+    if match is None:
+        raise ConfigError(f"{str(dpath)!r}: not a line '<sha256>  {path.name}'")
+    actual, expected_digest = _sha256(data), match.group(1).decode("ascii")
+    if actual != expected_digest:
+        raise ConfigError(
+            f"{str(path)!r}: its sha256 is {actual[:16]}... but {dpath.name} records "
+            f"{expected_digest[:16]}...: the block was changed or damaged (delete both files to "
+            "compute it again)"
+        )
+    try:
+        stored = store.loads(data, repr(str(path)))
+    except store.StoreError as exc:
+        raise ConfigError(str(exc)) from None
+    expected = _block_header(plan, index)
+    if set(stored.header) != set(expected):
+        raise ConfigError(
+            f"{str(path)!r}: header has fields {sorted(stored.header)}, expected {sorted(expected)}"
+        )
+    for key, want in expected.items():
+        if not _same(stored.header[key], want):
+            raise ConfigError(
+                f"{str(path)!r}: header says {key} = {stored.header[key]!r} but this batch has "
+                f"{want!r}"
+            )
+    return stored.value
 
 
 def _run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
@@ -147,6 +264,8 @@ def _run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
         "n_runs": plan.n_runs,
         "block_size": len(plan.blocks[0]),
         "n_blocks": len(plan.blocks),
+        "scenario_sha256": plan.scenario_sha256,
+        "store_version": store.VERSION,
         "state": state,
     }
 
@@ -166,9 +285,37 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
             f"out = {str(out_dir)!r}: folder exists and is not empty; "
             "use --resume to complete it or choose another --out"
         )
+    text = scenario_text(plan.scenario)
+    if _sha256(text.encode("utf-8")) != plan.scenario_sha256:
+        raise ValueError("plan.scenario_sha256 is not the digest of plan.scenario")
     out_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out_dir / SCENARIO_FILE, tomli_w.dumps(to_plain(plan.scenario)))
+    atomic_write_text(out_dir / SCENARIO_FILE, text)
     _write_run_record(out_dir, plan, "incomplete")
+
+
+def _read_record(out_dir: Path) -> dict[str, Any]:
+    path = out_dir / RUN_FILE
+    if not path.is_file():
+        raise ConfigError(f"out = {str(out_dir)!r}: no {RUN_FILE}; nothing to resume")
+    try:
+        record = json.loads(path.read_bytes().decode("utf-8"))
+    except (OSError, ValueError, RecursionError) as exc:
+        what = " ".join(str(exc).split())
+        raise ConfigError(f"--resume: {str(path)!r} is not valid JSON ({what})") from None
+    if type(record) is not dict:
+        raise ConfigError(f"--resume: {str(path)!r} is not a JSON object")
+    return record
+
+
+def _record_field(record: dict[str, Any], out_dir: Path, key: str, kind: type) -> Any:
+    where = str(out_dir / RUN_FILE)
+    if key not in record:
+        raise ConfigError(f"--resume: {where!r}: field {key!r} is missing")
+    value = record[key]
+    if type(value) is not kind:
+        must = "an integer" if kind is int else "a string"
+        raise ConfigError(f"--resume: {where!r}: {key} = {value!r}: must be {must}")
+    return value
 
 
 def plan_resume(
@@ -179,44 +326,109 @@ def plan_resume(
     overrides: Sequence[str],
     scenario_files: Sequence[str | Path],
 ) -> BatchPlan:
-    """Rebuild the plan of an interrupted batch from its folder.
+    """Rebuild the plan of an interrupted batch from its folder, checking the folder first.
+
+    Nothing is written. See the module docstring for the checks.
 
     Raises:
-        ConfigError: if the folder is not a batch of ``name`` or the request contradicts it.
+        ConfigError: if the folder is not a batch of ``name``, the request contradicts it, or a
+            file of it was changed, damaged or does not belong to it.
     """
-    record_path = out_dir / RUN_FILE
-    if not record_path.is_file():
-        raise ConfigError(f"out = {str(out_dir)!r}: no {RUN_FILE}; nothing to resume")
-    record = json.loads(record_path.read_text())
-    if record.get("experiment") != name:
+    record = _read_record(out_dir)
+    where = str(out_dir / RUN_FILE)
+    version = _record_field(record, out_dir, "format_version", int)
+    if version != FORMAT_VERSION:
         raise ConfigError(
-            f"--resume: {str(out_dir)!r} holds {record.get('experiment')!r}, not {name!r}"
+            f"--resume: {where!r}: format_version = {version}: this bauv-sim resumes format "
+            f"{FORMAT_VERSION} only (format 1 kept pickled blocks, which are never read); start "
+            "the batch again"
         )
+    experiment = _record_field(record, out_dir, "experiment", str)
+    if experiment != name:
+        raise ConfigError(f"--resume: {str(out_dir)!r} holds {experiment!r}, not {name!r}")
+    rec_seed = _record_field(record, out_dir, "seed", int)
+    rec_runs = _record_field(record, out_dir, "n_runs", int)
+    block_size = _record_field(record, out_dir, "block_size", int)
+    n_blocks = _record_field(record, out_dir, "n_blocks", int)
+    digest = _record_field(record, out_dir, "scenario_sha256", str)
+    store_version = _record_field(record, out_dir, "store_version", int)
+    state = _record_field(record, out_dir, "state", str)
+    try:
+        check_seed(rec_seed)
+    except ConfigError as exc:
+        raise ConfigError(f"--resume: {where!r}: {exc}") from None
+    if rec_runs < 1 or block_size < 1:
+        raise ConfigError(
+            f"--resume: {where!r}: n_runs = {rec_runs}, block_size = {block_size}: must be >= 1"
+        )
+    layout = _blocks(rec_runs, block_size)
+    if n_blocks != len(layout):
+        raise ConfigError(
+            f"--resume: {where!r}: n_blocks = {n_blocks} but {rec_runs} runs in blocks of "
+            f"{block_size} make {len(layout)}"
+        )
+    if not _HEX64.fullmatch(digest):
+        raise ConfigError(f"--resume: {where!r}: scenario_sha256 = {digest!r}: not a sha256")
+    if store_version != store.VERSION:
+        raise ConfigError(
+            f"--resume: {where!r}: store_version = {store_version}: this bauv-sim reads "
+            f"version {store.VERSION}"
+        )
+    if state not in STATES:
+        raise ConfigError(f"--resume: {where!r}: state = {state!r}: must be one of {STATES}")
     if overrides or scenario_files:
         raise ConfigError(
             "--resume: the scenario of a started batch cannot change (drop --set/--scenario)"
         )
-    if seed is not None and seed != record["seed"]:
-        raise ConfigError(
-            f"--resume: seed = {seed} but the batch was started with {record['seed']}"
-        )
-    if n_runs is not None and n_runs != record["n_runs"]:
-        raise ConfigError(
-            f"--resume: runs = {n_runs} but the batch was started with {record['n_runs']}"
-        )
+    if seed is not None and seed != rec_seed:
+        raise ConfigError(f"--resume: seed = {seed} but the batch was started with {rec_seed}")
+    if n_runs is not None and n_runs != rec_runs:
+        raise ConfigError(f"--resume: runs = {n_runs} but the batch was started with {rec_runs}")
     exp = registry.get(name)
-    scenario = validate(exp.scenario_type, read_toml(out_dir / SCENARIO_FILE))
-    n = int(record["n_runs"])
-    return BatchPlan(exp, scenario, int(record["seed"]), n, _blocks(n, int(record["block_size"])))
+    scn_path = out_dir / SCENARIO_FILE
+    try:
+        scn_bytes = scn_path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(f"--resume: cannot read {str(scn_path)!r}: {exc.strerror}") from None
+    if _sha256(scn_bytes) != digest:
+        raise ConfigError(
+            f"--resume: {str(scn_path)!r} was changed since the batch started (its sha256 is "
+            f"{_sha256(scn_bytes)[:16]}..., {RUN_FILE} records {digest[:16]}...); restore it or "
+            "start a new batch"
+        )
+    try:
+        data = tomllib.loads(scn_bytes.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ConfigError(f"--resume: {str(scn_path)!r}: {exc}") from None
+    scenario = validate(exp.scenario_type, data)
+    if _blocks(rec_runs, exp.block_size(scenario)) != layout:
+        raise ConfigError(
+            f"--resume: {where!r}: block_size = {block_size} but the scenario's runner gives "
+            f"blocks of {exp.block_size(scenario)}"
+        )
+    exp.check(scenario, rec_runs)
+    plan = BatchPlan(exp, scenario, rec_seed, rec_runs, layout, digest)
+    for i in range(len(layout)):
+        if _saved(out_dir, i):
+            try:
+                load_block(plan, out_dir, i)
+            except ConfigError as exc:
+                raise ConfigError(f"--resume: {exc}") from None
+    return plan
 
 
 def _run_block_in_worker(
-    name: str, scenario_data: dict[str, Any], seed: int, runs: tuple[int, ...]
+    name: str,
+    scenario_data: dict[str, Any],
+    seed: int,
+    runs: tuple[int, ...],
+    header: dict[str, Any],
 ) -> bytes:
-    """Worker entry point: re-create the experiment by name and compute one block."""
+    """Worker entry point: re-create the experiment by name, compute one block and encode it
+    (with its header) as the bytes of its file (:func:`tasks.core.store.dumps`)."""
     exp = registry.get(name)
     scenario = validate(exp.scenario_type, scenario_data)
-    return pickle.dumps(exp.run_block(scenario, seed, runs), protocol=pickle.HIGHEST_PROTOCOL)
+    return store.dumps(exp.run_block(scenario, seed, runs), header)
 
 
 class InlineExecutor(cf.Executor):
@@ -316,7 +528,7 @@ def execute(
     """
     from tqdm import tqdm
 
-    todo = [i for i in range(len(plan.blocks)) if not _block_path(out_dir, i).is_file()]
+    todo = [i for i in range(len(plan.blocks)) if not _saved(out_dir, i)]
     done_runs = plan.n_runs - sum(len(plan.blocks[i]) for i in todo)
     data = to_plain(plan.scenario)
     failures: list[str] = []
@@ -333,7 +545,12 @@ def execute(
             with make_executor(executor, workers, address) as ex:
                 futures = {
                     ex.submit(
-                        _run_block_in_worker, plan.experiment.name, data, plan.seed, plan.blocks[i]
+                        _run_block_in_worker,
+                        plan.experiment.name,
+                        data,
+                        plan.seed,
+                        plan.blocks[i],
+                        _block_header(plan, i),
                     ): i
                     for i in todo
                 }
@@ -349,7 +566,7 @@ def execute(
                                 f"{type(exc).__name__}: {exc}"
                             )
                             continue
-                        _atomic_write_bytes(_block_path(out_dir, i), payload)
+                        _save_block(out_dir, i, payload)
                         bar.update(len(plan.blocks[i]))
                 except KeyboardInterrupt:
                     for f in futures:
@@ -357,7 +574,7 @@ def execute(
                     raise
     except KeyboardInterrupt:
         bar.close()
-        n_done = sum(_block_path(out_dir, i).is_file() for i in range(len(plan.blocks)))
+        n_done = sum(_saved(out_dir, i) for i in range(len(plan.blocks)))
         raise BatchInterrupted(
             f"interrupted: {n_done} of {len(plan.blocks)} blocks are saved in {out_dir}; "
             f"complete the batch with: bauv run {plan.experiment.name} --resume --out {out_dir}"
@@ -371,8 +588,7 @@ def execute(
 
     def blocks() -> Iterator[Any]:
         for i in range(len(plan.blocks)):
-            with _block_path(out_dir, i).open("rb") as fh:
-                yield pickle.load(fh)
+            yield load_block(plan, out_dir, i)
 
     try:
         summary = plan.experiment.report(

@@ -52,6 +52,7 @@ from tasks.closed_loop.world import (
     standard_vehicle,
     waypoint_guidance,
 )
+from tasks.core import store
 from tasks.core.registry import ReportContext, ReportSummary, register
 
 METHODS = ("uncorrected", "corrected", "baseline")
@@ -356,6 +357,7 @@ def current_metrics(v: VehicleRun) -> dict[str, float]:
     }
 
 
+@store.plain_data("missions.correction.CorrectionRunResult")
 @dataclass
 class CorrectionRunResult:
     """Both flights of one run (compensated and direct course on leg 3), as plain data.

@@ -71,7 +71,7 @@ from nav.metrics import (
     series_stats,
 )
 from nav.models import CourseSpeedDepthMotion, UsblMeasurement
-from tasks.core import figures
+from tasks.core import figures, store
 from tasks.core.recording import COLORS, Recording
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
@@ -82,6 +82,10 @@ SIGMA_SOG_M_S = 0.5 * KNOT_M_S
 
 # The paper's tables: (min, max, mean) distance to the reference position, m, for EKF, DR, USBL.
 PaperRow = tuple[float, float, float]
+
+# the block accumulators are plain data (blocks are kept on disk for --resume)
+store.plain_data("nav.metrics.SeriesSum")(SeriesSum)
+store.plain_data("nav.metrics.Histogram")(Histogram)
 
 
 def _rows(ekf: PaperRow, dr: PaperRow, usbl: PaperRow) -> dict[str, PaperRow]:
@@ -446,6 +450,7 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
 # Block reduction
 
 
+@store.plain_data("paper000.Paper000Block")
 @dataclass
 class Paper000Block:
     """What a block of passages contributes to the report (no full paths except a few).

@@ -42,6 +42,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import velocity_from_course_speed
 from bauv_sim.kinematic import seed001 as kin
 from nav import correction as corr
+from tasks.core import store
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
 
@@ -167,9 +168,10 @@ def _cell_key(cell: tuple[float, float, float]) -> str:
 # Missions
 
 
+@store.plain_data("paper001.MissionBlock")
 @dataclass(frozen=True)
 class MissionBlock:
-    """The results of a block of missions (picklable).
+    """The results of a block of missions (plain data: kept on disk by the runner).
 
     Attributes:
         runs: the mission indices.

@@ -1,7 +1,11 @@
 """Same seed, same numbers, bit for bit: repeated, on 1 or N workers, on Dask, after a resume."""
 
+import hashlib
 import json
 import os
+import pathlib
+import pickle
+import shutil
 import signal
 import subprocess
 import sys
@@ -84,7 +88,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     deadline = time.time() + 60
     while time.time() < deadline:
         blocks = out / "blocks"
-        if blocks.is_dir() and len(list(blocks.glob("block-*.pkl"))) >= 5:
+        if blocks.is_dir() and len(list(blocks.glob("block-*.sha256"))) >= 5:
             break
         time.sleep(0.02)
     os.kill(proc.pid, signal.SIGINT)
@@ -93,7 +97,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     assert "--resume" in err and "Traceback" not in err
     assert not (out / "metrics.json").exists()
     assert json.loads((out / "run.json").read_text())["state"] == "incomplete"
-    n_saved = len(list((out / "blocks").glob("block-*.pkl")))
+    n_saved = len(list((out / "blocks").glob("block-*.sha256")))
     assert 5 <= n_saved < 100
     res = subprocess.run(
         [
@@ -113,3 +117,227 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     assert res.returncode == 0, res.stderr
     assert json.loads((out / "run.json").read_text())["state"] == "complete"
     assert _bytes(out) == _bytes(straight)
+
+
+# ---------------------------------------------------------------------------------------------
+# --resume refuses a folder that was changed, damaged or mixed with another batch
+
+
+RESUME_SET = [
+    "passage.duration_s=100",
+    "passage.closest_approach_time_s=50",
+    "report.figures=false",
+    "report.recording=false",
+    "runner.block_size=5",
+]
+
+
+def _interrupted(out, seed):
+    """A finished 12-run batch (3 blocks) made to look interrupted before its last block."""
+    run("paper-000/test-1", 12, seed, out, RESUME_SET, progress=False)
+    metrics = _bytes(out)
+    for name in ("block-000002.zip", "block-000002.sha256"):
+        (out / "blocks" / name).unlink()
+    for f in [*out.glob("*.md"), out / "metrics.json", *out.glob("tables/*")]:
+        f.unlink()
+    record = json.loads((out / "run.json").read_text())
+    (out / "run.json").write_text(json.dumps({**record, "state": "incomplete"}))
+    return metrics
+
+
+@pytest.fixture(scope="module")
+def batches(tmp_path_factory):
+    root = tmp_path_factory.mktemp("resume")
+    return {
+        "metrics": _interrupted(root / "seed2", 2),
+        "seed2": root / "seed2",
+        "seed3": root / "seed3",
+        "metrics3": _interrupted(root / "seed3", 3),
+    }
+
+
+def _snapshot(folder):
+    return {p.relative_to(folder): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _resume(out, capsys, *extra):
+    from tasks.core import cli
+
+    capsys.readouterr()
+    try:
+        cli.main(["run", "paper-000/test-1", "--resume", "--out", str(out), "--quiet", *extra])
+        code = 0
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+def _flip_block_byte(out, other):
+    path = out / "blocks" / "block-000001.zip"
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0x01
+    path.write_bytes(bytes(data))
+
+
+def _sidecar(path):
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    path.with_suffix(".sha256").write_text(f"{digest}  {path.name}\n")
+
+
+def _pickle_block(out, other):
+    path = out / "blocks" / "block-000000.zip"
+    path.write_bytes(pickle.dumps(_Touch(out.parent / f"pwned-{out.name}")))
+    _sidecar(path)  # its digest recorded too: only the format stops it
+
+
+def _block_of_another_seed(out, other):
+    for name in ("block-000000.zip", "block-000000.sha256"):
+        shutil.copy(other / "blocks" / name, out / "blocks" / name)
+
+
+def _block_of_another_index(out, other):
+    path = out / "blocks" / "block-000000.zip"
+    shutil.copy(out / "blocks" / "block-000001.zip", path)
+    _sidecar(path)
+
+
+def _garbage_sidecar(out, other):
+    (out / "blocks" / "block-000001.sha256").write_text("not a digest\n")
+
+
+def _edit_scenario(out, other):
+    with (out / "scenario.toml").open("a") as fh:
+        fh.write("# edited\n")
+
+
+def _scenario_with_another_layout(out, other):
+    path = out / "scenario.toml"
+    path.write_text(path.read_text().replace("block_size = 5", "block_size = 4"))
+    _edit_record(out, scenario_sha256=hashlib.sha256(path.read_bytes()).hexdigest())
+
+
+def _edit_record(out, **fields):
+    path = out / "run.json"
+    record = {**json.loads(path.read_text()), **fields}
+    path.write_text(json.dumps({k: v for k, v in record.items() if v is not _DROP}))
+
+
+_DROP = object()
+
+
+def _record(text):
+    def tamper(out, other):
+        (out / "run.json").write_text(text)
+
+    return tamper
+
+
+def _truncated_record(out, other):
+    path = out / "run.json"
+    path.write_bytes(path.read_bytes()[: len(path.read_bytes()) // 2])
+
+
+def _fields(**fields):
+    return lambda out, other: _edit_record(out, **fields)
+
+
+class _Touch:
+    """A pickle payload that creates a file when it is unpickled."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __reduce__(self):
+        return (pathlib.Path.touch, (self.path,))
+
+
+@pytest.mark.parametrize(
+    ("tamper", "fragment"),
+    [
+        (_flip_block_byte, "block-000001.zip': its sha256 is"),
+        (_pickle_block, "block-000000.zip': not a bauv-sim/plain-data file"),
+        (_block_of_another_seed, "header says seed = 3 but this batch has 2"),
+        (_block_of_another_index, "header says block = 1 but this batch has 0"),
+        (_garbage_sidecar, "block-000001.sha256': not a line"),
+        (_edit_scenario, "scenario.toml' was changed since the batch started"),
+        (_scenario_with_another_layout, "block_size = 5 but the scenario's runner gives"),
+        (_record("{ this is not json"), "is not valid JSON"),
+        (_truncated_record, "is not valid JSON"),
+        (_record("[1, 2]"), "is not a JSON object"),
+        (_fields(scenario_sha256=_DROP), "field 'scenario_sha256' is missing"),
+        (_fields(seed="2"), "seed = '2': must be an integer"),
+        (_fields(n_runs=True), "n_runs = True: must be an integer"),
+        (_fields(block_size=5.0), "block_size = 5.0: must be an integer"),
+        (_fields(n_blocks=2), "n_blocks = 2 but 12 runs in blocks of 5 make 3"),
+        (_fields(scenario_sha256="abc"), "scenario_sha256 = 'abc': not a sha256"),
+        (_fields(format_version=1), "format_version = 1"),
+        (_fields(state="done"), "state = 'done'"),
+    ],
+    ids=lambda v: getattr(v, "__name__", None) if callable(v) else None,
+)
+def test_resume_refuses_a_changed_or_mixed_folder(batches, tmp_path, capsys, tamper, fragment):
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    tamper(out, batches["seed3"])
+    before = _snapshot(out)
+    code, err = _resume(out, capsys)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert lines[0].startswith("error: --resume: ") and fragment in lines[0], err
+    assert _snapshot(out) == before  # nothing written
+    assert not (tmp_path / "pwned-batch").exists()  # nothing unpickled
+
+
+def test_resume_refuses_another_seed(batches, tmp_path, capsys):
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    code, err = _resume(out, capsys, "--seed", "9")
+    assert code == 2 and "seed = 9 but the batch was started with 2" in err
+
+
+def test_untouched_folder_resumes_to_the_straight_result(batches, tmp_path, capsys):
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    code, err = _resume(out, capsys)
+    assert code == 0, err
+    assert _bytes(out) == batches["metrics"]
+    assert json.loads((out / "run.json").read_text())["state"] == "complete"
+
+
+def test_resume_refusal_from_the_command_line(batches, tmp_path):
+    """The real CLI process: one line on stderr, exit status 2, no traceback."""
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    _flip_block_byte(out, None)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tasks.core.cli",
+            "run",
+            "paper-000/test-1",
+            "--resume",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "its sha256 is" in lines[0] and "Traceback" not in res.stderr
+
+
+def test_a_block_without_its_sha256_is_computed_again(batches, tmp_path, capsys):
+    """A crash between writing a block and its sha256 leaves it unsaved: --resume redoes it, and
+    the same block encodes to the same bytes."""
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    block = out / "blocks" / "block-000001.zip"
+    original = block.read_bytes()
+    (out / "blocks" / "block-000001.sha256").unlink()
+    block.write_bytes(b"half-written")
+    code, err = _resume(out, capsys)
+    assert code == 0, err
+    assert block.read_bytes() == original
+    assert _bytes(out) == batches["metrics"]
