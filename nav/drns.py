@@ -28,6 +28,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from nav.angles import course_of_scalar, unit_vector_scalar
 from nav.correction import CorrectionEstimate, CurrentResponse, baseline, cp1, cp2, dr_velocity
 from nav.errors import NavInputError
 
@@ -98,7 +99,7 @@ class CorrectedDeadReckoning:
         dt = t_s - self.t_s
         if not dt > 0:
             raise NavInputError(f"predict to t = {t_s} s: not after the current {self.t_s} s")
-        u = np.array([math.sin(heading_rad), math.cos(heading_rad)])
+        u = np.array(unit_vector_scalar(heading_rad))
         v = speed_m_s * u  # eq. 30-31
         self.uncorrected += dt * v
         self._leg_dr += dt * v
@@ -127,7 +128,7 @@ class CorrectedDeadReckoning:
         leg = None
         if t_s - self._last_fix_s > self.new_surfacing_after_s:
             t0, p0 = self._leg_start
-            course = math.atan2(self._leg_heading[0], self._leg_heading[1]) % (2 * math.pi)
+            course = course_of_scalar(*self._leg_heading.tolist())
             leg = Leg(t0, t_s - t0, z - (p0 + self._leg_dr), course)
             self.legs.append(leg)
             if len(self.legs) == 2 and self.estimate is None:

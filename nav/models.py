@@ -11,11 +11,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from nav.angles import (
+    course_of,
+    elevation_angle,
+    rel_from_range_azimuth_elevation,
+    unit_vector,
+    velocity_from_course_speed,
+    wrap_pi,
+)
+
 Array = NDArray[np.float64]
-
-
-def _wrap_pi(a: Array) -> Array:
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 @dataclass(frozen=True)
@@ -40,7 +45,7 @@ class CourseSpeedDepthMotion:
     def increment(self, u: Array, dt_s: float | Array) -> Array:
         """Displacement over one step, shape (n, 3), m, world (eq. 16 without the state)."""
         c, s, dz = u[..., 0], u[..., 1], u[..., 2]
-        return np.stack([dt_s * s * np.sin(c), dt_s * s * np.cos(c), -dz], axis=-1)
+        return np.concatenate([velocity_from_course_speed(c, dt_s * s), -dz[..., None]], axis=-1)
 
     def f(self, x: Array, u: Array, dt_s: float) -> Array:
         """Predicted state (eq. 17): shape (n, 3)."""
@@ -52,12 +57,14 @@ class CourseSpeedDepthMotion:
 
     def G(self, u: Array, dt_s: float | Array) -> Array:
         """Input Jacobian ``df/du``, shape (n, 3, 3)."""
-        c, s = u[..., 0], u[..., 1]
+        s = u[..., 1]
+        unit = unit_vector(u[..., 0])
+        ue, un = unit[..., 0], unit[..., 1]
         G = np.zeros((*u.shape[:-1], 3, 3))
-        G[..., 0, 0] = dt_s * s * np.cos(c)
-        G[..., 0, 1] = dt_s * np.sin(c)
-        G[..., 1, 0] = -dt_s * s * np.sin(c)
-        G[..., 1, 1] = dt_s * np.cos(c)
+        G[..., 0, 0] = dt_s * s * un
+        G[..., 0, 1] = dt_s * ue
+        G[..., 1, 0] = -dt_s * s * ue
+        G[..., 1, 1] = dt_s * un
         G[..., 2, 2] = -1.0
         return G
 
@@ -109,9 +116,7 @@ class UsblMeasurement:
     def h(self, x: Array) -> Array:
         """Predicted measurement, shape (n, 3): m, rad in [0, 2 pi), rad."""
         d, _, horiz, r, _ = self._d(x)
-        alpha = np.arctan2(d[..., 0], d[..., 1]) % (2 * np.pi)
-        beta = np.arctan2(d[..., 2], horiz)
-        return np.stack([r, alpha, beta], axis=-1)
+        return np.stack([r, course_of(d), elevation_angle(d[..., 2], horiz)], axis=-1)
 
     def H(self, x: Array) -> Array:
         """Jacobian ``dh/dx``, shape (n, 3, 3); rows of inactive components are zero."""
@@ -149,8 +154,8 @@ class UsblMeasurement:
     def residual(self, z: Array, hx: Array) -> Array:
         """Innovation ``z - h(x)`` with the angles wrapped to [-pi, pi) (eq. 19)."""
         y = np.asarray(z, dtype=float) - hx
-        y[..., 1] = _wrap_pi(y[..., 1])
-        y[..., 2] = _wrap_pi(y[..., 2])
+        y[..., 1] = wrap_pi(y[..., 1])
+        y[..., 2] = wrap_pi(y[..., 2])
         return y
 
     def invert(self, z: ArrayLike) -> Array:
@@ -162,11 +167,7 @@ class UsblMeasurement:
         Returns:
             Vehicle position, shape (..., 3), m, world.
         """
-        z = np.asarray(z, dtype=float)
-        r, alpha, beta = z[..., 0], z[..., 1], z[..., 2]
-        horiz = r * np.cos(beta)
-        rel = np.stack([horiz * np.sin(alpha), horiz * np.cos(alpha), r * np.sin(beta)], axis=-1)
-        return self.transceiver_world_m + rel
+        return self.transceiver_world_m + rel_from_range_azimuth_elevation(z)
 
     def fix_covariance(self, z: ArrayLike) -> Array:
         """Covariance of :meth:`invert` by first-order propagation of ``R``, shape (..., 3, 3)."""
