@@ -60,7 +60,8 @@ def test_dead_reckoning_equals_stepping_the_ekf_prediction():
     x0 = rng.normal(0, 10, (5, 3))
     P0 = np.diag([1.0, 2.0, 0.1])
     x, P = dead_reckon(x0, u, 1.0, m, P0)
-    f = BatchEKF(x0, P0)
+    f = BatchEKF(m)
+    xe, Pe = x0, np.broadcast_to(P0, (5, 3, 3))
     for k in range(30):
-        f.predict(m, u[:, k], 1.0)
-    assert np.allclose(x[:, -1], f.x, atol=1e-10) and np.allclose(P[:, -1], f.P, atol=1e-10)
+        xe, Pe = f.predict(xe, Pe, u[:, k], 1.0)
+    assert np.allclose(x[:, -1], xe, atol=1e-10) and np.allclose(P[:, -1], Pe, atol=1e-10)
