@@ -65,6 +65,7 @@ from nav.angles import (
     wrap_2pi,
     wrap_pi,
 )
+from nav.dead_reckoning import track
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -705,7 +706,8 @@ def dr_velocity(
 
 
 def dr_track(start_world_m: ArrayLike, velocity_world_m_s: ArrayLike, dt_s: float) -> Array:
-    """Integrate DR velocities from a start fix (eq. 30-33 as sums over steps).
+    """Integrate DR velocities from a start fix (eq. 30-33 as sums over steps;
+    :func:`nav.dead_reckoning.track` of the displacements ``v dt``).
 
     Args:
         start_world_m: positions at the start (the last fix), shape (n, 2), m, world.
@@ -721,12 +723,7 @@ def dr_track(start_world_m: ArrayLike, velocity_world_m_s: ArrayLike, dt_s: floa
     """
     if not (math.isfinite(dt_s) and dt_s > 0):
         raise NavInputError(f"dt_s = {dt_s}: must be finite and > 0")
-    s = np.asarray(start_world_m, dtype=float)
-    v = np.asarray(velocity_world_m_s, dtype=float)
-    out = np.empty((v.shape[0], v.shape[1] + 1, 2))
-    out[:, 0] = s
-    out[:, 1:] = s[:, None, :] + np.cumsum(v * dt_s, axis=1)
-    return out
+    return track(start_world_m, np.asarray(velocity_world_m_s, dtype=float) * dt_s)
 
 
 # --------------------------------------------------------------------------------------------
