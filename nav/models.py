@@ -384,35 +384,3 @@ class CurrentAwareMotion:
         P_new[4, 4] += q
         self.base._add_Q_one(P_new, u[0], dt_s)
         return x_new, P_new[None]
-
-
-@dataclass(frozen=True)
-class OnPosition:
-    """A position measurement model used on a longer state whose first three components are the
-    position (east, north, up): ``h`` reads them, ``H`` is padded with zero columns.
-
-    Attributes:
-        model: the position measurement model (USBL, GPS, depth).
-        dim: length of the state.
-    """
-
-    model: object
-    dim: int
-
-    def h(self, x: Array) -> Array:
-        return self.model.h(np.asarray(x)[..., :3])
-
-    def H(self, x: Array) -> Array:
-        H3 = self.model.H(np.asarray(x)[..., :3])
-        H = np.zeros((*H3.shape[:-1], self.dim))
-        H[..., :3] = H3
-        return H
-
-    def R(self) -> Array:
-        return self.model.R()
-
-    def residual(self, z: Array, hx: Array) -> Array:
-        return self.model.residual(z, hx)
-
-    def active(self, x: Array) -> NDArray[np.bool_]:
-        return self.model.active(np.asarray(x)[..., :3])
