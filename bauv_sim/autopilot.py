@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 from pydantic import Field
 
 from bauv_sim.config import Config
+from bauv_sim.frames import course_of_scalar, unit_vector_scalar, wrap_pi_scalar
 
 
 @dataclass
@@ -199,8 +200,7 @@ class BeatAverage:
         """Filtered measurements, and the depth rate (m/s, positive going deeper)."""
         self._rows.append(
             (
-                math.sin(m.heading_rad),
-                math.cos(m.heading_rad),
+                *unit_vector_scalar(m.heading_rad),
                 m.yaw_rate_rad_s,
                 m.depth_m,
                 m.pitch_rad,
@@ -219,7 +219,7 @@ class BeatAverage:
         self._depths.append(a[3])
         nd = min(round(self.depth_rate_window_s / dt_s), len(self._depths) - 1)
         rate = (a[3] - self._depths[-1 - nd]) / (nd * dt_s) if nd >= 1 else 0.0
-        heading = math.atan2(a[0], a[1]) % (2 * math.pi)
+        heading = course_of_scalar(a[0], a[1])
         return Measured(heading, *a[2:8], speed), rate
 
 
@@ -297,7 +297,7 @@ class Autopilot:
         if self.smooth is not None:
             m, depth_rate = self.smooth(m, self.frequency_hz, dt_s)
         # heading: error > 0 means turn clockwise (to starboard)
-        e_h = (course_rad - m.heading_rad + math.pi) % (2 * math.pi) - math.pi  # wrapped
+        e_h = wrap_pi_scalar(course_rad - m.heading_rad)
         bias = self.tail_bias_sign * self.heading.step(e_h, m.yaw_rate_rad_s, dt_s)
         # depth cascade: deeper than wanted (e_d < 0) -> pitch up
         e_d = depth_m - m.depth_m

@@ -24,6 +24,7 @@ from pydantic import Field, field_validator, model_validator
 from bauv_sim import seabed as sb
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError, GeometryError
+from bauv_sim.frames import unit_vector_scalar
 from bauv_sim.hull import MODEL_DIR
 from bauv_sim.physics import DEFAULT_CONTROL_TICK_S, BauvPhysics, mjcf
 
@@ -194,8 +195,8 @@ def initial_velocities(config: SceneConfig) -> dict[str, np.ndarray]:
     """Initial velocity over ground of each vehicle, world ENU, m/s, by vehicle name."""
     out = {}
     for v in config.vehicles:
-        h = math.radians(v.heading_deg)
-        out[v.name] = np.array([v.speed_m_s * math.sin(h), v.speed_m_s * math.cos(h), 0.0])
+        east, north = unit_vector_scalar(math.radians(v.heading_deg))
+        out[v.name] = np.array([v.speed_m_s * east, v.speed_m_s * north, 0.0])
     return out
 
 

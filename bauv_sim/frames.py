@@ -1,20 +1,21 @@
-"""Frames, navigation angles and their conversions: the one place for them.
+"""Frames of the simulator: the world and body frames, attitude, quaternions, units and depth.
 
-Conventions (see ``docs/architecture.md``):
+The navigation angles and their pure conversions (wrapping, course and speed <-> east/north,
+heading <-> yaw and their rates, range/azimuth/elevation, seed 004's theta) live in
+:mod:`nav.angles`, which the navigation stack uses without importing :mod:`bauv_sim`; this module
+re-exports them under their names, so that simulator code has one module to import from, and adds
+what belongs to the simulator.
+
+Conventions (see ``docs/architecture.md`` and :mod:`nav.angles`):
 
 * **World frame** ``world``: x east, y north, z up (ENU; MuJoCo's z is up and gravity is -z).
   The sea surface is z = 0 and depth = -z (positive down).
 * **Body frame** ``body``: x forward, y to port, z up (FLU).
-* **Navigation angles**: course, heading and the USBL azimuth alpha are measured clockwise from
-  north, in radians inside the code, wrapped to [0, 2 pi) by :func:`wrap_2pi` unless a function says
-  otherwise. Residuals and differences of angles are wrapped to [-pi, pi) by :func:`wrap_pi`.
-  The elevation beta is positive when the target is above the observer.
+* **Navigation angles**: clockwise from north, rad, as in :mod:`nav.angles`.
 * **Attitude**: roll positive with the starboard side down, pitch positive nose up, heading as
   above.
 * **Quaternions** carry their component order in their name: MuJoCo uses ``quat_wxyz``,
   rerun and scipy ``quat_xyzw``.
-* **Seed 004 angles**: theta is measured counter-clockwise from the x (east) axis, gamma up from the
-  horizontal; :func:`course_from_theta` and :func:`theta_from_course` convert.
 
 All functions accept numpy arrays and broadcast over leading axes; a trailing axis of size 3 (or 4
 for quaternions, or 3x3 for rotation matrices) is the vector axis.
@@ -26,38 +27,72 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from nav.angles import (
+    TWO_PI,
+    course_from_theta,
+    course_of,
+    course_of_scalar,
+    course_speed_from_velocity,
+    diff_course,
+    elevation_angle,
+    heading_from_yaw,
+    heading_rate_from_yaw_rate,
+    range_azimuth_elevation,
+    rel_from_range_azimuth_elevation,
+    theta_from_course,
+    unit_vector,
+    unit_vector_scalar,
+    velocity_from_course_speed,
+    wrap_2pi,
+    wrap_2pi_scalar,
+    wrap_pi,
+    wrap_pi_scalar,
+    yaw_from_heading,
+    yaw_rate_from_heading_rate,
+)
+
+__all__ = [
+    "KNOT_M_S",
+    "TWO_PI",
+    "R_from_quat_wxyz",
+    "R_from_roll_pitch_heading",
+    "body_from_world",
+    "course_from_theta",
+    "course_of",
+    "course_of_scalar",
+    "course_speed_from_velocity",
+    "depth_from_z",
+    "diff_course",
+    "elevation_angle",
+    "heading_from_quat_wxyz",
+    "heading_from_yaw",
+    "heading_rate_from_yaw_rate",
+    "knots_to_m_s",
+    "m_s_to_knots",
+    "quat_wxyz_from_R",
+    "quat_wxyz_from_roll_pitch_heading",
+    "quat_wxyz_to_xyzw",
+    "quat_xyzw_to_wxyz",
+    "range_azimuth_elevation",
+    "rel_from_range_azimuth_elevation",
+    "roll_pitch_heading_from_R",
+    "roll_pitch_heading_from_quat_wxyz",
+    "theta_from_course",
+    "unit_vector",
+    "unit_vector_scalar",
+    "velocity_from_course_speed",
+    "world_from_body",
+    "wrap_2pi",
+    "wrap_2pi_scalar",
+    "wrap_pi",
+    "wrap_pi_scalar",
+    "yaw_from_heading",
+    "yaw_rate_from_heading_rate",
+    "z_from_depth",
+]
+
 KNOT_M_S = 1852.0 / 3600.0
 """One knot in metres per second (exact by definition of the nautical mile)."""
-
-TWO_PI = 2.0 * np.pi
-
-
-def wrap_pi(angle_rad: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles to [-pi, pi).
-
-    Args:
-        angle_rad: angles, any shape, radians.
-
-    Returns:
-        Angles of the same shape in [-pi, pi), radians.
-    """
-    a = np.asarray(angle_rad, dtype=float)
-    return (a + np.pi) % TWO_PI - np.pi
-
-
-def wrap_2pi(angle_rad: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles to [0, 2 pi).
-
-    Args:
-        angle_rad: angles, any shape, radians.
-
-    Returns:
-        Angles of the same shape in [0, 2 pi), radians.
-    """
-    a = np.asarray(angle_rad, dtype=float)
-    w = a % TWO_PI
-    # a tiny negative input can round to exactly 2 pi
-    return np.where(w >= TWO_PI, 0.0, w)
 
 
 def knots_to_m_s(speed_kn: ArrayLike) -> NDArray[np.float64]:
@@ -78,99 +113,6 @@ def depth_from_z(z_world_m: ArrayLike) -> NDArray[np.float64]:
 def z_from_depth(depth_m: ArrayLike) -> NDArray[np.float64]:
     """World z (up, m) from depth below the surface (positive down, m)."""
     return -np.asarray(depth_m, dtype=float)
-
-
-def velocity_from_course_speed(course_rad: ArrayLike, speed_m_s: ArrayLike) -> NDArray[np.float64]:
-    """Horizontal world velocity from course and speed.
-
-    Seed 000 eq. 8: ``dx = S sin C``, ``dy = S cos C``.
-
-    Args:
-        course_rad: course clockwise from north, shape (...), rad.
-        speed_m_s: speed, shape broadcastable with ``course_rad``, m/s.
-
-    Returns:
-        Velocity (east, north), shape (..., 2), m/s, world frame.
-    """
-    c = np.asarray(course_rad, dtype=float)
-    s = np.asarray(speed_m_s, dtype=float)
-    return np.stack(np.broadcast_arrays(s * np.sin(c), s * np.cos(c)), axis=-1)
-
-
-def course_speed_from_velocity(
-    vel_en_m_s: ArrayLike,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Course and speed of a horizontal world velocity.
-
-    Args:
-        vel_en_m_s: velocity (east, north[, up]), shape (..., 2) or (..., 3), m/s, world frame.
-            An up component is ignored.
-
-    Returns:
-        ``(course_rad, speed_m_s)``, each of shape (...); course in [0, 2 pi) clockwise from
-        north (0 for a zero velocity).
-    """
-    v = np.asarray(vel_en_m_s, dtype=float)
-    return wrap_2pi(np.arctan2(v[..., 0], v[..., 1])), np.hypot(v[..., 0], v[..., 1])
-
-
-def range_azimuth_elevation(rel_world_m: ArrayLike) -> NDArray[np.float64]:
-    """Slant range, azimuth and elevation of a relative position.
-
-    Seed 000 eq. 15 (with world z up): ``r = |d|``, ``alpha = atan2(d_e, d_n)`` clockwise from
-    north, ``beta = atan2(d_u, sqrt(d_e^2 + d_n^2))`` positive when the target is above.
-    Directly above or below the observer the azimuth is returned as 0.
-
-    Args:
-        rel_world_m: target minus observer, shape (..., 3), m, world frame.
-
-    Returns:
-        ``(r, alpha, beta)`` stacked, shape (..., 3): m, rad in [0, 2 pi), rad in [-pi/2, pi/2].
-    """
-    d = np.asarray(rel_world_m, dtype=float)
-    horiz = np.hypot(d[..., 0], d[..., 1])
-    r = np.sqrt(horiz**2 + d[..., 2] ** 2)
-    alpha = wrap_2pi(np.arctan2(d[..., 0], d[..., 1]))
-    beta = np.arctan2(d[..., 2], horiz)
-    return np.stack([r, alpha, beta], axis=-1)
-
-
-def rel_from_range_azimuth_elevation(rae: ArrayLike) -> NDArray[np.float64]:
-    """Relative position from slant range, azimuth and elevation (inverse of
-    :func:`range_azimuth_elevation`).
-
-    Args:
-        rae: ``(r, alpha, beta)``, shape (..., 3): m, rad clockwise from north, rad up.
-
-    Returns:
-        Target minus observer, shape (..., 3), m, world frame.
-    """
-    a = np.asarray(rae, dtype=float)
-    r, alpha, beta = a[..., 0], a[..., 1], a[..., 2]
-    horiz = r * np.cos(beta)
-    return np.stack([horiz * np.sin(alpha), horiz * np.cos(alpha), r * np.sin(beta)], axis=-1)
-
-
-def heading_from_yaw(yaw_rad: ArrayLike) -> NDArray[np.float64]:
-    """Navigation heading (clockwise from north) from a mathematical yaw about world z (counter-
-    clockwise from east). Both in rad; the result is in [0, 2 pi)."""
-    return wrap_2pi(np.pi / 2 - np.asarray(yaw_rad, dtype=float))
-
-
-def yaw_from_heading(heading_rad: ArrayLike) -> NDArray[np.float64]:
-    """Mathematical yaw about world z (counter-clockwise from east, in [-pi, pi)) from a navigation
-    heading (clockwise from north), both rad."""
-    return wrap_pi(np.pi / 2 - np.asarray(heading_rad, dtype=float))
-
-
-def course_from_theta(theta_rad: ArrayLike) -> NDArray[np.float64]:
-    """Seed 004's theta (counter-clockwise from the x/east axis) to a navigation course, rad."""
-    return heading_from_yaw(theta_rad)
-
-
-def theta_from_course(course_rad: ArrayLike) -> NDArray[np.float64]:
-    """Navigation course to seed 004's theta (counter-clockwise from x/east, in [-pi, pi)), rad."""
-    return yaw_from_heading(course_rad)
 
 
 def quat_wxyz_to_xyzw(quat_wxyz: ArrayLike) -> NDArray[np.float64]:
@@ -244,7 +186,7 @@ def R_from_roll_pitch_heading(
     roll, pitch, heading = np.broadcast_arrays(
         np.asarray(roll_rad, float), np.asarray(pitch_rad, float), np.asarray(heading_rad, float)
     )
-    yaw = np.pi / 2 - heading
+    yaw = np.pi / 2 - heading  # yaw_from_heading unwrapped: no range is needed here
     # FLU body: +y is port. Nose up is a negative rotation about +y; starboard down is a
     # positive rotation about +x (port side rises).
     return _rot_z(yaw) @ _rot_y(-pitch) @ _rot_x(roll)
@@ -264,7 +206,7 @@ def roll_pitch_heading_from_R(R: ArrayLike) -> NDArray[np.float64]:
     M = np.asarray(R, dtype=float)
     fwd = M[..., :, 0]
     pitch = np.arcsin(np.clip(fwd[..., 2], -1.0, 1.0))
-    heading = wrap_2pi(np.arctan2(fwd[..., 0], fwd[..., 1]))
+    heading = course_of(fwd)
     # roll from the body y (port) and z (up) axes' world z components
     roll = np.arctan2(M[..., 2, 1], M[..., 2, 2])
     return np.stack([wrap_pi(roll), pitch, heading], axis=-1)
@@ -289,7 +231,7 @@ def roll_pitch_heading_from_quat_wxyz(quat_wxyz: ArrayLike) -> NDArray[np.float6
     r21 = 2 * (y * z + w * x)
     r22 = 1 - 2 * (x * x + y * y)
     pitch = np.arcsin(np.clip(r20, -1.0, 1.0))
-    heading = wrap_2pi(np.arctan2(r00, r10))
+    heading = course_of(np.stack([r00, r10], axis=-1))
     roll = wrap_pi(np.arctan2(r21, r22))
     return np.stack([roll, pitch, heading], axis=-1)
 

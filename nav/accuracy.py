@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from nav.angles import heading_from_yaw
+
 Array = NDArray[np.float64]
 
 
@@ -140,7 +142,7 @@ class Ellipse:
     @property
     def azimuth_rad(self) -> Array:
         """Major-axis direction as a navigation bearing, rad clockwise from north, in [0, pi)."""
-        return (np.pi / 2 - self.tau) % np.pi
+        return heading_from_yaw(self.tau) % np.pi
 
 
 def ellipse_parameters(P: ArrayLike) -> Ellipse:

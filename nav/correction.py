@@ -22,11 +22,11 @@ and uses the estimates for corrected DR (:func:`dr_velocity`, :func:`dr_track`: 
 the course that compensates the estimated current and vehicle error (:func:`compensated_course`:
 eq. 22-26, with CP2's three-phase fix).
 
-Conventions: x east, y north; courses clockwise from north in radians, the paper's degrees only in
-names that say so; ``u(c) = (sin c, cos c)`` is the unit vector of course ``c``. This module
-repeats these two formulas instead of importing :mod:`bauv_sim.frames` because :mod:`nav` never
-imports :mod:`bauv_sim`; ``tests/nav/test_correction.py`` checks that they agree. Arrays carry a
-leading axis of runs ``n`` (one run is a batch of one).
+Conventions (:mod:`nav.angles`): x east, y north; courses clockwise from north in radians, the
+paper's degrees only in names that say so; ``u(c) = (sin c, cos c)`` is the unit vector of course
+``c`` (:func:`~nav.angles.unit_vector`), ``getCourse360`` is :func:`~nav.angles.course_of` and
+``diffCourse`` :func:`~nav.angles.diff_course`. Arrays carry a leading axis of runs ``n`` (one
+run is a batch of one).
 
 Vector formulation (differences from the printed equations, all documented where they occur):
 
@@ -57,6 +57,15 @@ import numpy as np
 from numpy.polynomial import chebyshev
 from numpy.typing import ArrayLike, NDArray
 
+from nav.angles import (
+    course_of,
+    diff_course,
+    unit_vector,
+    velocity_from_course_speed,
+    wrap_2pi,
+    wrap_pi,
+)
+from nav.dead_reckoning import track
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -65,55 +74,6 @@ OnBad = Literal["raise", "fallback"]
 DEFAULT_RHO_S_COS_COEFFS: tuple[float, ...] = (1.0, 0.2, 0.15)
 """Default hull response ``rho_s(gamma) = 1 + 0.2 cos(gamma) + 0.15 cos(2 gamma)``; see
 :class:`CurrentResponse` for the justification."""
-
-
-# --------------------------------------------------------------------------------------------
-# Angles (the conventions of bauv_sim.frames, repeated because nav does not import bauv_sim)
-
-
-def unit_vector(course_rad: ArrayLike) -> Array:
-    """Unit vector of a course: ``(sin c, cos c)`` (x east, y north).
-
-    Args:
-        course_rad: courses clockwise from north, shape (...), rad.
-
-    Returns:
-        Shape (..., 2), world frame.
-    """
-    c = np.asarray(course_rad, dtype=float)
-    return np.stack([np.sin(c), np.cos(c)], axis=-1)
-
-
-def course_of(vel_world: ArrayLike) -> Array:
-    """Course of a horizontal vector (the paper's ``getCourse360``), in [0, 2 pi).
-
-    Args:
-        vel_world: vectors (east, north), shape (..., 2).
-
-    Returns:
-        Courses clockwise from north, shape (...), rad; 0 for a zero vector.
-    """
-    v = np.asarray(vel_world, dtype=float)
-    c = np.arctan2(v[..., 0], v[..., 1]) % (2.0 * np.pi)
-    return np.where(c >= 2.0 * np.pi, 0.0, c)
-
-
-def wrap_pi(angle_rad: ArrayLike) -> Array:
-    """Wrap angles to [-pi, pi)."""
-    return (np.asarray(angle_rad, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
-
-
-def diff_course(a_rad: ArrayLike, b_rad: ArrayLike) -> Array:
-    """The paper's ``diffCourse``: the unsigned difference of two courses, in [0, pi].
-
-    Args:
-        a_rad: courses, rad, any shape broadcastable with ``b_rad``.
-        b_rad: courses, rad.
-
-    Returns:
-        ``|wrap_pi(a - b)|``, rad.
-    """
-    return np.abs(wrap_pi(np.asarray(a_rad, dtype=float) - np.asarray(b_rad, dtype=float)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -739,14 +699,15 @@ def dr_velocity(
         Velocity (east, north), shape ``course_rad.shape + (2,)``, m/s, world.
     """
     course = np.asarray(course_rad, dtype=float)
-    v = np.asarray(speed_m_s, dtype=float)[..., None] * unit_vector(course)
+    v = velocity_from_course_speed(course, speed_m_s)
     if estimate is None:
         return v
     return v + estimate.velocity_error(course)
 
 
 def dr_track(start_world_m: ArrayLike, velocity_world_m_s: ArrayLike, dt_s: float) -> Array:
-    """Integrate DR velocities from a start fix (eq. 30-33 as sums over steps).
+    """Integrate DR velocities from a start fix (eq. 30-33 as sums over steps;
+    :func:`nav.dead_reckoning.track` of the displacements ``v dt``).
 
     Args:
         start_world_m: positions at the start (the last fix), shape (n, 2), m, world.
@@ -762,12 +723,7 @@ def dr_track(start_world_m: ArrayLike, velocity_world_m_s: ArrayLike, dt_s: floa
     """
     if not (math.isfinite(dt_s) and dt_s > 0):
         raise NavInputError(f"dt_s = {dt_s}: must be finite and > 0")
-    s = np.asarray(start_world_m, dtype=float)
-    v = np.asarray(velocity_world_m_s, dtype=float)
-    out = np.empty((v.shape[0], v.shape[1] + 1, 2))
-    out[:, 0] = s
-    out[:, 1:] = s[:, None, :] + np.cumsum(v * dt_s, axis=1)
-    return out
+    return track(start_world_m, np.asarray(velocity_world_m_s, dtype=float) * dt_s)
 
 
 # --------------------------------------------------------------------------------------------
@@ -856,7 +812,7 @@ def course_through_current(
     W = np.where(too_strong[:, None], W_fb, W)
     resulting = W + c
     speed_along = np.sum(resulting * u, axis=-1)
-    alpha = np.where(R > 0.0, course_of(W) - delta, nu) % (2.0 * np.pi)
+    alpha = wrap_2pi(np.where(R > 0.0, course_of(W) - delta, nu))
     feasible = ~too_strong & (speed_along > 0.0) & (R > 0.0)
     return CourseSolution(alpha, speed_along, feasible)
 

@@ -28,7 +28,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from nav.angles import course_of_scalar, unit_vector_scalar
 from nav.correction import CorrectionEstimate, CurrentResponse, baseline, cp1, cp2, dr_velocity
+from nav.dead_reckoning import DeadReckoning
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -79,13 +81,26 @@ class CorrectedDeadReckoning:
     def __post_init__(self) -> None:
         p = np.asarray(self.position_world_m, dtype=float).reshape(2)
         self.t_s = float(self.t0_s)
-        self.uncorrected = p.copy()
-        self.corrected = p.copy()
-        self.baseline = p.copy()
+        self._tracks = {name: DeadReckoning(p) for name in ("uncorrected", "corrected", "baseline")}
         self._leg_start = (self.t_s, p.copy())
-        self._leg_dr = np.zeros(2)  # uncorrected DR displacement since the leg's start fix
-        self._leg_heading = np.zeros(2)  # time integral of the heading unit vector
+        self._leg_dr = DeadReckoning(np.zeros(2))  # uncorrected DR since the leg's start fix
+        self._leg_heading = DeadReckoning(np.zeros(2))  # time integral of the heading unit vector
         self._last_fix_s = self.t_s
+
+    @property
+    def uncorrected(self) -> Array:
+        """The uncorrected DR position (eq. 30-31), shape (2,), m, world."""
+        return self._tracks["uncorrected"].position
+
+    @property
+    def corrected(self) -> Array:
+        """The DR position corrected by the procedure (eq. 32-33), shape (2,), m, world."""
+        return self._tracks["corrected"].position
+
+    @property
+    def baseline(self) -> Array:
+        """The DR position corrected by the baseline's current, shape (2,), m, world."""
+        return self._tracks["baseline"].position
 
     def predict(self, t_s: float, heading_rad: float, speed_m_s: float) -> None:
         """Dead-reckon to ``t_s`` with the heading and odometry speed held since the last call.
@@ -98,13 +113,16 @@ class CorrectedDeadReckoning:
         dt = t_s - self.t_s
         if not dt > 0:
             raise NavInputError(f"predict to t = {t_s} s: not after the current {self.t_s} s")
-        u = np.array([math.sin(heading_rad), math.cos(heading_rad)])
+        u = np.array(unit_vector_scalar(heading_rad))
         v = speed_m_s * u  # eq. 30-31
-        self.uncorrected += dt * v
-        self._leg_dr += dt * v
-        self._leg_heading += dt * u
-        self.corrected += dt * self._velocity(self.estimate, heading_rad, speed_m_s, v)
-        self.baseline += dt * self._velocity(self.baseline_estimate, heading_rad, speed_m_s, v)
+        tracks = self._tracks
+        tracks["uncorrected"].advance(dt * v)
+        self._leg_dr.advance(dt * v)
+        self._leg_heading.advance(dt * u)
+        tracks["corrected"].advance(dt * self._velocity(self.estimate, heading_rad, speed_m_s, v))
+        tracks["baseline"].advance(
+            dt * self._velocity(self.baseline_estimate, heading_rad, speed_m_s, v)
+        )
         self.t_s = float(t_s)
 
     @staticmethod
@@ -127,23 +145,23 @@ class CorrectedDeadReckoning:
         leg = None
         if t_s - self._last_fix_s > self.new_surfacing_after_s:
             t0, p0 = self._leg_start
-            course = math.atan2(self._leg_heading[0], self._leg_heading[1]) % (2 * math.pi)
-            leg = Leg(t0, t_s - t0, z - (p0 + self._leg_dr), course)
+            leg_dr = self._leg_dr.position
+            course = course_of_scalar(*self._leg_heading.position.tolist())
+            leg = Leg(t0, t_s - t0, z - (p0 + leg_dr), course)
             self.legs.append(leg)
             if len(self.legs) == 2 and self.estimate is None:
                 self._correct()
             if len(self.legs) >= 1:
                 last = self.legs[-1]
                 self.baseline_estimate = baseline(
-                    z[None], (p0 + self._leg_dr)[None], np.array([last.duration_s])
+                    z[None], (p0 + leg_dr)[None], np.array([last.duration_s])
                 )
         self._last_fix_s = float(t_s)
         self._leg_start = (float(t_s), z.copy())
-        self._leg_dr = np.zeros(2)
-        self._leg_heading = np.zeros(2)
-        self.uncorrected = z.copy()
-        self.corrected = z.copy()
-        self.baseline = z.copy()
+        self._leg_dr.reset(np.zeros(2))
+        self._leg_heading.reset(np.zeros(2))
+        for track in self._tracks.values():
+            track.reset(z)
         return leg
 
     def _correct(self) -> None:

@@ -1,4 +1,5 @@
-"""The extended Kalman filter, batched over Monte Carlo runs (seed 000 eq. 17-23).
+"""The extended Kalman filter (seed 000 eq. 17-23): batched over Monte Carlo runs, and its
+single-run fast path beside it.
 
 Predict: ``x- = f(x, u)`` (eq. 17), ``P- = F P F^T + Q`` (eq. 18).
 Update: ``y = z - h(x-)`` with angles wrapped (eq. 19), ``S = H P- H^T + R`` (eq. 20),
@@ -9,7 +10,16 @@ symmetric and positive definite in floating point.
 Robustness (after robot_localization and filterpy): components a model marks inactive (e.g. the
 USBL azimuth straight above the transceiver) are left out of the update exactly; runs without a
 measurement are left unchanged; an optional chi-square gate on the normalised innovation squared
-(NIS) rejects outliers; a non-finite state or covariance raises :class:`FilterDivergedError`.
+(NIS) rejects outliers; :func:`check_estimate` raises :class:`FilterDivergedError` on a
+non-finite state or covariance.
+
+**The estimator shape** (:class:`Estimator`): an estimator holds its motion model and is
+stateless; ``predict(x, P, u, dt_s) -> (x, P)`` and ``update(x, P, model, z, present,
+gate_probability) -> (x, P, UpdateInfo)`` take and return states ``(n, d)`` and covariances
+``(n, d, d)``. Two implementations: :class:`BatchEKF`, the batched algorithm (:func:`predict`,
+:func:`update`), and :class:`SingleRunEKF`, the same filter for one run (n = 1) without the batch
+machinery (the motion model's closed-form ``predict_one`` and :func:`update_one`), for the online
+navigator's per-tick path; the two give the same numbers (tested to 1e-12).
 """
 
 from __future__ import annotations
@@ -28,15 +38,22 @@ Array = NDArray[np.float64]
 
 
 class MotionModel(Protocol):
-    """What :meth:`BatchEKF.predict` needs from a motion model."""
+    """What the batched EKF needs from a motion model (shapes: x (n, d), u (n, p))."""
 
     def f(self, x: Array, u: Array, dt_s: float) -> Array: ...
     def F(self, x: Array, u: Array, dt_s: float) -> Array: ...
     def Q(self, u: Array, dt_s: float) -> Array: ...
 
 
+class SingleRunMotionModel(MotionModel, Protocol):
+    """A motion model that also predicts one run in closed form: ``predict_one(x (1, d), P (1, d,
+    d), u (1, p), dt_s) -> (x-, P-)``, the numbers of :func:`predict` with its f, F and Q."""
+
+    def predict_one(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]: ...
+
+
 class MeasurementModel(Protocol):
-    """What :meth:`BatchEKF.update` needs from a measurement model."""
+    """What an update needs from a measurement model (shapes: x (n, d), z (n, m))."""
 
     def h(self, x: Array) -> Array: ...
     def H(self, x: Array) -> Array: ...
@@ -47,11 +64,11 @@ class MeasurementModel(Protocol):
 
 @dataclass(frozen=True)
 class UpdateInfo:
-    """Diagnostics of one batched update.
+    """Diagnostics of one update.
 
     Attributes:
         nis: normalised innovation squared ``y^T S^-1 y`` over the active components, shape (n,);
-            NaN for runs that had no measurement.
+            NaN for runs that had no measurement or no active component.
         dof: number of active components, shape (n,).
         applied: whether the update changed the run's estimate, shape (n,).
         rejected: whether the gate rejected the measurement, shape (n,).
@@ -63,6 +80,34 @@ class UpdateInfo:
     rejected: NDArray[np.bool_]
 
 
+class Estimator(Protocol):
+    """The shape of an estimator: stateless predict and update over a batch of runs.
+
+    Attributes:
+        motion: the motion model the estimator predicts with.
+    """
+
+    motion: MotionModel
+
+    def predict(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
+        """Propagate states ``x`` (n, d) and covariances ``P`` (n, d, d) with inputs ``u``
+        (n, p) over ``dt_s`` seconds; returns ``(x-, P-)``."""
+        ...
+
+    def update(
+        self,
+        x: Array,
+        P: Array,
+        model: MeasurementModel,
+        z: Array,
+        present: NDArray[np.bool_] | None = None,
+        gate_probability: float | None = None,
+    ) -> tuple[Array, Array, UpdateInfo]:
+        """Correct with measurements ``z`` (n, m) of ``model``; rows with ``present`` False are
+        left unchanged (their ``z`` may hold anything); returns ``(x, P, info)``."""
+        ...
+
+
 @functools.lru_cache(maxsize=256)
 def gate_limit(probability: float, dof: int) -> float:
     """Chi-square quantile of ``probability`` with ``dof`` degrees of freedom (cached)."""
@@ -70,7 +115,7 @@ def gate_limit(probability: float, dof: int) -> float:
 
 
 def predict(x: Array, P: Array, fx: Array, F: Array, Q: Array) -> tuple[Array, Array]:
-    """EKF prediction (eq. 17-18).
+    """EKF prediction (eq. 17-18), batched.
 
     Args:
         x: state, shape (n, d) (unused except for its shape: ``fx`` is ``f(x, u)``).
@@ -96,7 +141,7 @@ def update(
     present: NDArray[np.bool_] | None = None,
     gate_probability: float | None = None,
 ) -> tuple[Array, Array, UpdateInfo]:
-    """EKF update (eq. 19-23, Joseph form).
+    """EKF update (eq. 19-23, Joseph form), batched.
 
     Args:
         x: prior state, shape (n, d).
@@ -112,6 +157,9 @@ def update(
 
     Returns:
         ``(x, P, info)`` with unchanged rows where nothing was applied.
+
+    Raises:
+        NavInputError: if ``R`` has a variance <= 0.
     """
     n, m = y.shape
     act = np.ones((n, m), dtype=bool) if active is None else np.asarray(active, dtype=bool)
@@ -142,59 +190,141 @@ def update(
     P_new = 0.5 * (P_new + np.swapaxes(P_new, -1, -2))
     x_out = np.where(applied[:, None], x_new, x)
     P_out = np.where(applied[:, None, None], P_new, P)
-    nis = np.where(pres, nis, np.nan)
+    nis = np.where(pres & (dof > 0), nis, np.nan)
     return x_out, P_out, UpdateInfo(nis, dof, applied, rejected)
 
 
-class BatchEKF:
-    """An EKF over n Monte Carlo runs at once.
+def update_one(
+    x: Array,
+    P: Array,
+    y: Array,
+    H: Array,
+    R: Array,
+    active: NDArray[np.bool_],
+    gate_probability: float | None = None,
+) -> tuple[Array, Array, UpdateInfo]:
+    """The update of :func:`update` (eq. 19-23, Joseph form, inactive components removed,
+    chi-square gate) for a single run with a measurement, on the active components only instead
+    of zeroed rows (tested equal).
 
     Args:
-        x0: initial state, shape (n, d).
-        P0: initial covariance, shape (n, d, d) or (d, d).
+        x: prior state, shape (1, d).
+        P: prior covariance, shape (1, d, d).
+        y: innovation with angles wrapped, shape (1, m).
+        H: measurement Jacobian, shape (1, m, d).
+        R: measurement noise, shape (m, m).
+        active: components to use, shape (1, m).
+        gate_probability: chi-square gate probability, or ``None``.
+
+    Returns:
+        ``(x, P, info)``; ``x`` and ``P`` unchanged when nothing was applied.
+
+    Raises:
+        NavInputError: if ``R`` has a variance <= 0.
+    """
+    if np.any(np.diagonal(R) <= 0):
+        raise NavInputError("measurement noise R must have positive variances")
+    idx = np.flatnonzero(active[0])
+    no = np.array([False])
+    if idx.size == 0:
+        return x, P, UpdateInfo(np.array([np.nan]), np.array([0]), no, no)
+    Ha, ya, Ra = H[0][idx], y[0][idx], R[np.ix_(idx, idx)]
+    P0 = P[0]
+    PHt = P0 @ Ha.T
+    S = Ha @ PHt + Ra  # eq. 20
+    S = 0.5 * (S + S.T)
+    nis = float(ya @ np.linalg.solve(S, ya))
+    dof = np.array([idx.size])
+    if gate_probability is not None and nis > gate_limit(gate_probability, int(idx.size)):
+        return x, P, UpdateInfo(np.array([nis]), dof, no, np.array([True]))
+    K = np.linalg.solve(S, PHt.T).T  # eq. 21
+    x_new = x + (K @ ya)[None]  # eq. 22
+    I_KH = np.eye(P0.shape[0]) - K @ Ha
+    P_new = I_KH @ P0 @ I_KH.T + K @ Ra @ K.T  # eq. 23, Joseph form
+    P_new = 0.5 * (P_new + P_new.T)
+    return x_new, P_new[None], UpdateInfo(np.array([nis]), dof, np.array([True]), no)
+
+
+@dataclass(frozen=True)
+class BatchEKF:
+    """The EKF over n Monte Carlo runs at once (an :class:`Estimator`).
+
+    Attributes:
+        motion: the motion model (f, F, Q).
     """
 
-    def __init__(self, x0: Array, P0: Array):
-        self.x = np.array(x0, dtype=float)
-        n, d = self.x.shape
-        self.P = np.broadcast_to(np.asarray(P0, dtype=float), (n, d, d)).copy()
+    motion: MotionModel
 
-    def predict(self, model: MotionModel, u: Array, dt_s: float) -> None:
-        """Propagate with a motion model and input ``u`` (shape (n, p)) over ``dt_s`` seconds."""
-        self.x, self.P = predict(
-            self.x, self.P, model.f(self.x, u, dt_s), model.F(self.x, u, dt_s), model.Q(u, dt_s)
-        )
+    def predict(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
+        """Eq. 17-18 with the motion model: states (n, d), covariances (n, d, d), inputs (n, p)."""
+        m = self.motion
+        return predict(x, P, m.f(x, u, dt_s), m.F(x, u, dt_s), m.Q(u, dt_s))
 
     def update(
         self,
+        x: Array,
+        P: Array,
         model: MeasurementModel,
         z: Array,
         present: NDArray[np.bool_] | None = None,
         gate_probability: float | None = None,
-    ) -> UpdateInfo:
-        """Correct with measurements ``z`` (shape (n, m)); rows with ``present`` False are skipped
-        (their ``z`` may hold anything)."""
-        hx = model.h(self.x)
-        pres = np.ones(len(self.x), dtype=bool) if present is None else np.asarray(present)
+    ) -> tuple[Array, Array, UpdateInfo]:
+        """Eq. 19-23 with measurements ``z`` (n, m) of ``model``; rows with ``present`` False
+        are skipped (their ``z`` may hold anything)."""
+        hx = model.h(x)
+        pres = np.ones(len(x), dtype=bool) if present is None else np.asarray(present)
         z_safe = np.where(pres[:, None], z, hx)
         y = model.residual(z_safe, hx)
-        self.x, self.P, info = update(
-            self.x,
-            self.P,
-            y,
-            model.H(self.x),
-            model.R(),
-            model.active(self.x),
-            pres,
-            gate_probability,
-        )
-        return info
+        return update(x, P, y, model.H(x), model.R(), model.active(x), pres, gate_probability)
 
-    def check(self, t_s: float) -> None:
-        """Raise :class:`FilterDivergedError` if any run's state or covariance is not finite or
-        its covariance has a negative variance."""
-        bad = ~np.isfinite(self.x).all(axis=1) | ~np.isfinite(self.P).all(axis=(1, 2))
-        bad |= (np.diagonal(self.P, axis1=-2, axis2=-1) < 0).any(axis=1)
-        if bad.any():
-            runs = np.flatnonzero(bad)[:5].tolist()
-            raise FilterDivergedError(f"EKF diverged at t = {t_s:g} s in batch rows {runs}")
+
+@dataclass(frozen=True)
+class SingleRunEKF:
+    """The EKF of one run (n = 1; an :class:`Estimator`): the motion model's closed-form
+    prediction and :func:`update_one`, the numbers of :class:`BatchEKF` (tested) in a fraction of
+    its time.
+
+    Attributes:
+        motion: the motion model (with ``predict_one``).
+    """
+
+    motion: SingleRunMotionModel
+
+    def predict(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
+        """Eq. 17-18 for one run: state (1, d), covariance (1, d, d), input (1, p)."""
+        return self.motion.predict_one(x, P, u, dt_s)
+
+    def update(
+        self,
+        x: Array,
+        P: Array,
+        model: MeasurementModel,
+        z: Array,
+        present: NDArray[np.bool_] | None = None,
+        gate_probability: float | None = None,
+    ) -> tuple[Array, Array, UpdateInfo]:
+        """Eq. 19-23 for one run with a measurement ``z`` (1, m) of ``model``; with ``present``
+        ``[False]`` the run is left unchanged."""
+        if present is not None and not present[0]:
+            dof = np.array([int(np.count_nonzero(model.active(x)))])
+            no = np.array([False])
+            return x, P, UpdateInfo(np.array([np.nan]), dof, no, no)
+        hx = model.h(x)
+        y = model.residual(z, hx)
+        return update_one(x, P, y, model.H(x), model.R(), model.active(x), gate_probability)
+
+
+def check_estimate(x: Array, P: Array, t_s: float) -> None:
+    """Raise :class:`FilterDivergedError` if any run's state or covariance is not finite or its
+    covariance has a negative variance.
+
+    Args:
+        x: states, shape (n, d).
+        P: covariances, shape (n, d, d).
+        t_s: time of the estimate, s (for the message).
+    """
+    bad = ~np.isfinite(x).all(axis=1) | ~np.isfinite(P).all(axis=(1, 2))
+    bad |= (np.diagonal(P, axis1=-2, axis2=-1) < 0).any(axis=1)
+    if bad.any():
+        runs = np.flatnonzero(bad)[:5].tolist()
+        raise FilterDivergedError(f"EKF diverged at t = {t_s:g} s in batch rows {runs}")

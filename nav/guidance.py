@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import rice
 
+from nav.angles import course_of_scalar
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -78,7 +79,7 @@ class GuidanceCommand:
 
 def direct_course(position: Array, wp: Waypoint) -> float:
     """Direct course from a position to a way-point, rad clockwise from north, in [0, 2 pi)."""
-    return math.atan2(wp.east_m - position[0], wp.north_m - position[1]) % (2 * math.pi)
+    return course_of_scalar(wp.east_m - position[0], wp.north_m - position[1])
 
 
 def horizontal_sigma_m(P: Array) -> float:

@@ -21,22 +21,28 @@ current its innovations grow beyond what it expects and a gate then rejects ever
 ``max_consecutive_rejections`` rejections in a row of the same measurement model, the next one is
 applied without the gate (the practice of IST's farol navigation).
 
-The dead-reckoning track uses the same inputs without the current and is never corrected
-(``reset_dr`` restarts it, e.g. at a GPS fix when a mission wants DR-with-resets).
+The dead-reckoning track (:class:`nav.dead_reckoning.DeadReckoning`) uses the same inputs
+without the current and is never corrected (``reset_dr`` restarts it, e.g. at a GPS fix when a
+mission wants DR-with-resets).
+
+**Estimator.** :class:`OnlineNavigator` does the history, the late fixes, the gate, the lock-out
+and the DR for any :class:`nav.ekf.Estimator` it is given (with the estimator's motion model);
+:class:`Navigator` builds today's configuration in one call: seed 000's motion model, with the
+current in the state or not, under :class:`nav.ekf.SingleRunEKF`.
 """
 
 from __future__ import annotations
 
-import math
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from nav.ekf import MeasurementModel, UpdateInfo, gate_limit
+from nav.dead_reckoning import DeadReckoning
+from nav.ekf import Estimator, MeasurementModel, SingleRunEKF, UpdateInfo
 from nav.errors import FilterDivergedError, NavInputError
-from nav.models import CourseSpeedDepthMotion, CurrentAwareMotion, OnPosition
+from nav.models import CourseSpeedDepthMotion, CurrentAwareMotion
 
 Array = NDArray[np.float64]
 
@@ -59,60 +65,54 @@ class Estimate:
 @dataclass
 class _Slot:
     t_s: float
-    x: Array  # (1, 3) after the updates at t_s
-    P: Array  # (1, 3, 3)
+    x: Array  # (1, d) after the updates at t_s
+    P: Array  # (1, d, d)
     u: Array | None  # input that led from the previous slot to this one, (1, 3)
     dt_s: float
 
 
-class Navigator:
-    """EKF + DR for one vehicle, with delayed measurements applied at their time of validity.
+class OnlineNavigator:
+    """EKF (any :class:`~nav.ekf.Estimator`) + DR for one vehicle, with delayed measurements
+    applied at their time of validity (see the module docstring).
+
+    The state starts with the position (east, north, up) (:mod:`nav.models`); the estimator's
+    motion model takes the inputs ``(heading, speed through water, depth change)`` and says with
+    ``current_components`` where a current is in the state (``None``: none).
 
     Args:
+        estimator: the estimator, with its motion model (e.g. ``SingleRunEKF(motion)``).
         t0_s: start time, s.
-        x0: initial position estimate, shape (3,), m, world.
-        P0: initial position covariance, shape (3, 3), m^2.
-        motion: motion model (inputs heading, speed, depth change).
+        x0: initial state, shape (d,) (position in m, world, first).
+        P0: initial covariance, shape (d, d).
+        dr_motion: the motion model of the dead-reckoning track (its ``increment_one``).
         history_s: how long states are kept for late measurements, s.
         gate_probability: chi-square gate probability, or ``None`` for no gate.
-        current_sigma0_m_s: initial standard deviation of each current component, m/s, or
-            ``None`` for seed 000's three-state filter without current.
-        current_walk_m_s_per_sqrt_s: random-walk intensity of the current, (m/s)/sqrt(s).
         max_consecutive_rejections: lock-out guard (see the module docstring), or ``None``.
     """
 
     def __init__(
         self,
+        estimator: Estimator,
         t0_s: float,
         x0: Array,
         P0: Array,
-        motion: CourseSpeedDepthMotion,
+        dr_motion: CourseSpeedDepthMotion,
         history_s: float = 10.0,
         gate_probability: float | None = None,
-        current_sigma0_m_s: float | None = None,
-        current_walk_m_s_per_sqrt_s: float = 0.005,
         max_consecutive_rejections: int | None = None,
     ):
-        self.dr_motion = motion
+        self.estimator = estimator
+        self.dr_motion = dr_motion
         self.gate_probability = gate_probability
         self.history_s = float(history_s)
         self.max_consecutive_rejections = max_consecutive_rejections
         self._rejections: dict[str, int] = {}
-        x0 = np.asarray(x0, dtype=float).reshape(1, 3)
-        P0 = np.asarray(P0, dtype=float).reshape(1, 3, 3)
-        self._dr = x0.copy()
-        if current_sigma0_m_s is None:
-            self.motion = motion
-            self.dim = 3
-            xs, Ps = x0, P0
-        else:
-            self.motion = CurrentAwareMotion(motion, current_walk_m_s_per_sqrt_s)
-            self.dim = 5
-            xs = np.concatenate([x0, np.zeros((1, 2))], axis=1)
-            Ps = np.zeros((1, 5, 5))
-            Ps[:, :3, :3] = P0
-            Ps[:, 3, 3] = Ps[:, 4, 4] = current_sigma0_m_s**2
-        self._hist: deque[_Slot] = deque([_Slot(float(t0_s), xs.copy(), Ps.copy(), None, 0.0)])
+        xs = np.array(x0, dtype=float).reshape(1, -1)
+        self.dim = xs.shape[1]
+        Ps = np.array(P0, dtype=float).reshape(1, self.dim, self.dim)
+        self._current = estimator.motion.current_components
+        self._dr = DeadReckoning(xs[0, :3])
+        self._hist: deque[_Slot] = deque([_Slot(float(t0_s), xs, Ps, None, 0.0)])
         self.n_rejected = 0
         self.n_applied = 0
 
@@ -133,15 +133,16 @@ class Navigator:
     def current_estimate(self) -> tuple[Array, Array] | None:
         """Estimated current (east, north), m/s, and its 2x2 covariance, or ``None`` without a
         current state."""
-        if self.dim < 5:
+        c = self._current
+        if c is None:
             return None
         s = self._hist[-1]
-        return s.x[0, 3:5].copy(), s.P[0, 3:5, 3:5].copy()
+        return s.x[0, c].copy(), s.P[0, c, c].copy()
 
     @property
     def dr_position(self) -> Array:
         """The dead-reckoned position now, shape (3,), m, world."""
-        return self._dr[0].copy()
+        return self._dr.position.copy()
 
     # -- time update --------------------------------------------------------------------------
 
@@ -155,6 +156,10 @@ class Navigator:
             heading_rad: measured heading, rad clockwise from north.
             speed_m_s: measured speed through water, m/s.
             depth_change_m: depth change over the step, m (positive down).
+
+        Raises:
+            NavInputError: if ``t_s`` is not after the current time or an input is not finite.
+            FilterDivergedError: if the prediction is not finite.
         """
         last = self._hist[-1]
         dt = t_s - last.t_s
@@ -163,51 +168,17 @@ class Navigator:
         u = np.array([[heading_rad, speed_m_s, depth_change_m]], dtype=float)
         if not np.all(np.isfinite(u)):
             raise NavInputError(f"predict at t = {t_s} s: non-finite input {u[0].tolist()}")
-        x, P = self._predict(last.x, last.P, u, dt)
+        x, P = self.estimator.predict(last.x, last.P, u, dt)
         if not (np.isfinite(x).all() and np.isfinite(P).all()):
             raise FilterDivergedError(f"navigation estimate not finite at t = {t_s:g} s")
         self._hist.append(_Slot(float(t_s), x, P, u, dt))
-        # DR: seed 000 eq. 8/16 with the same inputs, no current (scalar form of dr_motion.f)
-        h, spd = u[0, 0], u[0, 1]
-        self._dr = self._dr + np.array([[dt * spd * math.sin(h), dt * spd * math.cos(h), -u[0, 2]]])
+        self._dr.advance(self.dr_motion.increment_one(u[0], dt))
         while len(self._hist) > 2 and self._hist[1].t_s < t_s - self.history_s:
             self._hist.popleft()
 
-    def _predict(self, x: Array, P: Array, u: Array, dt: float) -> tuple[Array, Array]:
-        """One prediction (eq. 17-18), exploiting the structure of the two motion models: the
-        same numbers as :func:`nav.ekf.predict` with ``F`` and ``Q`` of the model (tested), in a
-        fraction of the time for a single vehicle."""
-        m = self.motion
-        base = m.base if isinstance(m, CurrentAwareMotion) else m
-        c, s = math.cos(u[0, 0]), math.sin(u[0, 0])
-        spd = u[0, 1]
-        sc2, ss2 = base.sigma_course_rad**2, base.sigma_speed_m_s**2
-        g00, g01, g10, g11 = dt * spd * c, dt * s, -dt * spd * s, dt * c
-        q00 = g00 * g00 * sc2 + g01 * g01 * ss2
-        q01 = g00 * g10 * sc2 + g01 * g11 * ss2
-        q11 = g10 * g10 * sc2 + g11 * g11 * ss2
-        x_new = x.copy()
-        x_new[0, 0] += dt * spd * s
-        x_new[0, 1] += dt * spd * c
-        x_new[0, 2] -= u[0, 2]
-        P_new = P[0].copy()
-        if isinstance(m, CurrentAwareMotion):
-            x_new[0, :2] += dt * x[0, 3:5]
-            P_new[:2, :] += dt * P_new[3:5, :]  # F P
-            P_new[:, :2] += dt * P_new[:, 3:5]  # (F P) F^T
-            q = m.sigma_current_walk_m_s_per_sqrt_s**2 * dt
-            P_new[3, 3] += q
-            P_new[4, 4] += q
-        P_new[0, 0] += q00
-        P_new[0, 1] += q01
-        P_new[1, 0] += q01
-        P_new[1, 1] += q11
-        P_new[2, 2] += base.sigma_depth_change_m**2
-        return x_new, P_new[None]
-
     def reset_dr(self, x: Array) -> None:
-        """Restart the DR track from a position, shape (3,)."""
-        self._dr = np.asarray(x, dtype=float).reshape(1, 3).copy()
+        """Restart the DR track from a position, shape (3,), m, world."""
+        self._dr.reset(np.asarray(x, dtype=float).reshape(3))
 
     # -- measurement update -------------------------------------------------------------------
 
@@ -217,7 +188,7 @@ class Navigator:
         """Apply a measurement at the tick it refers to and re-predict to now.
 
         Args:
-            model: its measurement model.
+            model: its measurement model (of the position, :mod:`nav.models`).
             z: the measurement, shape (m,).
             t_valid_s: its time of validity, s (default: now).
 
@@ -226,6 +197,7 @@ class Navigator:
 
         Raises:
             NavInputError: if the measurement is older than the kept history or not finite.
+            FilterDivergedError: if the re-predicted estimate is not finite.
         """
         z = np.asarray(z, dtype=float).reshape(1, -1)
         if not np.all(np.isfinite(z)):
@@ -242,20 +214,14 @@ class Navigator:
                 f"measurement valid at {t:.3f} s is older than the navigation history "
                 f"(from {slots[0].t_s:.3f} s); raise history_s"
             )
-        if self.dim != 3:
-            model = OnPosition(model, self.dim)
-        key = type(getattr(model, "model", model)).__name__
+        key = type(model).__name__
         gate = self.gate_probability
         if (
             self.max_consecutive_rejections is not None
             and self._rejections.get(key, 0) >= self.max_consecutive_rejections
         ):
             gate = None
-        x, P = slots[k].x, slots[k].P
-        hx = model.h(x)
-        x, P, info = _update_one(
-            x, P, model.residual(z, hx), model.H(x), model.R(), model.active(x), gate
-        )
+        x, P, info = self.estimator.update(slots[k].x, slots[k].P, model, z, None, gate)
         if info.rejected[0]:
             self.n_rejected += 1
             self._rejections[key] = self._rejections.get(key, 0) + 1
@@ -264,47 +230,66 @@ class Navigator:
         self.n_applied += 1
         slots[k].x, slots[k].P = x, P
         for j in range(k + 1, len(slots)):
-            x, P = self._predict(x, P, slots[j].u, slots[j].dt_s)
+            x, P = self.estimator.predict(x, P, slots[j].u, slots[j].dt_s)
             slots[j].x, slots[j].P = x, P
         if not (np.isfinite(x).all() and np.isfinite(P).all()):
             raise FilterDivergedError(f"navigation estimate not finite at t = {self.t_s:g} s")
         return info
 
 
-def _update_one(
-    x: Array,
-    P: Array,
-    y: Array,
-    H: Array,
-    R: Array,
-    active: NDArray[np.bool_],
-    gate_probability: float | None,
-) -> tuple[Array, Array, UpdateInfo]:
-    """The EKF update of :func:`nav.ekf.update` (eq. 19-23, Joseph form, inactive components
-    removed, chi-square gate) for a single run, without the batch machinery (tested equal)."""
-    idx = np.flatnonzero(active[0])
-    if idx.size == 0:
-        none = np.array([False])
-        return x, P, UpdateInfo(np.array([np.nan]), np.array([0]), none, none)
-    Ha, ya, Ra = H[0][idx], y[0][idx], R[np.ix_(idx, idx)]
-    P0 = P[0]
-    PHt = P0 @ Ha.T
-    S = Ha @ PHt + Ra  # eq. 20
-    S = 0.5 * (S + S.T)
-    nis = float(ya @ np.linalg.solve(S, ya))
-    if gate_probability is not None and nis > gate_limit(gate_probability, int(idx.size)):
-        return (
-            x,
-            P,
-            UpdateInfo(np.array([nis]), np.array([idx.size]), np.array([False]), np.array([True])),
+class Navigator(OnlineNavigator):
+    """Today's navigator in one call: seed 000's motion model driven by heading and speed
+    through water, with the current in the state or not, under the single-run EKF, and DR on the
+    same inputs without the current.
+
+    Equivalent to ``OnlineNavigator(SingleRunEKF(m), t0_s, x0', P0', motion, history_s,
+    gate_probability, max_consecutive_rejections)`` with ``m = motion`` and the position state, or
+    with ``m = CurrentAwareMotion(motion, current_walk_m_s_per_sqrt_s)`` and the state extended by
+    a zero current of variance ``current_sigma0_m_s**2`` per component.
+
+    Args:
+        t0_s: start time, s.
+        x0: initial position estimate, shape (3,), m, world.
+        P0: initial position covariance, shape (3, 3), m^2.
+        motion: motion model (inputs heading, speed, depth change; its sigmas).
+        history_s: how long states are kept for late measurements, s.
+        gate_probability: chi-square gate probability, or ``None`` for no gate.
+        current_sigma0_m_s: initial standard deviation of each current component, m/s, or
+            ``None`` for seed 000's three-state filter without current.
+        current_walk_m_s_per_sqrt_s: random-walk intensity of the current, (m/s)/sqrt(s).
+        max_consecutive_rejections: lock-out guard (see the module docstring), or ``None``.
+    """
+
+    def __init__(
+        self,
+        t0_s: float,
+        x0: Array,
+        P0: Array,
+        motion: CourseSpeedDepthMotion,
+        history_s: float = 10.0,
+        gate_probability: float | None = None,
+        current_sigma0_m_s: float | None = None,
+        current_walk_m_s_per_sqrt_s: float = 0.005,
+        max_consecutive_rejections: int | None = None,
+    ):
+        x0 = np.asarray(x0, dtype=float).reshape(3)
+        P0 = np.asarray(P0, dtype=float).reshape(3, 3)
+        if current_sigma0_m_s is None:
+            nav_motion: CourseSpeedDepthMotion | CurrentAwareMotion = motion
+            xs, Ps = x0, P0
+        else:
+            nav_motion = CurrentAwareMotion(motion, current_walk_m_s_per_sqrt_s)
+            xs = np.concatenate([x0, np.zeros(2)])
+            Ps = np.zeros((5, 5))
+            Ps[:3, :3] = P0
+            Ps[3, 3] = Ps[4, 4] = current_sigma0_m_s**2
+        super().__init__(
+            SingleRunEKF(nav_motion),
+            t0_s,
+            xs,
+            Ps,
+            motion,
+            history_s,
+            gate_probability,
+            max_consecutive_rejections,
         )
-    K = np.linalg.solve(S, PHt.T).T  # eq. 21
-    x_new = x + (K @ ya)[None]  # eq. 22
-    I_KH = np.eye(P0.shape[0]) - K @ Ha
-    P_new = I_KH @ P0 @ I_KH.T + K @ Ra @ K.T  # eq. 23, Joseph form
-    P_new = 0.5 * (P_new + P_new.T)
-    return (
-        x_new,
-        P_new[None],
-        UpdateInfo(np.array([nis]), np.array([idx.size]), np.array([True]), np.array([False])),
-    )

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from bauv_sim.config import Config
-from bauv_sim.frames import velocity_from_course_speed
+from bauv_sim.frames import unit_vector_scalar, velocity_from_course_speed
 from bauv_sim.sensors.base import check_multiple
 from bauv_sim.truth import Truth
 
@@ -78,8 +78,8 @@ def passage_start(
     if cfg.start_east_m is not None and cfg.start_north_m is not None:
         return np.array([cfg.start_east_m, cfg.start_north_m, -cfg.depth_m])
     c = math.radians(cfg.course_deg)
-    along = np.array([math.sin(c), math.cos(c)])
-    starboard = np.array([math.cos(c), -math.sin(c)])
+    along = np.array(unit_vector_scalar(c))
+    starboard = np.array([along[1], -along[0]])  # the course turned 90 deg clockwise
     tx = transceiver.position_world_m()[:2]
     closest = tx - cfg.closest_approach_offset_m * starboard
     start = closest - cfg.closest_approach_time_s * cfg.speed_m_s * along

@@ -59,7 +59,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import Field, field_validator, model_validator
 
 from bauv_sim.config import Config
-from bauv_sim.frames import velocity_from_course_speed, wrap_2pi, wrap_pi
+from bauv_sim.frames import diff_course, velocity_from_course_speed, wrap_2pi
 
 Array = NDArray[np.float64]
 
@@ -151,8 +151,9 @@ def _ratio(value: float, unit: float, what: str, unit_name: str) -> int:
 def rho_s(gamma_rad: ArrayLike, cos_coeffs: Sequence[float]) -> Array:
     """The hull response ``rho_s(gamma) = sum_k a_k cos(k gamma)`` (eq. 29), any shape.
 
-    The same series as :meth:`nav.correction.CurrentResponse.rho_s` (repeated here because the world
-    does not import the navigation package; a test checks they agree).
+    The same series as :meth:`nav.correction.CurrentResponse.rho_s`, repeated here because this
+    is the world's truth and that the navigation's model of it (the world shares only
+    :mod:`nav.angles` with the navigation package); a test checks they agree.
     """
     return chebyshev.chebval(np.cos(np.asarray(gamma_rad, dtype=float)), np.asarray(cos_coeffs))
 
@@ -263,7 +264,7 @@ def mean_current_speed(
         Shape (n,), m/s.
     """
     ac = math.radians(cfg.current_direction_deg)
-    gamma = np.abs(wrap_pi(np.asarray(hull_course_rad, dtype=float) - ac))
+    gamma = diff_course(hull_course_rad, ac)
     ratio = rho_s(gamma, cfg.rho_s_cos_coeffs) / rho_s(ac, cfg.rho_s_cos_coeffs)
     return np.asarray(current_speed_m_s, dtype=float) * ratio
 

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from bauv_sim.config import Config
-from bauv_sim.frames import KNOT_M_S
+from bauv_sim.frames import KNOT_M_S, unit_vector
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import ErrorProcess, SpeedErrorConfig
 from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
@@ -38,10 +38,11 @@ def forward_speed_through_water(truth: Truth) -> NDArray[np.float64]:
     The body x axis in the world is ``(cos p sin h, cos p cos h, sin p)`` for pitch p and heading h
     (roll turns the body about that axis and does not move it).
     """
-    p, h = truth.roll_pitch_rad[..., 1], truth.heading_rad
+    p = truth.roll_pitch_rad[..., 1]
+    u = unit_vector(truth.heading_rad)
     v = truth.vel_water_world_m_s
     cp = np.cos(p)
-    return cp * np.sin(h) * v[..., 0] + cp * np.cos(h) * v[..., 1] + np.sin(p) * v[..., 2]
+    return cp * u[..., 0] * v[..., 0] + cp * u[..., 1] * v[..., 1] + np.sin(p) * v[..., 2]
 
 
 class Log:

@@ -60,7 +60,7 @@ from bauv_sim.sensors import (
 )
 from bauv_sim.truth import Truth
 from nav.dead_reckoning import dead_reckon
-from nav.ekf import BatchEKF
+from nav.ekf import BatchEKF, check_estimate
 from nav.metrics import (
     Histogram,
     SeriesSum,
@@ -396,22 +396,25 @@ def run_ekf(
         ``(x (n, T + 1, 3), P (n, T + 1, 3, 3), nis (n, k), gate_rejected (n, k))``.
     """
     n, T, _ = inp.u.shape
-    ekf = BatchEKF(inp.x0, inp.P0)
+    ekf = BatchEKF(inp.motion)
+    x, P = np.array(inp.x0, dtype=float), np.broadcast_to(inp.P0, (n, 3, 3)).copy()
     xs = np.empty((n, T + 1, 3))
     Ps = np.empty((n, T + 1, 3, 3))
-    xs[:, 0], Ps[:, 0] = ekf.x, ekf.P
+    xs[:, 0], Ps[:, 0] = x, P
     nis = np.full(inp.z_produced.shape, np.nan)
     rejected = np.zeros(inp.z_produced.shape, dtype=bool)
     fix_at = {int(t): j for j, t in enumerate(inp.fix_tick)}
     for k in range(T):
-        ekf.predict(inp.motion, inp.u[:, k], tick_s)
+        x, P = ekf.predict(x, P, inp.u[:, k], tick_s)
         j = fix_at.get(k + 1)
         if j is not None:
-            info = ekf.update(inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability)
+            x, P, info = ekf.update(
+                x, P, inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability
+            )
             nis[:, j] = info.nis
             rejected[:, j] = info.rejected
-        xs[:, k + 1], Ps[:, k + 1] = ekf.x, ekf.P
-    ekf.check(T * tick_s)
+        xs[:, k + 1], Ps[:, k + 1] = x, P
+    check_estimate(x, P, T * tick_s)
     return xs, Ps, nis, rejected
 
 

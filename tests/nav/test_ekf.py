@@ -1,4 +1,5 @@
-"""The batched EKF against filterpy's ExtendedKalmanFilter, path by path, and its robustness."""
+"""The batched EKF against filterpy's ExtendedKalmanFilter, path by path, its robustness, and the
+single-run EKF against the batched one."""
 
 import math
 
@@ -7,9 +8,15 @@ import pytest
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.stats import chi2
 
-from nav.ekf import BatchEKF, update
+from nav.ekf import BatchEKF, SingleRunEKF, check_estimate, update, update_one
 from nav.errors import FilterDivergedError, NavInputError
-from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+from nav.models import (
+    CourseSpeedDepthMotion,
+    CurrentAwareMotion,
+    DepthMeasurement,
+    HorizontalPositionMeasurement,
+    UsblMeasurement,
+)
 
 TX = np.array([0.0, 0.0, -6.0])
 USBL = UsblMeasurement(TX, 0.2, math.radians(3), math.radians(3))
@@ -38,14 +45,15 @@ def test_batched_ekf_equals_filterpy_path_by_path():
     n, T = 6, 120
     x0, u, z, k_fix = _inputs(n, T, 5)
     P0 = np.diag([4.5, 4.5, 0.0625])
-    batch = BatchEKF(x0, P0)
+    batch = BatchEKF(MOTION)
+    x, P = x0, np.broadcast_to(P0, (n, 3, 3))
     xs_b, Ps_b = [], []
     for k in range(T):
-        batch.predict(MOTION, u[:, k], 1.0)
+        x, P = batch.predict(x, P, u[:, k], 1.0)
         if (k + 1) % k_fix == 0:
-            batch.update(USBL, z[:, k])
-        xs_b.append(batch.x.copy())
-        Ps_b.append(batch.P.copy())
+            x, P, _ = batch.update(x, P, USBL, z[:, k])
+        xs_b.append(x)
+        Ps_b.append(P)
     for i in range(n):
         ekf = ExtendedKalmanFilter(dim_x=3, dim_z=3, dim_u=3)
         ekf.x = x0[i].copy()
@@ -70,13 +78,14 @@ def test_batched_ekf_equals_filterpy_path_by_path():
 
 def test_joseph_update_keeps_covariance_symmetric_positive():
     x0, u, z, _ = _inputs(50, 40, 1, seed=9)
-    f = BatchEKF(x0, np.diag([4.5, 4.5, 0.06]))
+    f = BatchEKF(MOTION)
+    x, P = x0, np.broadcast_to(np.diag([4.5, 4.5, 0.06]), (50, 3, 3))
     for k in range(40):
-        f.predict(MOTION, u[:, k], 1.0)
-        f.update(USBL, z[:, k])
-        assert np.allclose(f.P, np.swapaxes(f.P, 1, 2), atol=0)
-        assert np.all(np.linalg.eigvalsh(f.P) > 0)
-    f.check(40.0)
+        x, P = f.predict(x, P, u[:, k], 1.0)
+        x, P, _ = f.update(x, P, USBL, z[:, k])
+        assert np.allclose(P, np.swapaxes(P, 1, 2), atol=0)
+        assert np.all(np.linalg.eigvalsh(P) > 0)
+    check_estimate(x, P, 40.0)
 
 
 def test_inactive_component_equals_update_without_it():
@@ -98,37 +107,133 @@ def test_inactive_component_equals_update_without_it():
 
 def test_absent_runs_are_unchanged_and_gate_rejects_outliers():
     x0, u, z, _ = _inputs(40, 2, 1, seed=5)
-    f = BatchEKF(x0, np.diag([4.5, 4.5, 0.06]))
-    f.predict(MOTION, u[:, 0], 1.0)
-    x_before, P_before = f.x.copy(), f.P.copy()
+    f = BatchEKF(MOTION)
+    x_before, P_before = f.predict(
+        x0, np.broadcast_to(np.diag([4.5, 4.5, 0.06]), (40, 3, 3)), u[:, 0], 1.0
+    )
     present = np.arange(40) % 2 == 0
     zz = z[:, 0].copy()
     zz[::4, 0] += 60.0  # gross range outliers on every other present run
-    info = f.update(USBL, zz, present=present, gate_probability=0.99)
-    assert np.array_equal(f.x[~present], x_before[~present])
-    assert np.array_equal(f.P[~present], P_before[~present])
+    x, P, info = f.update(x_before, P_before, USBL, zz, present=present, gate_probability=0.99)
+    assert np.array_equal(x[~present], x_before[~present])
+    assert np.array_equal(P[~present], P_before[~present])
     assert np.all(np.isnan(info.nis[~present]))
     limit = chi2.ppf(0.99, 3)
     assert np.array_equal(info.rejected, present & (info.nis > limit))
     assert info.rejected[::4].all()
-    assert np.array_equal(f.x[info.rejected], x_before[info.rejected])
+    assert np.array_equal(x[info.rejected], x_before[info.rejected])
 
 
 def test_vehicle_above_the_transceiver_gives_finite_update():
     x = np.array([[0.0, 0.0, -3.0], [0.2, -0.1, -3.0]])
-    f = BatchEKF(x, np.diag([4.5, 4.5, 0.06]))
     z = USBL.h(np.array([[0.5, 0.4, -3.2], [0.1, 0.1, -2.9]]))
-    f.update(USBL, z)
-    assert np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.P))
-    f.check(0.0)
+    x, P, info = BatchEKF(MOTION).update(
+        x, np.broadcast_to(np.diag([4.5, 4.5, 0.06]), (2, 3, 3)), USBL, z
+    )
+    assert np.all(np.isfinite(x)) and np.all(np.isfinite(P)) and np.all(info.dof == 2)
+    check_estimate(x, P, 0.0)
 
 
 def test_bad_inputs_raise():
-    f = BatchEKF(np.zeros((1, 3)), np.eye(3))
-    f.x[0, 0] = np.nan
+    x = np.zeros((1, 3))
+    x[0, 0] = np.nan
     with pytest.raises(FilterDivergedError, match="t = 7"):
-        f.check(7.0)
+        check_estimate(x, np.eye(3)[None], 7.0)
+    with pytest.raises(FilterDivergedError, match="rows \\[0\\]"):
+        check_estimate(np.zeros((1, 3)), -np.eye(3)[None], 7.0)
+    args = (np.zeros((1, 1)), np.eye(1)[None], np.zeros((1, 1)), np.eye(1)[None], np.zeros((1, 1)))
     with pytest.raises(NavInputError, match="positive variances"):
-        update(
-            np.zeros((1, 1)), np.eye(1)[None], np.zeros((1, 1)), np.eye(1)[None], np.zeros((1, 1))
+        update(*args)
+    with pytest.raises(NavInputError, match="positive variances"):
+        update_one(*args, np.ones((1, 1), bool))
+
+
+# --------------------------------------------------------------------------------------------
+# The single-run EKF equals the batched EKF
+
+
+def _spd(rng, d):
+    A = rng.normal(size=(d, d))
+    return A @ A.T + 0.1 * np.eye(d)
+
+
+CURRENT = CurrentAwareMotion(MOTION, 0.005)
+
+
+@pytest.mark.parametrize("motion", [MOTION, CURRENT], ids=["position", "current"])
+def test_single_run_prediction_equals_the_batched_prediction(motion):
+    rng = np.random.default_rng(21)
+    d = motion.dim
+    for _ in range(50):
+        x = rng.normal(0, 100, (1, d))
+        x[0, 3:] = rng.normal(0, 0.3, d - 3)
+        P = _spd(rng, d)[None]
+        u = np.array([[rng.uniform(-7, 7), rng.uniform(0, 2), rng.normal(0, 0.3)]])
+        dt = rng.uniform(0.01, 5.0)
+        xf, Pf = SingleRunEKF(motion).predict(x, P, u, dt)
+        xb, Pb = BatchEKF(motion).predict(x, P, u, dt)
+        assert xf.shape == xb.shape and Pf.shape == Pb.shape
+        assert np.allclose(xf, xb, rtol=1e-12, atol=1e-12)
+        assert np.allclose(Pf, Pb, rtol=1e-12, atol=1e-12)
+
+
+def _measurement_cases(rng, model, d, n=60):
+    """States near the transceiver (some vertically above it: azimuth inactive), covariances,
+    and measurements of nearby truths with a gross error on every fifth."""
+    x = np.zeros((n, d))
+    x[:, :3] = TX + rng.normal(0, 30, (n, 3)) * [1, 1, 0.1]
+    x[::7, :2] = TX[:2] + rng.uniform(-0.5, 0.5, (len(x[::7]), 2))
+    x[:, 3:] = rng.normal(0, 0.3, (n, d - 3))
+    P = np.stack([_spd(rng, d) for _ in range(n)])
+    truth = x + rng.normal(0, 1.0, x.shape)
+    z = model.h(truth)
+    z[::5, 0] += 40.0 * model.R()[0, 0] ** 0.5 + 5.0
+    return x, P, z
+
+
+@pytest.mark.parametrize("dim", [3, 5])
+@pytest.mark.parametrize("gate", [None, 0.95])
+@pytest.mark.parametrize(
+    "model",
+    [USBL, HorizontalPositionMeasurement(1.5), DepthMeasurement(0.1)],
+    ids=["usbl", "gps", "depth"],
+)
+def test_single_run_update_equals_the_batched_update(model, gate, dim):
+    rng = np.random.default_rng(5)
+    x, P, z = _measurement_cases(rng, model, dim)
+    present = np.arange(len(x)) % 9 != 4
+    xb, Pb, ib = BatchEKF(MOTION).update(x, P, model, z, present, gate)
+    fast = SingleRunEKF(MOTION)
+    for i in range(len(x)):
+        xo, Po, io = fast.update(
+            x[i : i + 1], P[i : i + 1], model, z[i : i + 1], present[i : i + 1], gate
         )
+        assert np.allclose(xo, xb[i : i + 1], rtol=1e-12, atol=1e-12)
+        assert np.allclose(Po, Pb[i : i + 1], rtol=1e-12, atol=1e-12)
+        assert io.applied[0] == ib.applied[i] and io.rejected[0] == ib.rejected[i]
+        assert io.dof[0] == ib.dof[i]
+        assert io.nis[0] == pytest.approx(ib.nis[i], rel=1e-12, nan_ok=True)
+    # every branch was taken: applied, absent, and (with the gate) rejected
+    assert ib.applied.any() and (~present).any()
+    assert ib.rejected.any() == (gate is not None)
+    if model is USBL:
+        assert (ib.dof == 2).any()  # the azimuth was inactive above the transceiver
+
+
+def test_single_run_update_on_components_equals_the_batched_update():
+    rng = np.random.default_rng(11)
+    for d, m in [(3, 3), (5, 3), (5, 1), (5, 2)]:
+        for _ in range(20):
+            P = _spd(rng, d)[None]
+            x = rng.normal(size=(1, d))
+            H = rng.normal(size=(1, m, d))
+            y = rng.normal(size=(1, m))
+            R = np.diag(rng.uniform(0.1, 1.0, m))
+            active = rng.random((1, m)) > 0.3
+            for gate in (None, 0.9):
+                xb, Pb, ib = update(x, P, y, H, R, active, None, gate)
+                xo, Po, io = update_one(x, P, y, H, R, active, gate)
+                assert np.allclose(xb, xo, rtol=1e-12, atol=1e-12)
+                assert np.allclose(Pb, Po, rtol=1e-12, atol=1e-12)
+                assert ib.rejected[0] == io.rejected[0] and ib.applied[0] == io.applied[0]
+                assert ib.nis[0] == pytest.approx(io.nis[0], rel=1e-12, nan_ok=True)

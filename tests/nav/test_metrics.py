@@ -3,10 +3,7 @@
 import numpy as np
 import pytest
 
-from nav.dead_reckoning import dead_reckon
-from nav.ekf import BatchEKF
 from nav.metrics import Histogram, SeriesSum, nees, nees_band, series_stats
-from nav.models import CourseSpeedDepthMotion
 
 
 @pytest.mark.parametrize(
@@ -48,19 +45,3 @@ def test_series_stats_ignores_absent():
     st = series_stats(np.array([5.0, 1.0, 3.0, 100.0]), np.array([True, True, True, False]))
     assert (st.min, st.max, st.mean) == (1.0, 5.0, 3.0)
     assert np.isnan(series_stats(np.array([1.0]), np.array([False])).mean)
-
-
-def test_dead_reckoning_equals_stepping_the_ekf_prediction():
-    rng = np.random.default_rng(8)
-    m = CourseSpeedDepthMotion(0.1, 0.2, 0.25)
-    u = np.stack(
-        [rng.uniform(0, 6, (5, 30)), rng.uniform(0.5, 1.5, (5, 30)), rng.normal(0, 0.2, (5, 30))],
-        -1,
-    )
-    x0 = rng.normal(0, 10, (5, 3))
-    P0 = np.diag([1.0, 2.0, 0.1])
-    x, P = dead_reckon(x0, u, 1.0, m, P0)
-    f = BatchEKF(x0, P0)
-    for k in range(30):
-        f.predict(m, u[:, k], 1.0)
-    assert np.allclose(x[:, -1], f.x, atol=1e-10) and np.allclose(P[:, -1], f.P, atol=1e-10)

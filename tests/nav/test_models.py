@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 
 from nav.accuracy import dr_step_covariance
-from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+from nav.models import (
+    CourseSpeedDepthMotion,
+    DepthMeasurement,
+    HorizontalPositionMeasurement,
+    UsblMeasurement,
+)
 
 RNG = np.random.default_rng(2024)
 TX = np.array([12.0, -7.0, -6.0])
@@ -94,3 +99,27 @@ def test_process_noise_horizontal_block_is_seed000_eq10():
     P10 = dr_step_covariance(u[:, 0], u[:, 1], 1.0, MOTION.sigma_course_rad, MOTION.sigma_speed_m_s)
     assert np.allclose(Q[:, :2, :2], P10, rtol=1e-12, atol=1e-15)
     assert np.allclose(Q[:, 2, 2], 0.25**2) and np.allclose(Q[:, :2, 2], 0)
+
+
+def test_increment_of_one_run_is_the_batched_increment():
+    u = np.column_stack(
+        [RNG.uniform(-7, 7, 200), RNG.uniform(0.0, 2, 200), RNG.normal(0, 0.3, 200)]
+    )
+    one = np.array([MOTION.increment_one(row, 0.7) for row in u])
+    np.testing.assert_array_max_ulp(one, MOTION.increment(u, 0.7), maxulp=2)
+
+
+@pytest.mark.parametrize(
+    "model",
+    [USBL, HorizontalPositionMeasurement(2.0), DepthMeasurement(0.1)],
+    ids=["usbl", "gps", "depth"],
+)
+def test_position_measurements_read_the_position_of_a_longer_state(model):
+    x3 = TX + RNG.uniform(-50, 50, (30, 3))
+    x3[:3, :2] = TX[:2]  # straight above the transceiver: the USBL azimuth is inactive
+    x5 = np.column_stack([x3, RNG.normal(0, 0.3, (30, 2))])
+    assert np.array_equal(model.h(x5), model.h(x3))
+    assert np.array_equal(model.active(x5), model.active(x3))
+    H5 = model.H(x5)
+    assert H5.shape[-1] == 5
+    assert np.array_equal(H5[..., :3], model.H(x3)) and np.all(H5[..., 3:] == 0.0)

@@ -5,14 +5,17 @@ import math
 import numpy as np
 import pytest
 
+from nav.dead_reckoning import dead_reckon
+from nav.ekf import BatchEKF, SingleRunEKF
 from nav.errors import NavInputError
 from nav.models import (
     CourseSpeedDepthMotion,
+    CurrentAwareMotion,
     DepthMeasurement,
     HorizontalPositionMeasurement,
     UsblMeasurement,
 )
-from nav.navigator import Navigator
+from nav.navigator import Navigator, OnlineNavigator
 
 MOTION = CourseSpeedDepthMotion(math.radians(3), 0.05, 0.02)
 USBL = UsblMeasurement(np.array([50.0, 80.0, -30.0]), 0.2, math.radians(1), math.radians(1))
@@ -33,6 +36,20 @@ def test_without_measurements_the_ekf_is_the_dr():
         nav.predict(0.1 * k, *_inputs(k))
     assert np.allclose(nav.estimate.x, nav.dr_position)
     assert nav.estimate.t_s == pytest.approx(4.9)
+    assert nav.current_estimate is None
+
+
+def test_online_dr_is_the_batched_dr_and_restarts():
+    nav = _nav(current_sigma0_m_s=0.2)
+    u = np.array([[[*_inputs(k), 0.01 * k] for k in range(1, 30)]])
+    for k in range(1, 30):
+        nav.predict(0.1 * k, *u[0, k - 1])
+        if k == 10:
+            nav.update(HorizontalPositionMeasurement(1.0), np.array([5.0, -3.0]))
+    x, _ = dead_reckon(np.array([[0.0, 0.0, -5.0]]), u, 0.1, MOTION)
+    assert np.allclose(nav.dr_position, x[0, -1], atol=1e-12)  # fixes never move the DR
+    nav.reset_dr(np.array([1.0, 2.0, -3.0]))
+    assert np.array_equal(nav.dr_position, [1.0, 2.0, -3.0])
 
 
 def test_late_fix_equals_a_fix_applied_on_time():
@@ -80,44 +97,77 @@ def test_gps_and_depth_updates_and_gate():
     assert info.rejected[0] and nav.n_rejected == 1
 
 
+def _fly(nav):
+    """A mission segment: inputs at 10 Hz, depth every second, a late USBL fix, GPS fixes (the
+    last one gross)."""
+    infos = []
+    for k in range(1, 80):
+        t = 0.1 * k
+        nav.predict(t, *_inputs(k), 0.002)
+        if k % 10 == 0:
+            infos.append(nav.update(DepthMeasurement(0.05), np.array([5.0 + 0.001 * k])))
+        if k == 47:  # valid at 4 s, near where the vehicle then is
+            z = USBL.h(np.array([[1.5, 3.5, -5.2]]))[0]
+            infos.append(nav.update(USBL, z, t_valid_s=4.0))
+        if k in (60, 61, 62, 63):
+            z = np.array([4.0, 5.0]) if k < 63 else np.array([80.0, -60.0])
+            infos.append(nav.update(HorizontalPositionMeasurement(1.0), z))
+    return infos
+
+
 @pytest.mark.parametrize("with_current", [False, True])
-def test_fast_prediction_equals_the_generic_ekf_prediction(with_current):
-    from nav.ekf import predict
-    from nav.models import CurrentAwareMotion
+def test_navigator_is_generic_over_the_estimator(with_current):
+    motion = CurrentAwareMotion(MOTION, 0.01) if with_current else MOTION
+    d = motion.dim
+    x0 = np.zeros(d)
+    x0[2] = -5.0
+    P0 = np.diag([9.0, 9.0, 0.25, 0.04, 0.04][:d])
+    navs = [
+        OnlineNavigator(est(motion), 0.0, x0, P0, MOTION, gate_probability=0.99)
+        for est in (SingleRunEKF, BatchEKF)
+    ]
+    runs = [_fly(nav) for nav in navs]
+    fast, batched = navs
+    assert np.allclose(fast.estimate.x, batched.estimate.x, rtol=1e-12, atol=1e-12)
+    assert np.allclose(fast.estimate.P, batched.estimate.P, rtol=1e-12, atol=1e-12)
+    assert [i.applied[0] for i in runs[0]] == [i.applied[0] for i in runs[1]]
+    assert (fast.n_applied, fast.n_rejected) == (batched.n_applied, batched.n_rejected)
+    assert fast.n_rejected == 1  # the gross GPS fix
+    assert np.array_equal(fast.dr_position, batched.dr_position)
+    if with_current:
+        c_f, C_f = fast.current_estimate
+        c_b, C_b = batched.current_estimate
+        assert np.allclose(c_f, c_b, atol=1e-12) and np.allclose(C_f, C_b, atol=1e-12)
+        assert np.all(np.diag(C_f) < 0.04)  # the fixes told it something about the current
+    else:
+        assert fast.current_estimate is None
 
-    rng = np.random.default_rng(3)
-    nav = Navigator(
-        0.0, np.zeros(3), np.eye(3), MOTION, current_sigma0_m_s=0.3 if with_current else None
+
+def test_navigator_builds_todays_configuration():
+    kw = dict(history_s=5.0, gate_probability=0.99, max_consecutive_rejections=3)
+    P0 = np.diag([9.0, 9.0, 0.25])
+    preset = Navigator(0.0, np.array([0.0, 0.0, -5.0]), P0, MOTION, current_sigma0_m_s=0.2, **kw)
+    P5 = np.zeros((5, 5))
+    P5[:3, :3] = P0
+    P5[3, 3] = P5[4, 4] = 0.2**2
+    explicit = OnlineNavigator(
+        SingleRunEKF(CurrentAwareMotion(MOTION, 0.005)), 0.0, [0, 0, -5.0, 0, 0], P5, MOTION, **kw
     )
-    d = nav.dim
-    A = rng.normal(size=(d, d))
-    P = (A @ A.T + np.eye(d))[None]
-    x = rng.normal(size=(1, d))
-    u = np.array([[1.1, 0.9, 0.05]])
-    m = CurrentAwareMotion(MOTION, 0.005) if with_current else MOTION
-    assert type(nav.motion) is type(m)
-    xf, Pf = nav._predict(x, P, u, 0.2)
-    xg, Pg = predict(x, P, m.f(x, u, 0.2), m.F(x, u, 0.2), m.Q(u, 0.2))
-    assert np.allclose(xf, xg, atol=1e-14) and np.allclose(Pf, Pg, atol=1e-14)
+    _fly(preset)
+    _fly(explicit)
+    assert np.array_equal(preset.estimate.x, explicit.estimate.x)
+    assert np.array_equal(preset.estimate.P, explicit.estimate.P)
+    assert np.array_equal(preset.current_estimate[0], explicit.current_estimate[0])
 
 
-def test_single_run_update_equals_the_batched_update():
-    from nav.ekf import update
-    from nav.navigator import _update_one
-
-    rng = np.random.default_rng(11)
-    for d, m in [(3, 3), (5, 3), (5, 1), (5, 2)]:
-        A = rng.normal(size=(d, d))
-        P = (A @ A.T + np.eye(d))[None]
-        x = rng.normal(size=(1, d))
-        H = rng.normal(size=(1, m, d))
-        y = rng.normal(size=(1, m))
-        R = np.diag(rng.uniform(0.1, 1.0, m))
-        active = rng.random((1, m)) > 0.3
-        for gate in (None, 0.9):
-            xb, Pb, ib = update(x, P, y, H, R, active, None, gate)
-            xo, Po, io = _update_one(x, P, y, H, R, active, gate)
-            assert np.allclose(xb, xo, atol=1e-12) and np.allclose(Pb, Po, atol=1e-12)
-            assert ib.rejected[0] == io.rejected[0] and ib.applied[0] == io.applied[0]
-            if active.any():
-                assert ib.nis[0] == pytest.approx(io.nis[0])
+def test_lock_out_applies_a_fix_after_consecutive_rejections():
+    nav = _nav(gate_probability=0.99, max_consecutive_rejections=2)
+    nav.predict(1.0, 0.0, 1.0)
+    far = np.array([80.0, -60.0])
+    gps = HorizontalPositionMeasurement(1.0)
+    assert nav.update(gps, far).rejected[0] and nav.update(gps, far).rejected[0]
+    assert nav.update(DepthMeasurement(0.05), np.array([5.0])).applied[0]  # counted per model
+    info = nav.update(gps, far)  # the third in a row goes in without the gate
+    assert info.applied[0] and not info.rejected[0] and nav.n_rejected == 2
+    assert nav.estimate.x[0] > 40.0
+    assert nav.update(gps, np.array([200.0, 0.0])).rejected[0]  # the gate is back
