@@ -69,6 +69,7 @@ __all__ = [
     "heading_rate_from_yaw_rate",
     "knots_to_m_s",
     "m_s_to_knots",
+    "navigation_rates_from_body",
     "quat_wxyz_from_R",
     "quat_wxyz_from_roll_pitch_heading",
     "quat_wxyz_to_xyzw",
@@ -246,6 +247,26 @@ def quat_wxyz_from_roll_pitch_heading(
 def heading_from_quat_wxyz(quat_wxyz: ArrayLike) -> NDArray[np.float64]:
     """Heading (clockwise from north, [0, 2 pi), rad) of the body x axis; shape (...)."""
     return roll_pitch_heading_from_R(R_from_quat_wxyz(quat_wxyz))[..., 2]
+
+
+def navigation_rates_from_body(
+    angular_velocity_body_rad_s: ArrayLike,
+) -> tuple[float, float, float]:
+    """Roll, pitch and heading rates in the navigation convention from body FLU rates.
+
+    Roll (starboard down +) turns about body x; pitch (nose up +) is minus the rate about body y
+    (port); the heading rate (clockwise +) is :func:`~nav.angles.heading_rate_from_yaw_rate` of
+    the rate about body z (up). The body rates equal the Euler-angle rates only for a level
+    vehicle (small roll and pitch), as the autopilot and the INS model take them.
+
+    Args:
+        angular_velocity_body_rad_s: (p, q, r) about body x, y, z, shape (3,), rad/s.
+
+    Returns:
+        ``(roll rate, pitch rate, heading rate)``, rad/s, as floats.
+    """
+    w = angular_velocity_body_rad_s
+    return float(w[0]), -float(w[1]), heading_rate_from_yaw_rate(float(w[2]))
 
 
 def world_from_body(R_world_from_body: ArrayLike, vec_body: ArrayLike) -> NDArray[np.float64]:

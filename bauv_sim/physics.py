@@ -440,9 +440,9 @@ class BauvPhysics(mjcf.Physics):
         r20 = 2 * (qx * qz - qw * qy)
         r21 = 2 * (qy * qz + qw * qx)
         r22 = 1 - 2 * (qx * qx + qy * qy)
-        roll = (math.atan2(r21, r22) + math.pi) % (2 * math.pi) - math.pi
+        roll = frames.wrap_pi_scalar(math.atan2(r21, r22))
         pitch = math.asin(min(1.0, max(-1.0, r20)))
-        heading = math.atan2(r00, r10) % (2 * math.pi)
+        heading = frames.course_of_scalar(r00, r10)
         cur = v.current_world.copy()
         vel = np.array([vx, vy, vz])
         return VehicleTruth(

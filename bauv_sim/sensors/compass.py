@@ -8,14 +8,12 @@ course-sector bias of seed 003 are part of the error vocabulary (:mod:`bauv_sim.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
 from bauv_sim.config import Config
-from bauv_sim.frames import wrap_2pi
+from bauv_sim.frames import course_of_scalar, wrap_2pi
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess
 from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
@@ -103,6 +101,6 @@ class CompassDevice:
         course = None
         if self._needs_course:
             v = vt.velocity_world_m_s
-            course = np.array([[math.atan2(v[0], v[1]) % (2 * math.pi)]])  # FRAMES
+            course = np.array([[course_of_scalar(v[0], v[1])]])
         heading = self._compass.measure(np.array([[vt.roll_pitch_heading_rad[2]]]), ctx.tt, course)
         return Measurement(self.name, ctx.t_s, ctx.t_s, heading[0][0])

@@ -12,6 +12,7 @@ import numpy as np
 from pydantic import Field
 
 from bauv_sim.config import Config
+from bauv_sim.frames import navigation_rates_from_body
 from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
 
 
@@ -41,6 +42,5 @@ class InsDevice:
         vt = ctx.truth
         rph = vt.roll_pitch_heading_rad
         w = vt.angular_velocity_body_rad_s
-        # FRAMES: body FLU rates -> navigation rates
-        value = np.array([rph[0], rph[1], float(w[0]), -float(w[1]), -float(w[2])])
+        value = np.array([rph[0], rph[1], *navigation_rates_from_body(w)])
         return Measurement(self.name, ctx.t_s, ctx.t_s, value)

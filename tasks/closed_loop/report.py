@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, Field
 
+from bauv_sim.frames import velocity_from_course_speed
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.scenario import MissionScenario
 from tasks.core.registry import ReportContext, ReportSummary
@@ -206,9 +207,9 @@ def report_mission(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
 
 
 def circle(cx: float, cy: float, r: float, z: float = 0.0, n: int = 48) -> NDArray[np.float64]:
-    """A horizontal circle as a closed polyline, shape (n + 1, 3), m, world (FRAMES)."""
-    a = np.linspace(0, 2 * np.pi, n + 1)
-    return np.column_stack([cx + r * np.sin(a), cy + r * np.cos(a), np.full(n + 1, z)])
+    """A horizontal circle as a closed polyline, shape (n + 1, 3), m, world."""
+    ring = (cx, cy) + velocity_from_course_speed(np.linspace(0, 2 * np.pi, n + 1), r)
+    return np.column_stack([ring, np.full(n + 1, z)])
 
 
 def mission_figures(

@@ -39,6 +39,7 @@ from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.currents import make_current
 from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import BauvSimError, PhysicsError
+from bauv_sim.frames import unit_vector_scalar
 from bauv_sim.sea import Sea
 from bauv_sim.sensors.rig import SensorRig
 from nav.errors import NavError
@@ -71,8 +72,7 @@ def place_vehicle(
         math.radians(start.heading_deg)
         + math.radians(start.heading_sigma_deg) * g.standard_normal()
     )
-    # FRAMES: course and speed -> velocity
-    vel = start.speed_m_s * np.array([math.sin(heading), math.cos(heading), 0.0])
+    vel = start.speed_m_s * np.array([*unit_vector_scalar(heading), 0.0])
     physics.set_pose(pos, (0.0, 0.0, heading), vel, vehicle=vehicle)
     return pos
 

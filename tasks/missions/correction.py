@@ -35,6 +35,13 @@ from pydantic import BaseModel, Field
 from bauv_sim import rng as rng_mod
 from bauv_sim.config import Config, load_config, to_plain
 from bauv_sim.errors import ConfigError
+from bauv_sim.frames import (
+    course_of,
+    diff_course,
+    unit_vector_scalar,
+    wrap_2pi_scalar,
+    wrap_pi_scalar,
+)
 from bauv_sim.sensors.rig import RigTick
 from nav.correction import CurrentResponse, compensated_course
 from nav.drns import CorrectedDeadReckoning
@@ -93,7 +100,7 @@ def leg_courses(scn: CorrectionScenario, seed: int, run: int) -> tuple[float, fl
         a1 = g.uniform(0, 2 * math.pi)
         # the second course at least `sep` from the first and from its opposite
         d = g.uniform(sep, math.pi - sep) * (1 if g.random() < 0.5 else -1)
-        a2 = (a1 + d) % (2 * math.pi)
+        a2 = wrap_2pi_scalar(a1 + d)
     else:
         a1, a2 = (math.radians(x) for x in c.cp2_courses_deg)
     a3 = g.uniform(0, 2 * math.pi)
@@ -109,7 +116,7 @@ def run_scenario(scn: CorrectionScenario, seed: int, run: int) -> CorrectionScen
     p = np.array([scn.start.east_m, scn.start.north_m])
     wps = []
     for i, course in enumerate(a):
-        p = p + c.leg_length_m * np.array([math.sin(course), math.cos(course)])  # FRAMES
+        p = p + c.leg_length_m * np.array(unit_vector_scalar(course))
         wps.append(
             {
                 "east_m": float(p[0]),
@@ -248,9 +255,9 @@ class LegGuidance:
             # onto the course is over, at the rest of the 100 m from the leg's start
             start = self.leg_start.setdefault(leg, p.copy())
             heading = nav.heading_rad
-            if leg == 2 or abs(math.remainder(heading - c, 2 * math.pi)) < math.radians(10.0):
+            if leg == 2 or abs(wrap_pi_scalar(heading - c)) < math.radians(10.0):
                 rest = max(self.leg_length_m - float(np.linalg.norm(p - start)), 0.0)
-                new = p + rest * np.array([math.sin(c), math.cos(c)])  # FRAMES
+                new = p + rest * np.array(unit_vector_scalar(c))
                 self.g.waypoints[leg] = dataclasses.replace(
                     self.g.waypoints[leg], east_m=float(new[0]), north_m=float(new[1])
                 )
@@ -329,9 +336,9 @@ def leg3_metrics(v: VehicleRun, wp3: NDArray[np.float64]) -> dict[str, float]:
     vel = a["truth_vel"][m, :2]
     kernel = np.ones(n) / n
     vel = np.column_stack([np.convolve(vel[:, i], kernel, mode="same") for i in range(2)])
-    cog = np.arctan2(vel[:, 0], vel[:, 1])  # FRAMES
-    nu = np.arctan2(wp3[0] - truth[:, 0], wp3[1] - truth[:, 1])
-    dev = np.degrees(np.abs(np.angle(np.exp(1j * (cog - nu)))))
+    cog = course_of(vel)
+    nu = course_of(wp3 - truth)
+    dev = np.degrees(diff_course(cog, nu))
     far = np.linalg.norm(wp3 - truth, axis=1) > 10.0  # the course to a point is ill-defined near it
     out["course_deviation_deg"] = float(dev[far].mean()) if far.any() else math.nan
     p0 = truth[0]

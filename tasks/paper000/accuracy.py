@@ -25,6 +25,7 @@ from matplotlib.patches import Ellipse as EllipsePatch
 from pydantic import BaseModel, Field
 
 from bauv_sim.config import Config
+from bauv_sim.frames import unit_vector_scalar
 from nav import accuracy as acc
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
@@ -240,7 +241,7 @@ def _figures(out, s: AccuracyScenario) -> list[str]:
         lim, pad = 0.0, 10.0
         for dd in s.ellipse_distances_m:
             e = acc.ellipse_parameters(fn(dd / v, c, v, sc, ss))
-            cx, cy = dd * math.sin(c), dd * math.cos(c)
+            cx, cy = (dd * u for u in unit_vector_scalar(c))
             ax.add_patch(
                 EllipsePatch(
                     (cx, cy),
@@ -254,7 +255,7 @@ def _figures(out, s: AccuracyScenario) -> list[str]:
             ax.plot(cx, cy, "k.")
             lim = max(lim, dd)
             pad = max(pad, 1.2 * scale * float(e.a))
-        ends = np.array([[0.0, 0.0], [lim * math.sin(c), lim * math.cos(c)]])
+        ends = np.array([[0.0, 0.0], [lim * u for u in unit_vector_scalar(c)]])
         ax.plot(ends[:, 0], ends[:, 1], "k--", lw=0.8)
         ax.set_xlim(ends[:, 0].min() - pad, ends[:, 0].max() + pad)
         ax.set_ylim(ends[:, 1].min() - pad, ends[:, 1].max() + pad)

@@ -28,7 +28,7 @@ from pydantic import BaseModel, Field
 
 from bauv_sim.autopilot import Autopilot, AutopilotConfig, Measured
 from bauv_sim.config import Config
-from bauv_sim.frames import wrap_pi
+from bauv_sim.frames import navigation_rates_from_body, unit_vector_scalar, wrap_pi
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 
 
@@ -87,7 +87,7 @@ def _fly(
     p.set_pose(
         [0.0, 0.0, -s.depth_m],
         [0.0, 0.0, heading0_rad],
-        [math.sin(heading0_rad), math.cos(heading0_rad), 0.0],
+        [*unit_vector_scalar(heading0_rad), 0.0],
     )
     p.set_sea(Sea(UniformCurrent(current_north_m_s, 0.0) if current_north_m_s else None))
     table = load_speed_table()
@@ -99,15 +99,18 @@ def _fly(
         t = p.time_s()
         tr = p.truth()
         r, pt, h = tr.roll_pitch_heading_rad
-        w = tr.angular_velocity_body_rad_s
-        x_axis = np.array([math.cos(pt) * math.sin(h), math.cos(pt) * math.cos(h), math.sin(pt)])
+        roll_rate, pitch_rate, heading_rate = navigation_rates_from_body(
+            tr.angular_velocity_body_rad_s
+        )
+        east, north = unit_vector_scalar(h)
+        x_axis = np.array([math.cos(pt) * east, math.cos(pt) * north, math.sin(pt)])
         u = float(tr.velocity_through_water_world_m_s @ x_axis)
         c = ap.step(
             tick,
             course(t),
             depth(t),
             speed(t),
-            Measured(h, -w[2], tr.depth_m, pt, -w[1], r, w[0], u),
+            Measured(h, heading_rate, tr.depth_m, pt, pitch_rate, r, roll_rate, u),
         )
         p.set_tail_beat_frequency_hz(float(np.clip(c.tail_beat_hz, *lim["tail_beat_frequency_hz"])))
         p.set_tail_bias_rad(float(np.clip(c.tail_bias_rad, *lim["tail_bias_rad"])))
@@ -282,7 +285,7 @@ class AutopilotTrials(Experiment):
                 )
             )
         c = tr["current"]
-        raw = np.degrees(np.angle(np.exp(1j * (c["heading"] - math.pi / 2))))
+        raw = np.degrees(wrap_pi(c["heading"] - math.pi / 2))
         err = beat_average(raw, n)
         late = c["t"] > 20.0
         max_err = float(np.max(np.abs(err[late])))
@@ -363,7 +366,7 @@ def _figure(out, tr, s: AutopilotTrialsScenario, n: int) -> str:
     axs[1, 0].axhline(s.speed_to_m_s, ls="--", color="tab:purple")
     axs[1, 0].set_ylabel("speed through water (m/s)")
     c = tr["current"]
-    e = np.degrees(np.angle(np.exp(1j * (c["heading"] - math.pi / 2))))
+    e = np.degrees(wrap_pi(c["heading"] - math.pi / 2))
     axs[1, 1].plot(c["t"], e, color="0.7", lw=0.6)
     axs[1, 1].plot(c["t"], beat_average(e, n), "k")
     axs[1, 1].axhspan(-s.hold_limit_deg, s.hold_limit_deg, color="tab:green", alpha=0.15)
