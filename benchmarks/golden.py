@@ -73,24 +73,21 @@ def diff(a, b, path: str = "") -> tuple[list[str], float, list[str]]:
         structural or string difference (always a failure).
     """
     if isinstance(a, dict) and isinstance(b, dict):
-        bad, worst, where = [], 0.0, []
-        for k in sorted(set(a) | set(b)):
-            if k not in a or k not in b:
-                bad.append(f"{path}/{k}: only in {'golden' if k in a else 'new'}")
-                continue
-            m, w, f = diff(a[k], b[k], f"{path}/{k}")
-            bad += m
-            if w > worst:
-                worst, where = w, f
-            elif w == worst and w > 0:
-                where += f
-        return bad, worst, where
-    if isinstance(a, list) and isinstance(b, list):
+        only = [f"{path}/{k}: only in {'golden' if k in a else 'new'}" for k in set(a) ^ set(b)]
+        pairs = [(f"{path}/{k}", a[k], b[k]) for k in sorted(set(a) & set(b))]
+    elif isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
             return [f"{path}: length {len(a)} vs {len(b)}"], 0.0, []
-        bad, worst, where = [], 0.0, []
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            m, w, f = diff(x, y, f"{path}[{i}]")
+        only, pairs = (
+            [],
+            [(f"{path}[{i}]", x, y) for i, (x, y) in enumerate(zip(a, b, strict=True))],
+        )
+    else:
+        pairs = None
+    if pairs is not None:
+        bad, worst, where = sorted(only), 0.0, []
+        for sub, x, y in pairs:
+            m, w, f = diff(x, y, sub)
             bad += m
             if w > worst:
                 worst, where = w, f

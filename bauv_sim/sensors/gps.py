@@ -94,10 +94,8 @@ class GpsDevice:
     kind = "event"
 
     def __init__(self, cfg: GpsConfig, build: DeviceBuild):
+        cfg = build.with_lever_arm(cfg, "antenna_body_m")
         arm = cfg.antenna_body_m
-        if arm == (0.0, 0.0, 0.0) and build.lever_arm_body_m is not None:
-            arm = build.lever_arm_body_m
-            cfg = cfg.model_copy(update={"antenna_body_m": arm})
         self.lever_arm_body_m = np.asarray(arm, dtype=float)
         self.name = build.name
         self.every = build.every(cfg.period_s)

@@ -175,6 +175,13 @@ class DeviceBuild:
     vehicle: str
     extra: Mapping[str, Any] = field(default_factory=dict)
 
+    def with_lever_arm(self, cfg: Config, field_name: str) -> Config:
+        """The configuration with its lever-arm field (body FLU, m) set to the model's site
+        when the configuration leaves it at zero."""
+        if getattr(cfg, field_name) == (0.0, 0.0, 0.0) and self.lever_arm_body_m is not None:
+            return cfg.model_copy(update={field_name: self.lever_arm_body_m})
+        return cfg
+
     def every(self, period_s: float) -> int:
         """The period in ticks (a whole multiple of the tick, else :class:`ConfigError`)."""
         return check_multiple(period_s, self.tick_s, f"sensors.{self.name}.period_s")

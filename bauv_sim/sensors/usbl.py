@@ -126,11 +126,8 @@ class UsblDevice:
     kind = "event"
 
     def __init__(self, cfg: UsblConfig, build: DeviceBuild):
-        arm = cfg.transponder_body_m
-        if arm == (0.0, 0.0, 0.0) and build.lever_arm_body_m is not None:
-            arm = build.lever_arm_body_m
-            cfg = cfg.model_copy(update={"transponder_body_m": arm})
-        self.lever_arm_body_m = np.asarray(arm, dtype=float)
+        cfg = build.with_lever_arm(cfg, "transponder_body_m")
+        self.lever_arm_body_m = np.asarray(cfg.transponder_body_m, dtype=float)
         self.transceiver_world_m = build.physics.transceiver_world()
         self.name = build.name
         self.every = build.every(cfg.period_s)
