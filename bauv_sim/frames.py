@@ -23,6 +23,8 @@ for quaternions, or 3x3 for rotation matrices) is the vector axis.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
@@ -56,6 +58,7 @@ __all__ = [
     "TWO_PI",
     "R_from_quat_wxyz",
     "R_from_roll_pitch_heading",
+    "attitude_from_quat_wxyz_scalar",
     "body_from_world",
     "course_from_theta",
     "course_of",
@@ -211,6 +214,32 @@ def roll_pitch_heading_from_R(R: ArrayLike) -> NDArray[np.float64]:
     # roll from the body y (port) and z (up) axes' world z components
     roll = np.arctan2(M[..., 2, 1], M[..., 2, 2])
     return np.stack([wrap_pi(roll), pitch, heading], axis=-1)
+
+
+def attitude_from_quat_wxyz_scalar(
+    qw: float, qx: float, qy: float, qz: float
+) -> tuple[tuple[float, float, float, float], tuple[float, float, float]]:
+    """The unit quaternion and ``(roll, pitch, heading)`` of one quaternion, with Python floats:
+    :func:`roll_pitch_heading_from_quat_wxyz` for per-tick code (the same formulas, tested
+    equal).
+
+    Args:
+        qw, qx, qy, qz: a quaternion body FLU -> world ENU (any norm > 0).
+
+    Returns:
+        ``((w, x, y, z) normalised, (roll in [-pi, pi), pitch, heading in [0, 2 pi)))``, rad.
+    """
+    n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    qw, qx, qy, qz = qw / n, qx / n, qy / n, qz / n
+    r00 = 1 - 2 * (qy * qy + qz * qz)
+    r10 = 2 * (qx * qy + qw * qz)
+    r20 = 2 * (qx * qz - qw * qy)
+    r21 = 2 * (qy * qz + qw * qx)
+    r22 = 1 - 2 * (qx * qx + qy * qy)
+    roll = wrap_pi_scalar(math.atan2(r21, r22))
+    pitch = math.asin(min(1.0, max(-1.0, r20)))
+    heading = course_of_scalar(r00, r10)
+    return (qw, qx, qy, qz), (roll, pitch, heading)
 
 
 def roll_pitch_heading_from_quat_wxyz(quat_wxyz: ArrayLike) -> NDArray[np.float64]:

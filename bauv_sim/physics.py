@@ -426,30 +426,20 @@ class BauvPhysics(mjcf.Physics):
         """The true state of a vehicle now (see :class:`VehicleTruth`).
 
         Called at every control tick, so it reads ``qpos``/``qvel`` once and computes the
-        attitude with scalar arithmetic (the same formulas as
-        :func:`bauv_sim.frames.roll_pitch_heading_from_quat_wxyz`).
+        attitude with scalar arithmetic (:func:`bauv_sim.frames.attitude_from_quat_wxyz_scalar`).
         """
         v = self._v(vehicle)
         d = self.data.ptr
         x, y, z, qw, qx, qy, qz = d.qpos[v.qpos_adr : v.qpos_adr + 7].tolist()
         vx, vy, vz, wx, wy, wz = d.qvel[v.dof_adr : v.dof_adr + 6].tolist()
-        n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
-        qw, qx, qy, qz = qw / n, qx / n, qy / n, qz / n
-        r00 = 1 - 2 * (qy * qy + qz * qz)
-        r10 = 2 * (qx * qy + qw * qz)
-        r20 = 2 * (qx * qz - qw * qy)
-        r21 = 2 * (qy * qz + qw * qx)
-        r22 = 1 - 2 * (qx * qx + qy * qy)
-        roll = frames.wrap_pi_scalar(math.atan2(r21, r22))
-        pitch = math.asin(min(1.0, max(-1.0, r20)))
-        heading = frames.course_of_scalar(r00, r10)
+        quat, rph = frames.attitude_from_quat_wxyz_scalar(qw, qx, qy, qz)
         cur = v.current_world.copy()
         vel = np.array([vx, vy, vz])
         return VehicleTruth(
             float(d.time),
             np.array([x, y, z]),
-            np.array([qw, qx, qy, qz]),
-            np.array([roll, pitch, heading]),
+            np.array(quat),
+            np.array(rph),
             -z,
             vel,
             vel - cur,

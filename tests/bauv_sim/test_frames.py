@@ -58,3 +58,13 @@ def test_units():
     assert fr.knots_to_m_s(1.0) == pytest.approx(0.514444, rel=1e-5)
     assert fr.m_s_to_knots(fr.knots_to_m_s(3.7)) == pytest.approx(3.7)
     assert fr.depth_from_z(-3.0) == 3.0 and fr.z_from_depth(6.0) == -6.0
+
+
+def test_scalar_attitude_equals_the_array_form():
+    rng = np.random.default_rng(11)
+    q = rng.normal(size=(500, 4)) * rng.uniform(0.5, 2.0, size=(500, 1))  # any norm
+    want = fr.roll_pitch_heading_from_quat_wxyz(q / np.linalg.norm(q, axis=1, keepdims=True))
+    for qi, wi in zip(q, want, strict=True):
+        unit, rph = fr.attitude_from_quat_wxyz_scalar(*qi.tolist())
+        assert np.allclose(unit, qi / np.linalg.norm(qi), atol=1e-15)
+        assert np.allclose(fr.wrap_pi(np.array(rph) - wi + 1.0) - 1.0, 0.0, atol=1e-12)
