@@ -16,7 +16,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import course_of_scalar, wrap_2pi
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess
-from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
+from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 

@@ -13,7 +13,7 @@ from pydantic import Field
 
 from bauv_sim.config import Config
 from bauv_sim.frames import navigation_rates_from_body
-from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
+from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 
 
 class InsConfig(Config):

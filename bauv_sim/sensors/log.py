@@ -15,7 +15,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import KNOT_M_S, unit_vector
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import ErrorProcess, SpeedErrorConfig
-from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
+from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 

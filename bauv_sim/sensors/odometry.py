@@ -17,7 +17,7 @@ from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 from bauv_sim.sensors.base import SensorSamples
 from bauv_sim.sensors.errors import ErrorProcess, SpeedErrorConfig
-from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
+from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 
 
 class OdometryConfig(Config):

@@ -17,7 +17,7 @@ from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import ErrorProcess, LengthErrorConfig
-from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
+from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 

@@ -14,9 +14,11 @@ time of arrival), the way the vehicle's computer would receive them:
   validity and the vehicle's own measured attitude at that time (for the lever arm of the
   transponder or antenna). Event devices are silent on the initial tick.
 
-Devices are built from their configurations through :data:`DEVICE_TYPES` (configuration type ->
-online device class, each class in its device's module). Adding a device type touches the
-device's module and this registry, nothing else. Lever arms that a configuration leaves at zero
+Devices are built from their configurations through the registry
+:data:`~bauv_sim.sensors.online.DEVICE_TYPES` (configuration type -> online device class, each
+class in its device's module, added by :func:`~bauv_sim.sensors.online.register_device`; this
+module imports the device modules). Adding a device type touches the device's module and the
+import line of this registry, nothing else. Lever arms that a configuration leaves at zero
 are read from the vehicle model's sites through the physics facade (:data:`LEVER_ARM_SITES`).
 
 Every device draws from its own streams, addressed by ``(seed, run, "sensor", <stream name>,
@@ -27,17 +29,19 @@ same errors whatever other vehicles share its sea.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
-from bauv_sim.sensors.base import check_multiple
-from bauv_sim.truth import Truth
+
+# the rig's registry of device types: each device module adds its online class to DEVICE_TYPES
+from bauv_sim.sensors import compass, gps, ins, log, odometry, pressure, usbl  # noqa: F401
+from bauv_sim.sensors.online import DEVICE_TYPES, Device, DeviceBuild, Measurement, TickContext
 
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics, VehicleTruth
@@ -46,27 +50,6 @@ Array = NDArray[np.float64]
 
 LEVER_ARM_SITES: Mapping[str, str] = {"usbl": "usbl_transponder", "gps": "gps_antenna"}
 """Device name -> the vehicle model's site of its transponder or antenna."""
-
-
-@dataclass(frozen=True)
-class Measurement:
-    """One measurement record as the vehicle receives it.
-
-    Attributes:
-        device: the device's name in the rig (``"usbl"``, ``"gps"``, ``"compass"``...).
-        t_valid_s: time of validity (the instant the measurement refers to), s.
-        t_arrival_s: time it reaches the vehicle (>= ``t_valid_s``), s.
-        value: the measured values, shape (m,), SI units (see the device).
-        attitude_rad: the vehicle's own measured (roll, pitch, heading) at ``t_valid_s``, shape
-            (3,), rad (INS roll and pitch, compass heading), for lever-arm corrections; ``None``
-            for held devices.
-    """
-
-    device: str
-    t_valid_s: float
-    t_arrival_s: float
-    value: Array
-    attitude_rad: Array | None = None
 
 
 @dataclass(frozen=True)
@@ -89,134 +72,6 @@ class RigTick:
         """The held scalar of a device, or ``None``."""
         v = self.held.get(device)
         return None if v is None else float(v[0])
-
-
-@dataclass
-class TickContext:
-    """What a device may read at a tick besides the truth (filled in device order).
-
-    Attributes:
-        k: tick index (0 at the start).
-        t_s: time, s.
-        truth: the vehicle's true state.
-        commands: the actuator settings in force (``tail_beat_frequency_hz`` ...), by name.
-        measured_attitude_rad: (roll, pitch, heading) as measured this tick (INS and compass),
-            shape (3,), set once those devices have been sampled.
-    """
-
-    k: int
-    t_s: float
-    truth: VehicleTruth
-    commands: Mapping[str, float]
-    measured_attitude_rad: Array | None = None
-    _record: Truth | None = field(default=None, repr=False)
-
-    @property
-    def tt(self) -> Array:
-        """The time as a sample grid, shape (1,), s."""
-        return np.array([self.t_s])
-
-    @property
-    def record(self) -> Truth:
-        """The truth as a one-run, one-sample record (built once per tick, on demand)."""
-        if self._record is None:
-            self._record = truth_record(self.truth)
-        return self._record
-
-
-class Device(Protocol):
-    """An online device of a rig (see the module docstring).
-
-    Attributes:
-        name: device name in the rig.
-        kind: ``"held"`` or ``"event"``.
-        every: sampling period in control ticks.
-    """
-
-    name: str
-    kind: Literal["held", "event"]
-    every: int
-
-    def step(self, ctx: TickContext) -> Measurement | None:
-        """Sample at this tick if due (or always, for devices that watch the truth every tick).
-
-        Returns:
-            A held device: its new value at a sampling tick, ``None`` when it produced nothing
-            (not called between its sampling ticks). An event device: a measurement to queue, or
-            ``None``.
-        """
-        ...
-
-
-@dataclass(frozen=True)
-class DeviceBuild:
-    """What a device class receives to build itself.
-
-    Attributes:
-        name: device name in the rig.
-        stream: stream name of the device (``name``, or ``"<prefix>/<name>"``).
-        seed: batch seed.
-        run: run index.
-        tick_s: control tick, s.
-        lever_arm_body_m: the device's lever arm from the model's site (body FLU, m), if it has
-            a site in :data:`LEVER_ARM_SITES`.
-        physics: the physics facade (scene geometry such as the USBL transceiver).
-        vehicle: the vehicle's name in the scene.
-        extra: per-device settings the mission supplies (e.g. the odometry's speed table).
-    """
-
-    name: str
-    stream: str
-    seed: int
-    run: int
-    tick_s: float
-    lever_arm_body_m: tuple[float, float, float] | None
-    physics: BauvPhysics
-    vehicle: str
-    extra: Mapping[str, Any] = field(default_factory=dict)
-
-    def with_lever_arm(self, cfg: Config, field_name: str) -> Config:
-        """The configuration with its lever-arm field (body FLU, m) set to the model's site
-        when the configuration leaves it at zero."""
-        if getattr(cfg, field_name) == (0.0, 0.0, 0.0) and self.lever_arm_body_m is not None:
-            return cfg.model_copy(update={field_name: self.lever_arm_body_m})
-        return cfg
-
-    def every(self, period_s: float) -> int:
-        """The period in ticks (a whole multiple of the tick, else :class:`ConfigError`)."""
-        return check_multiple(period_s, self.tick_s, f"sensors.{self.name}.period_s")
-
-
-DEVICE_TYPES: dict[type[Config], Callable[[Config, DeviceBuild], Device]] = {}
-"""The rig's registry: configuration type -> online device factory."""
-
-
-def register_device(cfg_type: type[Config]) -> Callable[[type], type]:
-    """Class decorator adding an online device class to :data:`DEVICE_TYPES`."""
-
-    def add(cls: type) -> type:
-        DEVICE_TYPES[cfg_type] = cls
-        return cls
-
-    return add
-
-
-def _load_devices() -> None:
-    # the device modules register their online classes when imported
-    from bauv_sim.sensors import compass, gps, ins, log, odometry, pressure, usbl  # noqa: F401
-
-
-def truth_record(vt: VehicleTruth) -> Truth:
-    """A one-run, one-sample truth record (run axis 1, time axis 1) of a vehicle's state."""
-    return Truth(
-        t_s=np.array([vt.t_s]),
-        pos_world_m=vt.position_world_m[None, None],
-        vel_ground_world_m_s=vt.velocity_world_m_s[None, None],
-        vel_water_world_m_s=vt.velocity_through_water_world_m_s[None, None],
-        heading_rad=np.array([[vt.roll_pitch_heading_rad[2]]]),
-        roll_pitch_rad=vt.roll_pitch_heading_rad[None, None, :2],
-        current_world_m_s=vt.current_world_m_s[None, None],
-    )
 
 
 def lever_arm_from_site(
@@ -256,7 +111,6 @@ class SensorRig:
         stream_prefix: str = "",
         extra: Mapping[str, Mapping[str, Any]] | None = None,
     ):
-        _load_devices()
         tick = physics.control_tick_s
         self.vehicle = vehicle
         self.devices: list[Device] = []
@@ -339,7 +193,7 @@ class SensorRig:
         return RigTick(t, dict(self._held), frozenset(sampled), tuple(arrived))
 
     def _attitude(self) -> Array | None:
-        ins, heading = self._held.get("ins"), self._held.get("compass")
-        if ins is None or heading is None:
+        att, heading = self._held.get("ins"), self._held.get("compass")
+        if att is None or heading is None:
             return None
-        return np.array([ins[0], ins[1], heading[0]])
+        return np.array([att[0], att[1], heading[0]])

@@ -21,7 +21,7 @@ from bauv_sim.config import Config
 from bauv_sim.frames import range_azimuth_elevation, wrap_2pi
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess, LengthErrorConfig
-from bauv_sim.sensors.rig import DeviceBuild, Measurement, TickContext, register_device
+from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
 
 

@@ -4,7 +4,7 @@ the run data of every run as Parquet (``data/``, schema in ``docs/run-data.md``)
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,10 +13,7 @@ from pydantic import BaseModel, Field
 from bauv_sim.frames import velocity_from_course_speed
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.scenario import MissionScenario
-from tasks.core.registry import ReportContext, ReportSummary
-
-if TYPE_CHECKING:
-    from tasks.closed_loop.experiment import MissionExperiment
+from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 
 class WaypointResult(BaseModel):
@@ -67,7 +64,7 @@ class MissionMetrics(BaseModel):
     runs: list[RunResult]
 
 
-def report_mission(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
+def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
     """Tables, metrics, figures and the recording of a mission batch."""
     from tasks.core.report import Table, write_metrics, write_tables
 

@@ -1,0 +1,166 @@
+"""Online devices: what a device of a vehicle's sensor rig is (:class:`Device`), what it gets to
+build itself (:class:`DeviceBuild`) and at each tick (:class:`TickContext`), what it hands over
+(:class:`Measurement`), and the registry of device classes (:data:`DEVICE_TYPES`) that each device
+module adds itself to with :func:`register_device` (see :mod:`bauv_sim.sensors.rig`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bauv_sim.config import Config
+from bauv_sim.sensors.base import check_multiple
+from bauv_sim.truth import Truth
+
+if TYPE_CHECKING:
+    from bauv_sim.physics import BauvPhysics, VehicleTruth
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One measurement record as the vehicle receives it.
+
+    Attributes:
+        device: the device's name in the rig (``"usbl"``, ``"gps"``, ``"compass"``...).
+        t_valid_s: time of validity (the instant the measurement refers to), s.
+        t_arrival_s: time it reaches the vehicle (>= ``t_valid_s``), s.
+        value: the measured values, shape (m,), SI units (see the device).
+        attitude_rad: the vehicle's own measured (roll, pitch, heading) at ``t_valid_s``, shape
+            (3,), rad (INS roll and pitch, compass heading), for lever-arm corrections; ``None``
+            for held devices.
+    """
+
+    device: str
+    t_valid_s: float
+    t_arrival_s: float
+    value: Array
+    attitude_rad: Array | None = None
+
+
+@dataclass
+class TickContext:
+    """What a device may read at a tick besides the truth (filled in device order).
+
+    Attributes:
+        k: tick index (0 at the start).
+        t_s: time, s.
+        truth: the vehicle's true state.
+        commands: the actuator settings in force (``tail_beat_frequency_hz`` ...), by name.
+        measured_attitude_rad: (roll, pitch, heading) as measured this tick (INS and compass),
+            shape (3,), set once those devices have been sampled.
+    """
+
+    k: int
+    t_s: float
+    truth: VehicleTruth
+    commands: Mapping[str, float]
+    measured_attitude_rad: Array | None = None
+    _record: Truth | None = field(default=None, repr=False)
+
+    @property
+    def tt(self) -> Array:
+        """The time as a sample grid, shape (1,), s."""
+        return np.array([self.t_s])
+
+    @property
+    def record(self) -> Truth:
+        """The truth as a one-run, one-sample record (built once per tick, on demand)."""
+        if self._record is None:
+            self._record = truth_record(self.truth)
+        return self._record
+
+
+class Device(Protocol):
+    """An online device of a rig (see the module docstring).
+
+    Attributes:
+        name: device name in the rig.
+        kind: ``"held"`` or ``"event"``.
+        every: sampling period in control ticks.
+    """
+
+    name: str
+    kind: Literal["held", "event"]
+    every: int
+
+    def step(self, ctx: TickContext) -> Measurement | None:
+        """Sample at this tick if due (or always, for devices that watch the truth every tick).
+
+        Returns:
+            A held device: its new value at a sampling tick, ``None`` when it produced nothing
+            (not called between its sampling ticks). An event device: a measurement to queue, or
+            ``None``.
+        """
+        ...
+
+
+@dataclass(frozen=True)
+class DeviceBuild:
+    """What a device class receives to build itself.
+
+    Attributes:
+        name: device name in the rig.
+        stream: stream name of the device (``name``, or ``"<prefix>/<name>"``).
+        seed: batch seed.
+        run: run index.
+        tick_s: control tick, s.
+        lever_arm_body_m: the device's lever arm from the model's site (body FLU, m), if it has
+            a site in :data:`LEVER_ARM_SITES`.
+        physics: the physics facade (scene geometry such as the USBL transceiver).
+        vehicle: the vehicle's name in the scene.
+        extra: per-device settings the mission supplies (e.g. the odometry's speed table).
+    """
+
+    name: str
+    stream: str
+    seed: int
+    run: int
+    tick_s: float
+    lever_arm_body_m: tuple[float, float, float] | None
+    physics: BauvPhysics
+    vehicle: str
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def with_lever_arm(self, cfg: Config, field_name: str) -> Config:
+        """The configuration with its lever-arm field (body FLU, m) set to the model's site
+        when the configuration leaves it at zero."""
+        if getattr(cfg, field_name) == (0.0, 0.0, 0.0) and self.lever_arm_body_m is not None:
+            return cfg.model_copy(update={field_name: self.lever_arm_body_m})
+        return cfg
+
+    def every(self, period_s: float) -> int:
+        """The period in ticks (a whole multiple of the tick, else :class:`ConfigError`)."""
+        return check_multiple(period_s, self.tick_s, f"sensors.{self.name}.period_s")
+
+
+DEVICE_TYPES: dict[type[Config], Callable[[Config, DeviceBuild], Device]] = {}
+"""The rig's registry: configuration type -> online device factory."""
+
+
+def register_device(cfg_type: type[Config]) -> Callable[[type], type]:
+    """Class decorator adding an online device class to :data:`DEVICE_TYPES`."""
+
+    def add(cls: type) -> type:
+        DEVICE_TYPES[cfg_type] = cls
+        return cls
+
+    return add
+
+
+def truth_record(vt: VehicleTruth) -> Truth:
+    """A one-run, one-sample truth record (run axis 1, time axis 1) of a vehicle's state."""
+    return Truth(
+        t_s=np.array([vt.t_s]),
+        pos_world_m=vt.position_world_m[None, None],
+        vel_ground_world_m_s=vt.velocity_world_m_s[None, None],
+        vel_water_world_m_s=vt.velocity_through_water_world_m_s[None, None],
+        heading_rad=np.array([[vt.roll_pitch_heading_rad[2]]]),
+        roll_pitch_rad=vt.roll_pitch_heading_rad[None, None, :2],
+        current_world_m_s=vt.current_world_m_s[None, None],
+    )
