@@ -43,30 +43,43 @@ class Measurement:
     attitude_rad: Array | None = None
 
 
-@dataclass
 class TickContext:
-    """What a device may read at a tick besides the truth (filled in device order).
+    """What a device may read at a tick besides the truth.
 
-    Attributes:
+    Args:
         k: tick index (0 at the start).
         t_s: time, s.
         truth: the vehicle's true state.
         commands: the actuator settings in force (``tail_beat_frequency_hz`` ...), by name.
-        measured_attitude_rad: (roll, pitch, heading) as measured this tick (INS and compass),
-            shape (3,), set once those devices have been sampled.
+        held: the rig's held values (the held devices are sampled before the event devices).
+
+    Attributes:
+        tt: the time as a sample grid, shape (1,), s.
     """
 
-    k: int
-    t_s: float
-    truth: VehicleTruth
-    commands: Mapping[str, float]
-    measured_attitude_rad: Array | None = None
-    _record: Truth | None = field(default=None, repr=False)
+    __slots__ = ("_held", "_record", "commands", "k", "t_s", "truth", "tt")
+
+    def __init__(
+        self,
+        k: int,
+        t_s: float,
+        truth: VehicleTruth,
+        commands: Mapping[str, float],
+        held: Mapping[str, Array | None],
+    ):
+        self.k, self.t_s, self.truth, self.commands = k, t_s, truth, commands
+        self.tt = np.array([t_s])
+        self._held = held
+        self._record: Truth | None = None
 
     @property
-    def tt(self) -> Array:
-        """The time as a sample grid, shape (1,), s."""
-        return np.array([self.t_s])
+    def measured_attitude_rad(self) -> Array | None:
+        """(roll, pitch, heading) as the vehicle measures them now (INS and compass), shape (3,),
+        rad, or ``None`` without both devices."""
+        att, heading = self._held.get("ins"), self._held.get("compass")
+        if att is None or heading is None:
+            return None
+        return np.array([att[0], att[1], heading[0]])
 
     @property
     def record(self) -> Truth:

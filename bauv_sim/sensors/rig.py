@@ -140,9 +140,9 @@ class SensorRig:
             arm_used = getattr(dev, "lever_arm_body_m", None)
             if arm_used is not None:
                 self.lever_arms_body_m[name] = tuple(float(c) for c in arm_used)
-        self._held: dict[str, Array | None] = {
-            d.name: None for d in self.devices if d.kind == "held"
-        }
+        self._held_devices = [d for d in self.devices if d.kind == "held"]
+        self._event_devices = [d for d in self.devices if d.kind == "event"]
+        self._held: dict[str, Array | None] = {d.name: None for d in self._held_devices}
         self._pending: list[Measurement] = []
 
     def device(self, name: str) -> Device:
@@ -171,29 +171,23 @@ class SensorRig:
             The tick's records.
         """
         t = truth.t_s
-        ctx = TickContext(k, t, truth, commands)
-        sampled = set()
-        for dev in self.devices:
-            if dev.kind == "held":
-                if k % dev.every:
-                    continue
+        held = self._held
+        ctx = TickContext(k, t, truth, commands, held)
+        sampled = []
+        for dev in self._held_devices:
+            if k % dev.every == 0:
                 m = dev.step(ctx)
-                self._held[dev.name] = None if m is None else m.value
-                sampled.add(dev.name)
-                if dev.name in ("compass", "ins"):
-                    ctx.measured_attitude_rad = self._attitude()
-            elif not initial:
+                held[dev.name] = None if m is None else m.value
+                sampled.append(dev.name)
+        if not initial:
+            for dev in self._event_devices:
                 m = dev.step(ctx)
                 if m is not None:
                     self._pending.append(m)
-        arrived, still = [], []
-        for m in self._pending:
-            (arrived if m.t_arrival_s <= t + 1e-9 else still).append(m)
-        self._pending = still
-        return RigTick(t, dict(self._held), frozenset(sampled), tuple(arrived))
-
-    def _attitude(self) -> Array | None:
-        att, heading = self._held.get("ins"), self._held.get("compass")
-        if att is None or heading is None:
-            return None
-        return np.array([att[0], att[1], heading[0]])
+        arrived = ()
+        if self._pending:
+            due = [m for m in self._pending if m.t_arrival_s <= t + 1e-9]
+            if due:
+                arrived = tuple(due)
+                self._pending = [m for m in self._pending if m.t_arrival_s > t + 1e-9]
+        return RigTick(t, dict(held), frozenset(sampled), arrived)

@@ -161,11 +161,15 @@ class TickLog:
             self.rows[k].append(v)
 
     def columns(self) -> dict[str, Column]:
-        """The columns of the ticks logged so far."""
+        """The columns of the ticks logged so far (a matrix column, the covariance, is
+        symmetrised: ``(P + P^T) / 2``, which moves it by rounding only)."""
         out = {}
         n = len(self.rows["t"])
         for k, (unit, desc, comps) in TICK_COLUMNS.items():
-            out[k] = Column(np.asarray(self.rows[k][:n]), unit, desc, comps)
+            v = np.asarray(self.rows[k][:n])
+            if v.ndim == 3:
+                v = 0.5 * (v + np.swapaxes(v, 1, 2))
+            out[k] = Column(v, unit, desc, comps)
         if self.current:
             unit, desc, comps = CURRENT_COLUMN
             out["ekf_current"] = Column(np.asarray(self.current[:n]), unit, desc, comps)

@@ -317,7 +317,7 @@ class MissionWorld(control.Task):
             "truth_vel_water": vt.velocity_through_water_world_m_s,
             "truth_current": vt.current_world_m_s,
             "ekf_pos": nav.estimate.x,
-            "ekf_P": 0.5 * (nav.estimate.P + nav.estimate.P.T),  # exactly symmetric
+            "ekf_P": nav.estimate.P,
             "dr_pos": nav.dr_position_m,
             "meas_heading": nav.heading_rad,
             "meas_depth": nav.depth_m,
