@@ -53,7 +53,7 @@ class FixRecord:
             (east m, north m).
         accepted: whether the navigator applied it (not rejected by the gate or refused).
         position_m: the fix's own position of the vehicle's reference point, shape (3,), m,
-            world (USBL inverted; GPS with the lever arm removed, up = 0).
+            world (USBL inverted; GPS: the antenna's fix, up = 0).
     """
 
     device: str
