@@ -124,7 +124,7 @@ class DeviceBuild:
         run: run index.
         tick_s: control tick, s.
         lever_arm_body_m: the device's lever arm from the model's site (body FLU, m), if it has
-            a site in :data:`LEVER_ARM_SITES`.
+            a site in :data:`bauv_sim.sensors.rig.LEVER_ARM_SITES`.
         physics: the physics facade (scene geometry such as the USBL transceiver).
         vehicle: the vehicle's name in the scene.
         extra: per-device settings the mission supplies (e.g. the odometry's speed table).

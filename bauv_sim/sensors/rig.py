@@ -87,8 +87,8 @@ class SensorRig:
     """The devices of one vehicle, sampled in the loop (see the module docstring).
 
     Args:
-        devices: device name -> configuration, in sampling order (a device that others read,
-            the compass and the INS, comes first).
+        devices: device name -> configuration (held devices are sampled before event
+            devices at each tick, each group in this order).
         physics: the physics facade, with the vehicle placed at its start pose.
         vehicle: the vehicle's name in the scene.
         seed: batch seed.
@@ -112,7 +112,6 @@ class SensorRig:
         extra: Mapping[str, Mapping[str, Any]] | None = None,
     ):
         tick = physics.control_tick_s
-        self.vehicle = vehicle
         self.devices: list[Device] = []
         self.lever_arms_body_m: dict[str, tuple[float, float, float]] = {}
         for name, cfg in devices.items():
@@ -144,17 +143,6 @@ class SensorRig:
         self._event_devices = [d for d in self.devices if d.kind == "event"]
         self._held: dict[str, Array | None] = {d.name: None for d in self._held_devices}
         self._pending: list[Measurement] = []
-
-    def device(self, name: str) -> Device:
-        """The device of that name."""
-        for d in self.devices:
-            if d.name == name:
-                return d
-        raise ConfigError(f"the rig has no device {name!r}")
-
-    def has(self, name: str) -> bool:
-        """Whether the rig has a device of that name."""
-        return any(d.name == name for d in self.devices)
 
     def sense(
         self, k: int, truth: VehicleTruth, commands: Mapping[str, float], initial: bool = False

@@ -110,8 +110,8 @@ class EkfNavigation:
         x0: initial position estimate, shape (3,), m, world.
         transceiver_world_m: the USBL transceiver, shape (3,), m, world.
         lever_arms_body_m: the rig's lever arms by device (``usbl``, ``gps``), body FLU, m.
-        use_usbl: apply USBL fixes.
-        use_gps: apply GPS fixes (they are still recorded and reported to guidance).
+        use_gps: apply GPS fixes (they are still recorded and reported to guidance). A vehicle
+            without USBL has no USBL device in its rig.
     """
 
     def __init__(
@@ -120,11 +120,10 @@ class EkfNavigation:
         x0: Array,
         transceiver_world_m: Array,
         lever_arms_body_m: dict[str, tuple[float, float, float]],
-        use_usbl: bool = True,
         use_gps: bool = True,
     ):
         n = cfg
-        self.use_usbl, self.use_gps = use_usbl, use_gps
+        self.use_gps = use_gps
         self.motion = CourseSpeedDepthMotion(
             math.radians(n.sigma_heading_deg), n.sigma_speed_m_s, n.sigma_vertical_m_per_tick
         )
@@ -151,7 +150,6 @@ class EkfNavigation:
             current_walk_m_s_per_sqrt_s=n.current_walk_m_s_per_sqrt_s,
             max_consecutive_rejections=n.max_consecutive_rejections or None,
         )
-        self.fixes: list[FixRecord] = []
 
     def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
         """One navigation tick (see the module docstring).
@@ -175,8 +173,6 @@ class EkfNavigation:
         gps_ref = None
         for m in tick.arrived:
             if m.device == "usbl":
-                if not self.use_usbl:
-                    continue
                 roll, pitch, h = m.attitude_rad
                 R = R_from_roll_pitch_heading(roll, pitch, h)
                 model = dataclasses.replace(
@@ -202,7 +198,6 @@ class EkfNavigation:
                     FixRecord("gps", m.t_valid_s, t, z, accepted, np.array([z[0], z[1], 0.0]))
                 )
                 gps_ref = z_ref
-        self.fixes += new
         cur = nav.current_estimate
         return NavOutput(
             t_s=t,

@@ -86,7 +86,7 @@ class WaypointSteering:
 
     Args:
         guidance: the way-point state machine.
-        steer_on: ``"ekf"`` or ``"dr"``.
+        steer_on: ``"ekf"`` or ``"dr"`` (a subclass that overrides :meth:`step` names its own).
     """
 
     guidance: WaypointGuidance

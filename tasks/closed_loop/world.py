@@ -120,7 +120,7 @@ def standard_vehicle(
     P0 = initial_covariance(n)
     e0 = rng_mod.generator(seed, run, *streams(prefix, "initial")).standard_normal(3) @ np.sqrt(P0)
     navigation = EkfNavigation(
-        n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, s.use_usbl, s.use_gps
+        n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, s.use_gps
     )
     if guidance is None:
         guidance = P.WaypointSteering(waypoint_guidance(scn, rig), n.steer_on)

@@ -48,7 +48,7 @@ from nav.drns import CorrectedDeadReckoning
 from nav.guidance import GuidanceCommand, WaypointGuidance, direct_course
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput
-from tasks.closed_loop.parts import MissionParts
+from tasks.closed_loop.parts import MissionParts, WaypointSteering
 from tasks.closed_loop.report import circle, export_runs, record_mission
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.scenario import MissionScenario
@@ -205,12 +205,13 @@ EXTRA_COLUMNS = {
 VehicleParts`)."""
 
 
-class LegGuidance:
+class LegGuidance(WaypointSteering):
     """Seed 001's legs: steer on the DRNS (corrected after leg 2) position, depth from pressure.
 
     Legs 1-2 hold their course (CP2: 45 and 225 deg) for ``leg_length_m`` from where each leg
     starts (the way-point is placed once the turn onto the course is over); leg 3 goes to its
-    way-point on the direct course or on the current-compensating course (eq. 22-26).
+    way-point on the direct course or on the current-compensating course (eq. 22-26). The rest
+    (done, way-points as placed, legs) is :class:`~tasks.closed_loop.parts.WaypointSteering`'s.
 
     Args:
         guidance: the way-point state machine of the run's scenario.
@@ -226,7 +227,7 @@ class LegGuidance:
         leg_length_m: float,
         course_law: str,
     ):
-        self.g = guidance
+        super().__init__(guidance, steer_on="drns")
         guidance.course_law = self._course_law
         guidance.waypoints = list(guidance.waypoints)
         self.courses, self.leg_length_m, self.course_law = courses, leg_length_m, course_law
@@ -234,19 +235,15 @@ class LegGuidance:
         self.leg_start: dict[int, NDArray[np.float64]] = {}
         self._nav: NavOutput | None = None
 
-    @property
-    def done(self) -> bool:
-        return self.g.done
-
     def step(self, t_s: float, nav: NavOutput) -> GuidanceCommand:
         if nav.gps_fix:
-            self.g.gps_fix()
+            self.guidance.gps_fix()
         self._nav = nav
-        return self.g.step(t_s, np.array([*nav.extra["dr_corrected"], -nav.depth_m]))
+        return self.guidance.step(t_s, np.array([*nav.extra["dr_corrected"], -nav.depth_m]))
 
     def _course_law(self, position, wp) -> float:
         nav = self._nav
-        leg = self.g.index
+        leg = self.guidance.index
         p = np.asarray(position, dtype=float)[:2]
         c = self.courses[leg]
         if leg not in self.placed:
@@ -258,11 +255,11 @@ class LegGuidance:
             if leg == 2 or abs(wrap_pi_scalar(heading - c)) < math.radians(10.0):
                 rest = max(self.leg_length_m - float(np.linalg.norm(p - start)), 0.0)
                 new = p + rest * np.array(unit_vector_scalar(c))
-                self.g.waypoints[leg] = dataclasses.replace(
-                    self.g.waypoints[leg], east_m=float(new[0]), north_m=float(new[1])
+                self.guidance.waypoints[leg] = dataclasses.replace(
+                    self.guidance.waypoints[leg], east_m=float(new[0]), north_m=float(new[1])
                 )
                 self.placed.add(leg)
-                wp = self.g.waypoints[leg]
+                wp = self.guidance.waypoints[leg]
         if leg < 2:
             return c  # CP legs: hold the leg's course
         nu = direct_course(position, wp)
@@ -272,15 +269,6 @@ class LegGuidance:
             if bool(sol.feasible[0]):
                 return float(sol.course_rad[0])
         return nu
-
-    def waypoints(self) -> list[tuple[float, float, float]]:
-        return [(w.east_m, w.north_m, w.acceptance_radius_m) for w in self.g.waypoints]
-
-    def legs(self) -> list[dict[str, Any]]:
-        return [{"waypoint": x.waypoint, "reached": x.reached, "t_s": x.t_s} for x in self.g.legs]
-
-    def outcome(self) -> dict[str, Any]:
-        return {}
 
 
 @dataclass(frozen=True)
