@@ -55,6 +55,14 @@ def test_different_seed_differs(reference, tmp_path):
     assert _batch(tmp_path / "a", seed=6) != reference
 
 
+def _resume_in_a_process(out, *extra):
+    """``bauv run paper-000/test-1 --resume --out OUT`` as a real CLI process."""
+    cmd = [sys.executable, "-m", "tasks.core.cli", "run", "paper-000/test-1", "--resume"]
+    return subprocess.run(
+        [*cmd, "--out", str(out), *extra], capture_output=True, text=True, check=False
+    )
+
+
 def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     args = [
         "paper-000/test-1",
@@ -99,21 +107,7 @@ def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     assert json.loads((out / "run.json").read_text())["state"] == "incomplete"
     n_saved = len(list((out / "blocks").glob("block-*.sha256")))
     assert 5 <= n_saved < 100
-    res = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "tasks.core.cli",
-            "run",
-            "paper-000/test-1",
-            "--resume",
-            "--out",
-            str(out),
-            "--quiet",
-        ],
-        capture_output=True,
-        text=True,
-    )
+    res = _resume_in_a_process(out, "--quiet")
     assert res.returncode == 0, res.stderr
     assert json.loads((out / "run.json").read_text())["state"] == "complete"
     assert _bytes(out) == _bytes(straight)
@@ -309,20 +303,7 @@ def test_resume_refusal_from_the_command_line(batches, tmp_path):
     out = tmp_path / "batch"
     shutil.copytree(batches["seed2"], out)
     _flip_block_byte(out, None)
-    res = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "tasks.core.cli",
-            "run",
-            "paper-000/test-1",
-            "--resume",
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-    )
+    res = _resume_in_a_process(out)
     assert res.returncode == 2, res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "its sha256 is" in lines[0] and "Traceback" not in res.stderr
