@@ -60,7 +60,7 @@ from bauv_sim.sensors import (
 )
 from bauv_sim.truth import Truth
 from nav.dead_reckoning import dead_reckon
-from nav.ekf import BatchEKF, check_estimate
+from nav.ekf import BatchEKF, check_estimate, predict_span
 from nav.metrics import (
     Histogram,
     SeriesSum,
@@ -403,17 +403,23 @@ def run_ekf(
     xs[:, 0], Ps[:, 0] = x, P
     nis = np.full(inp.z_produced.shape, np.nan)
     rejected = np.zeros(inp.z_produced.shape, dtype=bool)
-    fix_at = {int(t): j for j, t in enumerate(inp.fix_tick)}
-    for k in range(T):
-        x, P = ekf.predict(x, P, inp.u[:, k], tick_s)
-        j = fix_at.get(k + 1)
-        if j is not None:
+    # F = I: between two fixes the predictions are running sums of the steps' displacements and
+    # process noises (nav.ekf.predict_span), computed for all steps at once
+    inc, Q = inp.motion.increment_and_Q(inp.u, tick_s)
+    k = 0
+    for j, t in enumerate(inp.fix_tick.tolist() + [T]):
+        t = min(int(t), T)
+        if t > k:
+            predict_span(x, P, inc[:, k:t], Q[:, k:t], (xs[:, k + 1 : t + 1], Ps[:, k + 1 : t + 1]))
+            x, P = xs[:, t], Ps[:, t]
+            k = t
+        if j < len(inp.fix_tick) and 0 < int(inp.fix_tick[j]) <= T:
             x, P, info = ekf.update(
                 x, P, inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability
             )
             nis[:, j] = info.nis
             rejected[:, j] = info.rejected
-        xs[:, k + 1], Ps[:, k + 1] = x, P
+            xs[:, t], Ps[:, t] = x, P
     check_estimate(x, P, T * tick_s)
     return xs, Ps, nis, rejected
 
