@@ -179,39 +179,6 @@ def inverse_spd_small(S: Array) -> Array:
     return out
 
 
-def predict_span(
-    x: Array,
-    P: Array,
-    increments: Array,
-    Q: Array,
-    out: tuple[Array, Array] | None = None,
-) -> tuple[Array, Array]:
-    """EKF predictions over m steps of a motion model whose state Jacobian is the identity
-    (eq. 17-18 with ``F = I``, as seed 000's): ``x_k = x + sum_{i <= k} dx_i`` and ``P_k = P +
-    sum_{i <= k} Q_i`` for all k at once (cumulative sums; they agree with step-by-step
-    :func:`predict` to rounding, ~1e-15 relative). ``Q`` must be symmetric (then every ``P_k``
-    is, exactly).
-
-    Args:
-        x: state before the first step, shape (n, d).
-        P: covariance before the first step, shape (n, d, d).
-        increments: ``f(x, u_k) - x`` of each step, shape (n, m, d).
-        Q: process noise of each step, shape (n, m, d, d).
-        out: arrays of shapes (n, m, d) and (n, m, d, d) to write the results into, or ``None``.
-
-    Returns:
-        ``(xs, Ps)``: the predictions after each step, shapes (n, m, d) and (n, m, d, d).
-    """
-    if out is None:
-        out = (np.empty(increments.shape), np.empty(Q.shape))
-    xs, Ps = out
-    np.cumsum(increments, axis=1, out=xs)
-    xs += x[:, None]
-    np.cumsum(Q, axis=1, out=Ps)
-    Ps += P[:, None]
-    return xs, Ps
-
-
 def update(
     x: Array,
     P: Array,

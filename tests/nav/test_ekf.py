@@ -239,21 +239,6 @@ def test_single_run_update_on_components_equals_the_batched_update():
                 assert ib.nis[0] == pytest.approx(io.nis[0], rel=1e-12, nan_ok=True)
 
 
-def test_predict_span_equals_step_by_step_prediction():
-    from nav.ekf import predict_span
-
-    n, T = 5, 40
-    x0, u, _, _ = _inputs(n, T, 5, seed=4)
-    P = np.broadcast_to(np.diag([4.5, 4.5, 0.0625]), (n, 3, 3)).copy()
-    xs, Ps = predict_span(x0, P, MOTION.increment(u, 1.0), MOTION.Q(u, 1.0))
-    x = x0
-    for k in range(T):
-        x, P = BatchEKF(MOTION).predict(x, P, u[:, k], 1.0)
-        np.testing.assert_allclose(xs[:, k], x, rtol=1e-13, atol=1e-12)
-        np.testing.assert_allclose(Ps[:, k], P, rtol=1e-13, atol=1e-12)
-    assert np.array_equal(Ps, np.swapaxes(Ps, -1, -2))
-
-
 @pytest.mark.parametrize("m", [1, 2, 3, 4])
 def test_small_spd_inverse_equals_numpy(m):
     from nav.ekf import inverse_spd_small
