@@ -470,6 +470,8 @@ class Paper000Block:
         fixes_produced: number of USBL fixes produced.
         fixes_expected: number of USBL fixes scheduled.
         gate_rejected: number of fixes the gate rejected.
+        ekf_sigma_h: sum over runs of the EKF's own horizontal standard deviation
+            ``sqrt(P_ee + P_nn)`` at each tick, m (its 1-sigma radius, for the figures).
     """
 
     runs: tuple[int, ...]
@@ -483,6 +485,12 @@ class Paper000Block:
     fixes_produced: int = 0
     fixes_expected: int = 0
     gate_rejected: int = 0
+    ekf_sigma_h: SeriesSum | None = None
+
+
+def _ekf_sigma_h(P: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The horizontal 1-sigma radius ``sqrt(P_ee + P_nn)`` of covariances (..., 3, 3), m."""
+    return np.sqrt(np.maximum(P[..., 0, 0] + P[..., 1, 1], 0.0))
 
 
 def _edges(cfg: ReportConfig) -> NDArray[np.float64]:
@@ -519,6 +527,7 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
         fixes_produced=int(prod.sum()),
         fixes_expected=int(prod.size),
         gate_rejected=int(p.gate_rejected.sum()),
+        ekf_sigma_h=SeriesSum.of(_ekf_sigma_h(p.ekf_P)),
     )
     for i, run in enumerate(p.runs):
         if run < scn.report.routes_max:
@@ -532,6 +541,7 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
                 "EKF": d["EKF"][i],
                 "DR": d["DR"][i],
                 "USBL": np.where(prod[i], d["USBL"][i], np.nan),
+                "EKF_sigma_h": _ekf_sigma_h(p.ekf_P[i]),
             }
     return block
 
@@ -687,6 +697,9 @@ def _merge_blocks(ctx: ReportContext) -> Paper000Block:
             fixes_produced=total.fixes_produced + b.fixes_produced,
             fixes_expected=total.fixes_expected + b.fixes_expected,
             gate_rejected=total.gate_rejected + b.gate_rejected,
+            ekf_sigma_h=None
+            if total.ekf_sigma_h is None or b.ekf_sigma_h is None
+            else total.ekf_sigma_h.merge(b.ekf_sigma_h),
         )
     if total is None:
         raise ValueError("no blocks to report")
@@ -869,15 +882,26 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
     return ReportSummary(text, tuple(files))
 
 
+def _test_words(exp: StraightPassageExperiment) -> str:
+    """The test's name in words: ``"Seed 000 Test 1 (USBL fix every 5 s)"``."""
+    n = exp.test.split("-")[-1]
+    return f"Seed 000 Test {n}"
+
+
 def _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, band) -> list[str]:
+    """The test's figures (PNG and PDF), for any valid batch: one run, no route kept."""
     out = ctx.out_dir
     t = truth.t_s
     ref = truth.pos_world_m[0]
     tx = scn.transceiver.position_world_m()
-    files = []
+    words = f"{_test_words(exp)}, USBL fix every {scn.sensors.usbl.period_s:g} s"
+    n = ctx.n_runs
+    passages = f"{n} passage{'s' * (n != 1)}"
+    k = 2.0
+    files: list[str] = []
     runs = sorted(tot.routes)
-    files.append(
-        figures.routes(
+    if runs:
+        files += figures.routes(
             out / "routes.png",
             ref,
             {
@@ -886,48 +910,50 @@ def _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, band) -> list
             },
             {"USBL": [tot.routes[r]["USBL"] for r in runs]},
             {"transceiver": tx},
-            title=f"{exp.name}: determined routes ({len(runs)} passages)",
+            title=f"{words}: routes of {len(runs)} passage{'s' * (len(runs) != 1)}",
         )
-    )
-    files.append(
-        figures.distances(
-            out / "distance.png",
-            {
-                "EKF": (t[1:], zeta["EKF"][1:]),
-                "DR": (t[1:], zeta["DR"][1:]),
-                "USBL": (t[fix_tick], zeta["USBL"]),
-            },
-            title=f"{exp.name}: mean distance to the reference over {ctx.n_runs} passages",
-        )
+    bounds = {}
+    if tot.ekf_sigma_h is not None:
+        bounds["EKF"] = (t[1:], k * tot.ekf_sigma_h.mean()[1:], f"EKF {k:g}$\\sigma$ radius")
+    files += figures.distances(
+        out / "distance.png",
+        {
+            "EKF": (t[1:], zeta["EKF"][1:]),
+            "DR": (t[1:], zeta["DR"][1:]),
+            "USBL": (t[fix_tick], zeta["USBL"]),
+        },
+        title=f"{words}: mean distance to the reference over {passages}",
+        bounds=bounds,
     )
     for run in sorted(tot.single):
         d = tot.single[run]
-        files.append(
-            figures.distances(
-                out / f"distance-passage-{run + 1}.png",
-                {
-                    "EKF": (t[1:], d["EKF"][1:]),
-                    "DR": (t[1:], d["DR"][1:]),
-                    "USBL": (t[fix_tick], d["USBL"]),
-                },
-                title=f"{exp.name}: passage {run + 1}",
-            )
+        sb = {}
+        if "EKF_sigma_h" in d:
+            sb["EKF"] = (t[1:], k * d["EKF_sigma_h"][1:], f"EKF {k:g}$\\sigma$ radius")
+        files += figures.distances(
+            out / f"distance-passage-{run + 1}.png",
+            {
+                "EKF": (t[1:], d["EKF"][1:]),
+                "DR": (t[1:], d["DR"][1:]),
+                "USBL": (t[fix_tick], d["USBL"]),
+            },
+            title=f"{words}: passage {run + 1}",
+            bounds=sb,
         )
-    files.append(
-        figures.histograms(
-            out / "histogram.png", tot.hist, title=f"{exp.name}: {ctx.n_runs} passages"
-        )
+    files += figures.histograms(
+        out / "histogram.png",
+        tot.hist,
+        title=f"{words}: distance to the reference, {passages}",
     )
-    files.append(
-        figures.consistency(
-            out / "nees.png",
-            t[1:],
-            mean_nees[1:],
-            band,
-            3,
-            ctx.n_runs,
-            title=f"{exp.name}: EKF consistency",
-        )
+    files += figures.consistency(
+        out / "nees.png",
+        t[1:],
+        mean_nees[1:],
+        band,
+        3,
+        n,
+        title=f"{words}: EKF consistency (position NEES)",
+        probability=scn.report.consistency_probability,
     )
     return files
 
