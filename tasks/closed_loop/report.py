@@ -209,93 +209,224 @@ def circle(cx: float, cy: float, r: float, z: float = 0.0, n: int = 48) -> NDArr
     return np.column_stack([ring, np.full(n + 1, z)])
 
 
+def _title_words(name: str) -> str:
+    """A mission's registry name in words: ``"mission/survey"`` -> ``"Survey mission"``."""
+    return f"{name.split('/')[-1].replace('_', ' ').replace('-', ' ').capitalize()} mission"
+
+
+def unwrapped_heading_deg(
+    heading_rad: NDArray[np.float64], command_rad: NDArray[np.float64] | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """Heading without the 0/360 jump, and a command drawn beside it.
+
+    Args:
+        heading_rad: headings, shape (T,), rad clockwise from north (any wrap).
+        command_rad: commanded course, shape (T,), rad, or ``None``.
+
+    Returns:
+        ``(heading_deg (T,), command_deg (T,) or None)``: the heading unwrapped (continuous); the
+        command placed within 180 deg of it (its wrapped difference added), so both cross north
+        without a vertical line.
+    """
+    h = np.unwrap(np.asarray(heading_rad, dtype=float))
+    if command_rad is None:
+        return np.degrees(h), None
+    d = np.angle(np.exp(1j * (np.asarray(command_rad, dtype=float) - h)))
+    return np.degrees(h), np.degrees(h + d)
+
+
+def moving_mean(values: NDArray[np.float64], n: int) -> NDArray[np.float64]:
+    """Centred moving mean over ``n`` samples (shorter at the ends), shape as ``values``."""
+    v = np.asarray(values, dtype=float)
+    n = max(1, min(int(n), len(v)))
+    c = np.concatenate([[0.0], np.cumsum(v)])
+    lo = np.clip(np.arange(len(v)) - n // 2, 0, len(v))
+    hi = np.clip(lo + n, 0, len(v))
+    return (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
+
+
+def waypoint_marks(ax, waypoints, z_color: str | None = None) -> None:
+    """Draw way-points as acceptance circles labelled with their index (as in the tables)."""
+    from tasks.core import style
+
+    col = z_color or style.color("waypoint")
+    for i, w in enumerate(waypoints):
+        c = circle(w.east_m, w.north_m, w.acceptance_radius_m)
+        ax.plot(c[:, 0], c[:, 1], color=col, lw=0.8, zorder=2)
+        ax.annotate(
+            f"WP{i}",
+            (w.east_m, w.north_m),
+            textcoords="offset points",
+            xytext=(0, 0),
+            ha="center",
+            va="center",
+            color=col,
+            fontsize=6.5,
+            fontweight="bold",
+            zorder=6,
+        )
+    if len(waypoints):
+        ax.plot([], [], color=col, lw=0.8, label="way-point (acceptance circle)")
+
+
+def current_arrow(
+    ax, current_en: NDArray[np.float64], label: str, color: str, ls="-", slot: int = 0
+) -> None:
+    """An arrow of the mean current in the top left corner of the axes (its length in the
+    legend's words: the speed, m/s); drawn in axes coordinates so it never covers the route."""
+    speed = float(np.hypot(*current_en[:2]))
+    if speed <= 0:
+        return
+    u = np.asarray(current_en[:2]) / speed
+    x0, y0 = 0.09 + 0.17 * slot, 0.9
+    ax.annotate(
+        "",
+        xy=(x0 + 0.07 * u[0], y0 + 0.07 * u[1]),
+        xytext=(x0 - 0.07 * u[0], y0 - 0.07 * u[1]),
+        xycoords="axes fraction",
+        arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.4, "ls": ls},
+        zorder=7,
+    )
+    ax.plot([], [], color=color, lw=1.4, ls=ls, label=f"{label} {speed:.2f} m/s (arrow: direction)")
+
+
 def mission_figures(
     name: str, scn: MissionScenario, run: MissionRun, runs: list[MissionRun], out
 ) -> list[str]:
-    """Route, errors and vehicle state of the recorded run (PNG)."""
-    import matplotlib
+    """Route, errors and vehicle state of the recorded run (PNG and PDF, project style)."""
+    from tasks.core import style  # matplotlib only when figures are drawn
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with style.context():
+        return _draw_mission(name, scn, run, runs, out, style)
 
+
+def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     a = run.lead
     t = a["t"]
-    files = []
-    fig, ax = plt.subplots(figsize=(8, 7))
-    for other in runs:
-        if other is not run and other.vehicles:
+    words = f"{_title_words(name)}, run {run.run}"
+    files: list[str] = []
+    fig, ax = style.subplots("page", 5.6)
+    others = [o for o in runs if o is not run and o.vehicles]
+    for i, other in enumerate(others):
+        p = other.lead["truth_pos"]
+        ax.plot(
+            p[:, 0], p[:, 1], color="0.75", lw=0.5, label="other runs (truth)" if i == 0 else "_"
+        )
+    fx = a.fixes.get("usbl")
+    if fx:
+        pos, ok = fx["position"].values, fx["accepted"].values.astype(bool)
+        ax.plot(
+            pos[ok, 0],
+            pos[ok, 1],
+            **style.line("USBL", label="USBL fixes (accepted)", ms=2, alpha=0.6, zorder=1),
+        )
+        if (~ok).any():
             ax.plot(
-                other.lead["truth_pos"][:, 0], other.lead["truth_pos"][:, 1], color="0.7", lw=0.6
+                pos[~ok, 0],
+                pos[~ok, 1],
+                "x",
+                color=style.color("USBL"),
+                ms=4,
+                mew=0.8,
+                label="USBL fixes (rejected by the gate)",
+                zorder=1,
             )
-    ax.plot(a["truth_pos"][:, 0], a["truth_pos"][:, 1], "k-", lw=1.4, label="truth")
-    ax.plot(a["ekf_pos"][:, 0], a["ekf_pos"][:, 1], color="tab:blue", lw=1, label="EKF")
-    ax.plot(a["dr_pos"][:, 0], a["dr_pos"][:, 1], color="tab:red", lw=1, label="DR")
-    us = _fix_positions(a, "usbl")
-    if len(us):
-        ax.plot(us[:, 0], us[:, 1], ".", color="tab:green", ms=3, alpha=0.6, label="USBL fixes")
     gp = _fix_positions(a, "gps")
     if len(gp):
-        ax.plot(gp[:, 0], gp[:, 1], "x", color="tab:orange", ms=6, label="GPS fixes")
-    for w in scn.guidance.waypoints:
-        c = circle(w.east_m, w.north_m, w.acceptance_radius_m)
-        ax.plot(c[:, 0], c[:, 1], color="tab:purple", lw=1)
-        ax.plot(w.east_m, w.north_m, "+", color="tab:purple")
-    ax.plot(scn.transceiver_east_m, scn.transceiver_north_m, "k^", ms=8, label="transceiver")
-    cur = a["truth_current"].mean(axis=0)
-    span = max(np.ptp(a["truth_pos"][:, 0]), np.ptp(a["truth_pos"][:, 1]), 1.0)
-    x0, y0 = a["truth_pos"][:, 0].min(), a["truth_pos"][:, 1].max()
-    ax.annotate(
-        "",
-        xy=(x0 + 0.3 * span * cur[0], y0 + 0.3 * span * cur[1]),
-        xytext=(x0, y0),
-        arrowprops={"arrowstyle": "->", "color": "tab:cyan", "lw": 2},
-    )
-    ax.text(x0, y0, f" mean current {np.hypot(*cur[:2]):.2f} m/s", color="tab:cyan", va="bottom")
+        ax.plot(gp[:, 0], gp[:, 1], **style.line("GPS", label="GPS fixes", ms=4, zorder=5))
+    ax.plot(a["dr_pos"][:, 0], a["dr_pos"][:, 1], **style.line("DR", zorder=3))
+    ax.plot(a["ekf_pos"][:, 0], a["ekf_pos"][:, 1], **style.line("EKF", zorder=4))
+    ax.plot(a["truth_pos"][:, 0], a["truth_pos"][:, 1], **style.line("truth", lw=1.2, zorder=3))
+    waypoint_marks(ax, scn.guidance.waypoints)
+    if scn.sensors.use_usbl:
+        ax.plot(scn.transceiver_east_m, scn.transceiver_north_m, "k^", ms=6, label="transceiver")
+    current_arrow(ax, a["truth_current"].mean(axis=0), "mean current", style.color("current"))
+    if "ekf_current" in a.ticks:
+        est = a["ekf_current"]
+        current_arrow(ax, est[-1], "EKF current at the end", style.color("EKF"), "--", 1)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("east (m)")
-    ax.set_ylabel("north (m)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
-    ax.set_title(f"{name} run {run.run}: steering on {scn.navigation.steer_on.upper()}")
-    fig.tight_layout()
-    fig.savefig(out / "route.png", dpi=110)
-    plt.close(fig)
-    files.append("route.png")
+    ax.set_xlabel(style.label("east", "m"))
+    ax.set_ylabel(style.label("north", "m"))
+    style.title(ax, f"{words}: route, steering on the {scn.navigation.steer_on.upper()} estimate")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    files += style.save(fig, out / "route.png")
 
-    fig, ax = plt.subplots(figsize=(9, 3.8))
-    for key, label, color in [("ekf_pos", "EKF", "tab:blue"), ("dr_pos", "DR", "tab:red")]:
-        ax.plot(t, np.hypot(*(a[key] - a["truth_pos"])[:, :2].T), color=color, label=label)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("horizontal error (m)")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    ax.set_title(f"{name} run {run.run}: distance of the estimates to the truth")
-    fig.tight_layout()
-    fig.savefig(out / "errors.png", dpi=110)
-    plt.close(fig)
-    files.append("errors.png")
+    # errors: horizontal distance on a log axis, then the EKF's east and north errors with its
+    # own +-2 sigma
+    k = 2.0
+    e_ekf = a["ekf_pos"] - a["truth_pos"]
+    e_dr = a["dr_pos"] - a["truth_pos"]
+    P = a["ekf_P"]
+    sd = np.sqrt(np.maximum(np.stack([P[:, 0, 0], P[:, 1, 1]], axis=1), 0.0))
+    fig, axs = style.subplots("page", 5.2, 3, 1, sharex=True)
+    for key, e in (("DR", e_dr), ("EKF", e_ekf)):
+        d = np.hypot(e[:, 0], e[:, 1])
+        keep = d > 0
+        axs[0].plot(t[keep], d[keep], **style.line(key))
+    radius = k * np.hypot(sd[:, 0], sd[:, 1])
+    axs[0].plot(t, radius, **style.line("EKF", label=f"EKF {k:g}$\\sigma$ radius", ls=":"))
+    axs[0].set_yscale("log")
+    style.log_ticks(axs[0])
+    axs[0].set_ylabel(style.label("horizontal error", "m"))
+    axs[0].legend(loc="upper left", ncol=3)
+    for j, (ax, comp) in enumerate(zip(axs[1:], ("east", "north"), strict=True)):
+        ax.fill_between(
+            t,
+            -k * sd[:, j],
+            k * sd[:, j],
+            color=style.color("EKF"),
+            alpha=0.18,
+            lw=0,
+            label=f"EKF $\\pm${k:g}$\\sigma$",
+        )
+        ax.plot(t, e_ekf[:, j], **style.line("EKF", label=f"EKF {comp} error"))
+        ax.set_ylabel(style.label(f"{comp} error", "m"))
+        ax.legend(loc="upper left", ncol=2)
+    axs[-1].set_xlabel(style.label("time", "s"))
+    inside = np.mean(np.all(np.abs(e_ekf[:, :2]) <= k * sd, axis=1))
+    fig.suptitle(
+        f"{words}: navigation error (EKF inside {k:g}$\\sigma$ on both axes "
+        f"{100 * inside:.0f} % of the time)",
+    )
+    style.panel_letters(axs)
+    files += style.save(fig, out / "errors.png")
 
-    fig, axs = plt.subplots(4, 1, figsize=(9, 9), sharex=True)
-    axs[0].plot(t, -a["truth_pos"][:, 2], "k", label="true depth")
-    axs[0].plot(t, a["guidance_depth"], "--", color="tab:purple", label="commanded")
+    # vehicle state
+    fig, axs = style.subplots("page", 6.4, 4, 1, sharex=True)
+    axs[0].plot(t, -a["truth_pos"][:, 2], **style.line("truth", label="true depth"))
+    axs[0].plot(t, a["guidance_depth"], **style.line("command"))
     axs[0].invert_yaxis()
-    axs[0].set_ylabel("depth (m)")
-    axs[1].plot(t, np.degrees(a["truth_rph"][:, 2]), "k", label="true heading")
-    axs[1].plot(t, np.degrees(a["guidance_course"]), "--", color="tab:purple", label="commanded")
-    axs[1].set_ylabel("heading (deg)")
-    axs[2].plot(t, np.hypot(*a["truth_vel_water"][:, :2].T), label="through water")
-    axs[2].plot(t, np.hypot(*a["truth_vel"][:, :2].T), label="over ground")
-    axs[2].set_ylabel("speed (m/s)")
-    axs[3].plot(t, a["motor_power"], color="tab:orange", lw=0.5)
-    axs[3].set_ylabel("motor power (W)")
-    axs[3].set_xlabel("time (s)")
+    axs[0].set_ylabel(style.label("depth", "m"))
+    h, c = unwrapped_heading_deg(a["truth_rph"][:, 2], a["guidance_course"])
+    axs[1].plot(t, h, **style.line("truth", label="true heading (unwrapped)"))
+    axs[1].plot(t, c, **style.line("command", label="commanded course"))
+    axs[1].set_ylabel(style.label("heading", "deg"))
+    axs[2].plot(
+        t, np.hypot(*a["truth_vel_water"][:, :2].T), **style.line("EKF", label="through water")
+    )
+    axs[2].plot(
+        t, np.hypot(*a["truth_vel"][:, :2].T), **style.line("DR", label="over ground", ls="-")
+    )
+    axs[2].plot(t, a["guidance_speed"], **style.line("command"))
+    axs[2].set_ylabel(style.label("speed", "m/s"))
+    dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
+    n5 = max(1, round(5.0 / dt))
+    axs[3].plot(t, a["motor_power"], color="0.75", lw=0.4, label="per tick")
+    axs[3].plot(
+        t,
+        moving_mean(a["motor_power"], n5),
+        color=style.PALETTE["orange"],
+        lw=1.0,
+        label="mean over 5 s",
+    )
+    axs[3].set_ylabel(style.label("motor power", "W"))
+    axs[3].set_xlabel(style.label("time", "s"))
     for x in axs:
-        x.grid(alpha=0.3)
-        x.legend(fontsize=8, loc="upper right") if x.get_legend_handles_labels()[0] else None
-    fig.tight_layout()
-    fig.savefig(out / "state.png", dpi=110)
-    plt.close(fig)
-    files.append("state.png")
+        if x.get_legend_handles_labels()[0]:
+            x.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
+    fig.suptitle(f"{words}: vehicle state")
+    style.panel_letters(axs)
+    files += style.save(fig, out / "state.png")
     return files
 
 

@@ -43,6 +43,7 @@ __all__ = [
     "PALETTE",
     "RC",
     "color",
+    "context",
     "figure_legend",
     "label",
     "legend_outside",
@@ -140,6 +141,16 @@ def styled(fn: Callable[P, R]) -> Callable[P, R]:
             return fn(*args, **kwargs)
 
     return wrapper
+
+
+def context():
+    """The style as a context manager, for code that imports matplotlib lazily::
+
+    with style.context():
+        fig, ax = style.subplots("column")
+        ...
+    """
+    return matplotlib.rc_context(RC)
 
 
 def subplots(
