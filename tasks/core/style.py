@@ -229,17 +229,15 @@ def title(ax, text: str) -> None:
 
 
 def panel_letters(axes) -> None:
-    """Letter the panels (a), (b), ... in reading order, just above each panel's left corner."""
+    """Letter the panels (a), (b), ... in reading order: before the panel's left title if it
+    has one (call after :func:`title`), else just above its left corner."""
     for i, ax in enumerate(np.ravel(axes)):
-        ax.text(
-            0.0,
-            1.02,
-            f"({chr(ord('a') + i)})",
-            transform=ax.transAxes,
-            fontweight="bold",
-            va="bottom",
-            ha="right",
-        )
+        letter = f"({chr(ord('a') + i)})"
+        existing = ax.get_title(loc="left")
+        if existing:
+            ax.set_title(f"{letter} {existing}", loc="left")
+        else:
+            ax.set_title(letter, loc="left", fontweight="bold")
 
 
 def log_ticks(ax, axis: Literal["x", "y"] = "y") -> None:
