@@ -73,9 +73,10 @@ PALETTE: dict[str, str] = {
     "vermillion": "#D55E00",
     "reddish_purple": "#CC79A7",
     "grey": "#7F7F7F",
+    "olive": "#999933",  # Paul Tol's muted olive: a ninth colour, for the water current
     "light_grey": "#BBBBBB",
 }
-"""Okabe-Ito colour-blind-safe colours, plus greys."""
+"""Okabe-Ito colour-blind-safe colours, plus greys and one olive."""
 
 _P = PALETTE
 METHODS: dict[str, dict[str, Any]] = {
@@ -89,7 +90,7 @@ METHODS: dict[str, dict[str, Any]] = {
     "CP1": {"color": _P["reddish_purple"], "ls": "-", "label": "CP1"},
     "CP2": {"color": _P["sky_blue"], "ls": "-", "label": "CP2"},
     "baseline": {"color": _P["orange"], "ls": "-.", "label": "baseline"},
-    "current": {"color": _P["sky_blue"], "ls": "-", "label": "current"},
+    "current": {"color": _P["olive"], "ls": "-", "label": "current"},
     "waypoint": {"color": _P["reddish_purple"], "ls": "-", "label": "way-point"},
     "bound": {"color": _P["blue"], "ls": ":", "label": "bound"},
 }
