@@ -25,9 +25,9 @@ Array = NDArray[np.float64]
 def route_alpha(n_tracks: int) -> float:
     """Opacity of one of ``n_tracks`` overlaid tracks: 0.9 alone, fading to 0.15 for many.
 
-    Always inside [0.15, 0.9] (matplotlib refuses an alpha outside [0, 1]), for any count.
+    Always inside [0.25, 0.9] (matplotlib refuses an alpha outside [0, 1]), for any count.
     """
-    return float(np.clip(2.0 / max(n_tracks, 1), 0.15, 0.9))
+    return float(np.clip(3.0 / max(n_tracks, 1), 0.25, 0.9))
 
 
 def _frame(reference_en: Array) -> tuple[Array, Array, Array] | None:
@@ -125,6 +125,15 @@ def routes(
             return np.column_stack([d @ u, d @ n])
 
         draw(axes[1], along_across)
+        offsets = [
+            np.abs(along_across(np.asarray(tr, dtype=float))[:, 1])
+            for trs in tracks.values()
+            for tr in trs
+        ]
+        if offsets:
+            # the panel is about the tracks: fixes farther out are in panel (a)
+            lim = 1.4 * float(np.percentile(np.concatenate(offsets), 99.5)) + 1.0
+            axes[1].set_ylim(-lim, lim)
         for p in (landmarks or {}).values():
             q = along_across(np.asarray(p, dtype=float)[None, :2])[0]
             axes[1].axvline(q[0], color="k", lw=0.6, ls=":", zorder=0)
@@ -197,7 +206,7 @@ def distances(
     if title:
         style.title(ax, title)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="best")
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
     else:
         ax.text(0.5, 0.5, "no data", transform=ax.transAxes, ha="center")
     return style.save(fig, path)

@@ -273,10 +273,14 @@ def figure_legend(fig, axes, ncol: int | None = None, **kwargs: Any):
     for ax in np.ravel(axes):
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             seen.setdefault(lab, h)
-    return fig.legend(
+    leg = fig.legend(
         list(seen.values()),
         list(seen),
         loc="outside lower center",
         ncol=ncol or max(1, min(5, len(seen))),
         **kwargs,
     )
+    for h in leg.legend_handles:  # faint overlaid tracks get an opaque legend entry
+        if h is not None and hasattr(h, "set_alpha"):
+            h.set_alpha(1.0)
+    return leg

@@ -46,8 +46,8 @@ def test_small_batches_draw_every_figure(n_runs, overrides, tmp_path):
 @pytest.mark.parametrize("n", [0, 1, 2, 3, 7, 100, 10**6])
 def test_route_opacity_is_a_valid_alpha_for_any_count(n):
     a = figures.route_alpha(n)
-    assert 0.15 <= a <= 0.9
-    assert figures.route_alpha(1) == 0.9 and figures.route_alpha(10**6) == 0.15
+    assert 0.25 <= a <= 0.9
+    assert figures.route_alpha(1) == 0.9 and figures.route_alpha(10**6) == 0.25
 
 
 def test_method_colours_are_fixed_and_distinct():
