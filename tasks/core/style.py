@@ -73,10 +73,12 @@ PALETTE: dict[str, str] = {
     "vermillion": "#D55E00",
     "reddish_purple": "#CC79A7",
     "grey": "#7F7F7F",
-    "olive": "#999933",  # Paul Tol's muted olive: a ninth colour, for the water current
+    "olive": "#999933",  # Paul Tol's muted olive and wine: two more colours
+    "wine": "#882255",
+    "dark_grey": "#4D4D4D",
     "light_grey": "#BBBBBB",
 }
-"""Okabe-Ito colour-blind-safe colours, plus greys and one olive."""
+"""Okabe-Ito colour-blind-safe colours, plus greys and two of Paul Tol's muted colours."""
 
 _P = PALETTE
 METHODS: dict[str, dict[str, Any]] = {
@@ -89,9 +91,9 @@ METHODS: dict[str, dict[str, Any]] = {
     "GPS": {"color": _P["orange"], "ls": "none", "marker": "x", "label": "GPS"},
     "CP1": {"color": _P["reddish_purple"], "ls": "-", "label": "CP1"},
     "CP2": {"color": _P["sky_blue"], "ls": "-", "label": "CP2"},
-    "baseline": {"color": _P["orange"], "ls": "-.", "label": "baseline"},
-    "current": {"color": _P["olive"], "ls": "-", "label": "current"},
-    "waypoint": {"color": _P["reddish_purple"], "ls": "-", "label": "way-point"},
+    "baseline": {"color": _P["olive"], "ls": "-.", "label": "baseline"},
+    "current": {"color": _P["wine"], "ls": "-", "label": "current"},
+    "waypoint": {"color": _P["dark_grey"], "ls": "-", "label": "way-point"},
     "bound": {"color": _P["blue"], "ls": ":", "label": "bound"},
 }
 """Fixed look of each method: colour, line style (marker for fixes) and legend label."""

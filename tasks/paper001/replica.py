@@ -622,7 +622,7 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
             "o",
             ms=8,
             mfc="none",
-            mec=style.PALETTE["bluish_green"],
+            mec=style.color("GPS"),
             mew=2,
             label="GPS fixes",
         )
@@ -692,14 +692,14 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
             ":",
             color=style.color("waypoint"),
             lw=2,
-            label=f"desired track nu = {tr['nu_deg'][2]:.0f} deg",
+            label=f"desired track $\\nu$ = {tr['nu_deg'][2]:.0f}°",
         )
         ax.plot(
             tr["truth"][2][:, 0],
             tr["truth"][2][:, 1],
             "-",
             color=style.color("DR"),
-            label="steering nu (without CP)",
+            label="steering $\\nu$ (without CP)",
         )
         ax.plot(
             tr["truth_compensated"][:, 0],
@@ -707,7 +707,7 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
             "-",
             color=style.color(tr["procedure"].upper()),
             label=f"steering eq. 22-26 with {tr['procedure'].upper()} "
-            f"(alpha = {tr['alpha3_compensated_deg']:.1f} deg)",
+            f"($\\alpha$ = {tr['alpha3_compensated_deg']:.1f}°)",
         )
         ax.plot(
             tr["truth_compensated_baseline"][:, 0],

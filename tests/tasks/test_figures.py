@@ -52,7 +52,10 @@ def test_route_opacity_is_a_valid_alpha_for_any_count(n):
 
 def test_method_colours_are_fixed_and_distinct():
     # the methods that share a figure never share a colour (DR/EKF/USBL/GPS/truth; CP1/CP2)
-    together = [("truth", "DR", "EKF", "USBL", "GPS"), ("truth", "DR", "CP1", "CP2", "GPS")]
+    together = [
+        ("truth", "DR", "EKF", "USBL", "GPS", "waypoint", "current", "command"),
+        ("truth", "DR", "CP1", "CP2", "GPS", "baseline", "waypoint", "current"),
+    ]
     for group in together:
         cols = [style.color(m) for m in group]
         assert len(set(cols)) == len(cols), group
