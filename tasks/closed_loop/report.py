@@ -255,11 +255,11 @@ def waypoint_marks(ax, waypoints, z_color: str | None = None) -> None:
         ax.plot(c[:, 0], c[:, 1], color=col, lw=0.8, zorder=2)
         ax.annotate(
             f"WP{i}",
-            (w.east_m, w.north_m),
+            (w.east_m + w.acceptance_radius_m * 0.7, w.north_m + w.acceptance_radius_m * 0.7),
             textcoords="offset points",
-            xytext=(0, 0),
-            ha="center",
-            va="center",
+            xytext=(1, 1),
+            ha="left",
+            va="bottom",
             color=col,
             fontsize=6.5,
             fontweight="bold",
@@ -305,7 +305,14 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     t = a["t"]
     words = f"{_title_words(name)}, run {run.run}"
     files: list[str] = []
-    fig, ax = style.subplots("page", 5.6)
+    # the figure as tall as the route (equal scales), the legend below it
+    xy = np.concatenate(
+        [a["truth_pos"][:, :2], a["ekf_pos"][:, :2], a["dr_pos"][:, :2]]
+        + [np.array([[w.east_m, w.north_m]]) for w in scn.guidance.waypoints]
+    )
+    span = np.ptp(xy, axis=0) + 20.0
+    height = float(np.clip(0.9 * style.PAGE_IN * span[1] / span[0] + 1.3, 3.0, 8.5))
+    fig, ax = style.subplots("page", height)
     others = [o for o in runs if o is not run and o.vehicles]
     for i, other in enumerate(others):
         p = other.lead["truth_pos"]
@@ -337,6 +344,7 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     ax.plot(a["dr_pos"][:, 0], a["dr_pos"][:, 1], **style.line("DR", zorder=3))
     ax.plot(a["ekf_pos"][:, 0], a["ekf_pos"][:, 1], **style.line("EKF", zorder=4))
     ax.plot(a["truth_pos"][:, 0], a["truth_pos"][:, 1], **style.line("truth", lw=1.2, zorder=3))
+    ax.plot(*a["truth_pos"][0, :2], "o", color="k", ms=4, mfc="white", zorder=6, label="start")
     waypoint_marks(ax, scn.guidance.waypoints)
     if scn.sensors.use_usbl:
         ax.plot(scn.transceiver_east_m, scn.transceiver_north_m, "k^", ms=6, label="transceiver")
@@ -344,11 +352,11 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     if "ekf_current" in a.ticks:
         est = a["ekf_current"]
         current_arrow(ax, est[-1], "EKF current at the end", style.color("EKF"), "--", 1)
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel(style.label("east", "m"))
     ax.set_ylabel(style.label("north", "m"))
     style.title(ax, f"{words}: route, steering on the {scn.navigation.steer_on.upper()} estimate")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    style.figure_legend(fig, (ax,), ncol=3)
     files += style.save(fig, out / "route.png")
 
     # errors: horizontal distance on a log axis, then the EKF's east and north errors with its

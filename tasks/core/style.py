@@ -1,7 +1,7 @@
 """The project's figure style: one look for every figure an experiment writes.
 
 Sizes are those of a two-column journal page (a column about 3.5 in, the page about 7.2 in),
-fonts are sized for print at that width, every figure is written as a PNG (300 dpi, for a quick
+fonts are sized for print at that width, every figure is written as a PNG (200 dpi, for a quick
 look) and a vector PDF beside it (for the paper), and each method has a fixed colour and line
 style from a colour-blind-safe palette (Okabe and Ito, "Color Universal Design", 2008; black and
 grey for truth and commands). A new experiment adopts it with one import::
@@ -60,7 +60,7 @@ COLUMN_IN = 3.5
 """Width of one column of a two-column page, inches."""
 PAGE_IN = 7.2
 """Width of a full page (both columns), inches."""
-PNG_DPI = 300
+PNG_DPI = 200
 """Resolution of the PNG beside each vector file."""
 
 PALETTE: dict[str, str] = {
@@ -244,9 +244,13 @@ def panel_letters(axes) -> None:
 
 
 def log_ticks(ax, axis: Literal["x", "y"] = "y") -> None:
-    """Plain-number ticks on a log axis (1, 2, 5, 10, ... instead of ``2 x 10^0``)."""
+    """Plain-number ticks on a log axis (1, 2, 5, 10, ... instead of ``2 x 10^0``); only the
+    powers of ten when the axis spans more than three decades. Call after plotting."""
     a = ax.yaxis if axis == "y" else ax.xaxis
-    a.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    lo, hi = ax.get_ylim() if axis == "y" else ax.get_xlim()
+    decades = np.log10(max(hi, 1e-300) / max(lo, 1e-300)) if lo > 0 else 10.0
+    subs = (1.0, 2.0, 5.0) if decades <= 3 else (1.0,)
+    a.set_major_locator(ticker.LogLocator(base=10, subs=subs))
     a.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
     a.set_minor_formatter(ticker.NullFormatter())
 
