@@ -126,3 +126,30 @@ def test_heading_is_recorded_unwrapped(tmp_path):
     step = np.abs(np.diff(h.ravel()))
     assert step.max() < 30.0  # no 360 deg jump
     assert np.allclose(np.mod(h.ravel(), 360.0), np.mod(np.degrees(a["truth_rph"][:, 2]), 360.0))
+
+
+def test_passage_recording_splits_fixes_and_logs_rejections(tmp_path):
+    from tasks.core.registry import get
+    from tasks.paper000 import passage as paper000
+
+    # fixes beyond 150 m never come, and USBL range outliers a 99 % gate rejects
+    overrides = [
+        "sensors.usbl.max_range_m=150",
+        "sensors.usbl.range.outlier_probability=0.2",
+        "sensors.usbl.range.outlier_sigma_m=50",
+        "filter.gate_probability=0.99",
+    ]
+    scn = plan_batch("paper-000/test-1", overrides=overrides).scenario
+    rec = tmp_path / paper000.record_passage(get("paper-000/test-1"), scn, 0, 0, tmp_path)
+    p = paper000.simulate_passages(scn, 0, (0,))
+    ok, rej = p.usbl_produced[0], p.gate_rejected[0] & p.usbl_produced[0]
+    assert (~ok).sum() > 0 and rej.sum() > 0
+    _, flag = read_time_series(rec, "fixes/usbl_accepted", SCALARS)
+    assert np.array_equal(flag.ravel(), (~rej[ok]).astype(float))
+    _, pos = read_time_series(rec, "world/usbl/rejected/latest", "Points3D:positions")
+    assert len(pos) == rej.sum()
+    events = read_text_log(rec, "events")
+    assert sum("rejected by the gate" in e[2] for e in events) == rej.sum()
+    assert sum("no USBL fix" in e[2] for e in events) == (~ok).sum()
+    closest = [e for e in events if "closest approach" in e[2]]
+    assert closest and closest[0][0] == pytest.approx(scn.passage.closest_approach_time_s)
