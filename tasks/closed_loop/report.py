@@ -310,9 +310,13 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
         [a["truth_pos"][:, :2], a["ekf_pos"][:, :2], a["dr_pos"][:, :2]]
         + [np.array([[w.east_m, w.north_m]]) for w in scn.guidance.waypoints]
     )
-    span = np.ptp(xy, axis=0) + 20.0
-    height = float(np.clip(0.9 * style.PAGE_IN * span[1] / span[0] + 1.3, 3.0, 8.5))
-    fig, ax = style.subplots("page", height)
+    span = np.ptp(xy, axis=0) + 2.0 * max(
+        [w.acceptance_radius_m for w in scn.guidance.waypoints] + [10.0]
+    )
+    ratio = float(span[1] / span[0])
+    axes_h = min(6.5, 0.9 * style.PAGE_IN * ratio)
+    width = float(np.clip(axes_h / ratio / 0.85, 5.0, style.PAGE_IN))
+    fig, ax = style.subplots(width, axes_h + 1.5)
     others = [o for o in runs if o is not run and o.vehicles]
     for i, other in enumerate(others):
         p = other.lead["truth_pos"]
@@ -356,7 +360,7 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     ax.set_xlabel(style.label("east", "m"))
     ax.set_ylabel(style.label("north", "m"))
     style.title(ax, f"{words}: route, steering on the {scn.navigation.steer_on.upper()} estimate")
-    style.figure_legend(fig, (ax,), ncol=3)
+    style.figure_legend(fig, (ax,), ncol=3 if width > 6.0 else 2)
     files += style.save(fig, out / "route.png")
 
     # errors: horizontal distance on a log axis, then the EKF's east and north errors with its
