@@ -380,7 +380,7 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     axs[0].set_yscale("log")
     style.log_ticks(axs[0])
     axs[0].set_ylabel(style.label("horizontal error", "m"))
-    axs[0].legend(loc="upper left", ncol=3)
+    axs[0].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
     for j, (ax, comp) in enumerate(zip(axs[1:], ("east", "north"), strict=True)):
         ax.fill_between(
             t,
@@ -393,7 +393,11 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
         )
         ax.plot(t, e_ekf[:, j], **style.line("EKF", label=f"EKF {comp} error"))
         ax.set_ylabel(style.label(f"{comp} error", "m"))
-        ax.legend(loc="upper left", ncol=2)
+        # the scale of the error and of most of the bound (a bound that is large only before
+        # the first fix is drawn past the axis, not squashing the rest)
+        lim = 1.25 * max(float(np.max(np.abs(e_ekf[:, j]))), float(np.percentile(k * sd[:, j], 90)))
+        ax.set_ylim(-lim, lim)
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
     axs[-1].set_xlabel(style.label("time", "s"))
     inside = np.mean(np.all(np.abs(e_ekf[:, :2]) <= k * sd, axis=1))
     fig.suptitle(
