@@ -742,9 +742,9 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
             ("error_curve_cp_m", [0], style.color("CP1"), "CP1"),
             ("error_curve_cp_m", [1], style.color("CP2"), "CP2"),
         ):
-            curves = d[key][:, ci, procs].reshape(-1, t.size)
+            curves = d[key][:, ci, procs].reshape(-1, t.size)[:, 1:]  # t > 0: log axis
             ax.plot(
-                t,
+                t[1:],
                 curves.mean(axis=0),
                 color=col,
                 lw=1.3,
@@ -752,7 +752,7 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
                 label=f"{lab} (mean)",
             )
             ax.fill_between(
-                t,
+                t[1:],
                 np.percentile(curves, 10, axis=0),
                 np.percentile(curves, 90, axis=0),
                 color=col,
@@ -765,10 +765,11 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
             "10-90 % band",
             loc="left",
         )
+        ax.set_yscale("log")  # the corrected DR's metres beside the uncorrected tens of metres
+        style.log_ticks(ax)
         ax.set_xlabel("time since the fix at way-point 2 (s)")
         ax.set_ylabel("|DR - truth| (m)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
         name = "error-along-leg3.png"
         files += style.save(fig, out_dir / name)
     return files
