@@ -26,6 +26,9 @@ MPL_COLORS = {
     "DR": "tab:red",
     "USBL": "tab:green",
     "GPS": "tab:orange",
+    "GA1": "tab:green",
+    "GA2": "tab:purple",
+    "leader": "tab:gray",
 }
 
 Array = NDArray[np.float64]
@@ -45,8 +48,9 @@ def routes(
     points: Mapping[str, Sequence[Array]] | None = None,
     landmarks: Mapping[str, Array] | None = None,
     title: str = "",
+    extra: Mapping[str, Array] | None = None,
 ) -> str:
-    """Routes in the horizontal plane (seed 000 Figures 8, 19, 24, 30).
+    """Routes in the horizontal plane (seed 000 Figures 8, 19, 24, 30; seed 003 Figures 3, 5, 7).
 
     Args:
         path: PNG file.
@@ -54,6 +58,7 @@ def routes(
         tracks: method -> list of tracks, each (T, 2+), m.
         points: method -> list of point sets, each (k, 2+), m (USBL fixes).
         landmarks: label -> position (2+,), m.
+        extra: label -> another reference line (T, 2+), m, drawn dashed (seed 003: the leader).
     """
     fig, ax = plt.subplots(figsize=(7, 6.5))
     for name, pts in (points or {}).items():
@@ -80,6 +85,10 @@ def routes(
                 label=name if i == 0 else None,
             )
     ax.plot(reference_en[:, 0], reference_en[:, 1], "k-", lw=1.6, label="reference")
+    for label, line in (extra or {}).items():
+        ax.plot(
+            line[:, 0], line[:, 1], "--", lw=1.2, color=MPL_COLORS.get(label, "gray"), label=label
+        )
     for label, p in (landmarks or {}).items():
         ax.plot(p[0], p[1], "k^", ms=9)
         ax.annotate(label, (p[0], p[1]), textcoords="offset points", xytext=(6, 6))
@@ -166,4 +175,52 @@ def consistency(
     ax.grid(alpha=0.3, which="both")
     ax.legend()
     ax.set_title(title)
+    return _save(fig, path)
+
+
+def field_map(
+    path: Path,
+    east_m: Array,
+    north_m: Array,
+    values: Array,
+    title: str = "",
+    label: str = "",
+    marks: Mapping[str, Array] | None = None,
+    arrow: tuple[float, float] | None = None,
+    vmax: float | None = None,
+) -> str:
+    """A scalar field over the horizontal plane (seed 003 Figure 2, the HDOP map).
+
+    Args:
+        east_m: grid east coordinates, shape (nx,), m.
+        north_m: grid north coordinates, shape (ny,), m.
+        values: the field, shape (ny, nx); non-finite cells are drawn at ``vmax``.
+        label: colour-bar label.
+        marks: label -> position (2,), m, marked with a triangle.
+        arrow: ``(course_deg, length_m)`` of an arrow drawn at the centre (the follower's motion).
+        vmax: top of the colour scale (values above are clipped).
+    """
+    v = np.asarray(values, dtype=float)
+    top = vmax if vmax is not None else float(np.nanmax(np.where(np.isfinite(v), v, np.nan)))
+    v = np.where(np.isfinite(v), np.minimum(v, top), top)
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    mesh = ax.pcolormesh(east_m, north_m, v, shading="auto", cmap="viridis_r", vmax=top)
+    cs = ax.contour(east_m, north_m, v, levels=[1.5, 2, 3, 5], colors="white", linewidths=0.7)
+    ax.clabel(cs, fmt="%g", fontsize=7)
+    fig.colorbar(mesh, ax=ax, label=label)
+    for name, p in (marks or {}).items():
+        ax.plot(p[0], p[1], "k^", ms=9)
+        ax.annotate(name, (p[0], p[1]), textcoords="offset points", xytext=(6, 6))
+    if arrow is not None:
+        c, length = np.radians(arrow[0]), arrow[1]
+        ax.annotate(
+            "",
+            xy=(length * np.sin(c) / 2, length * np.cos(c) / 2),
+            xytext=(-length * np.sin(c) / 2, -length * np.cos(c) / 2),
+            arrowprops={"arrowstyle": "->", "color": "white", "lw": 1.5},
+        )
+    ax.set_xlabel("east of the leader (m)")
+    ax.set_ylabel("north of the leader (m)")
+    ax.set_aspect("equal")
+    ax.set_title(title, fontsize=10)
     return _save(fig, path)
