@@ -96,7 +96,10 @@ def routes(
     ax.set_ylabel("north (m)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    legend = ax.legend(loc="best", fontsize=8)
+    for handle in legend.legend_handles:  # faint lines of many runs: full colour in the legend
+        if handle is not None:
+            handle.set_alpha(1.0)
     ax.set_title(title)
     return _save(fig, path)
 
@@ -211,13 +214,18 @@ def field_map(
     for name, p in (marks or {}).items():
         ax.plot(p[0], p[1], "k^", ms=9)
         ax.annotate(name, (p[0], p[1]), textcoords="offset points", xytext=(6, 6))
-    if arrow is not None:
+    if arrow is not None:  # the follower's motion, drawn in the upper left corner
         c, length = np.radians(arrow[0]), arrow[1]
+        x0 = east_m[0] + 0.08 * (east_m[-1] - east_m[0]) + length / 2
+        y0 = north_m[-1] - 0.08 * (north_m[-1] - north_m[0]) - length / 2
         ax.annotate(
             "",
-            xy=(length * np.sin(c) / 2, length * np.cos(c) / 2),
-            xytext=(-length * np.sin(c) / 2, -length * np.cos(c) / 2),
-            arrowprops={"arrowstyle": "->", "color": "white", "lw": 1.5},
+            xy=(x0 + length * np.sin(c) / 2, y0 + length * np.cos(c) / 2),
+            xytext=(x0 - length * np.sin(c) / 2, y0 - length * np.cos(c) / 2),
+            arrowprops={"arrowstyle": "->", "color": "black", "lw": 1.5},
+        )
+        ax.annotate(
+            "F's DR step", (x0, y0), textcoords="offset points", xytext=(-20, 6), fontsize=8
         )
     ax.set_xlabel("east of the leader (m)")
     ax.set_ylabel("north of the leader (m)")

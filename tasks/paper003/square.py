@@ -56,6 +56,7 @@ from bauv_sim.kinematic.seed003 import (
     measure,
     square_truth,
 )
+from bauv_sim.sensors.base import check_multiple, periodic_indices
 from nav.metrics import SeriesSum, nees_band
 from nav.relative import GaOptions, dr_increment_covariance, dr_step, ga_fix, hdop, range_update
 from tasks.core import export, figures, store
@@ -70,6 +71,12 @@ METHODS = ("DR", "GA1", "GA2", "EKF")
 FIXED = ("GA1", "GA2", "EKF")
 """The methods that use the ranges."""
 STATS = ("max", "mean", "std")
+REC_COLORS = {
+    "DR": COLORS["dr"],
+    "GA1": (44, 160, 44),
+    "GA2": (148, 103, 189),
+    "EKF": COLORS["ekf"],
+}
 
 store.plain_data("nav.metrics.SeriesSum")(SeriesSum)
 
@@ -519,7 +526,10 @@ class Paper003Block:
             reading; NaN where none was accepted).
         routes: run -> method (and ``"reference"``) -> path points (float32), runs below
             ``report.routes_max`` (default reading).
-        single: run -> method -> distance at every tick, for ``report.single_sample``.
+        single: for ``report.single_sample``: ``"distance/M"`` (T + 1,) m and ``"track/M"``
+            (T + 1, 2) m of each method M, and ``"fix/M"`` (K, 2) m, ``"accepted/M"`` (K,),
+            ``"hdop/M"`` (K,) of GA1, GA2, EKF: the recording and the run data are written from
+            these, not simulated again.
     """
 
     runs: tuple[int, ...]
@@ -531,7 +541,7 @@ class Paper003Block:
     mean_curve: dict[str, SeriesSum]
     hdop_median: Array
     routes: dict[int, dict[str, NDArray[np.float32]]] = field(default_factory=dict)
-    single: dict[int, dict[str, Array]] = field(default_factory=dict)
+    single: dict[int, dict[str, NDArray]] = field(default_factory=dict)
 
 
 def _per_run(d: Array) -> Array:
@@ -644,7 +654,13 @@ def _default_parts(scn: Paper003Scenario, s: Samples, d: dict[str, Array]) -> Pa
         if run < scn.report.routes_max:
             block.routes[run] = {k: v[i, ::every].astype(np.float32) for k, v in s.tracks.items()}
         if run == scn.report.single_sample:
-            block.single[run] = {k: v[i] for k, v in d.items()}
+            one = {f"distance/{k}": v[i] for k, v in d.items()}
+            one.update({f"track/{k}": v[i] for k, v in s.tracks.items()})
+            for k, f in s.fixed.items():
+                one[f"fix/{k}"] = f.fix_position_m[i]
+                one[f"accepted/{k}"] = f.accepted[i]
+                one[f"hdop/{k}"] = f.hdop[i]
+            block.single[run] = one
     return block
 
 
@@ -1049,8 +1065,8 @@ def report_paper003(exp: SquareExperiment, ctx: ReportContext) -> ReportSummary:
         files += _figures(exp, ctx, scn, tot)
     if scn.report.run_data:
         files += _run_data(exp, ctx, scn, per_run[:, 0])
-    if scn.report.recording:
-        files.append(record_sample(exp, scn, ctx.seed, single, ctx.out_dir))
+    if (scn.report.recording or scn.report.run_data) and single in tot.single:
+        files += record_sample(exp, scn, ctx.seed, single, tot.single[single], ctx.out_dir)
     text = tables[0].to_text()
     if warnings:
         text += "\n" + "\n".join(f"warning: {w}" for w in warnings) + "\n"
@@ -1294,7 +1310,7 @@ def _figures(exp, ctx, scn: Paper003Scenario, tot: _Totals) -> list[str]:
         files.append(
             figures.distances(
                 out / "distance-single.png",
-                {k: (t[1:], d[k][1:]) for k in names},
+                {k: (t[1:], d[f"distance/{k}"][1:]) for k in names},
                 title=f"{exp.name}: distance to the reference position (run {s})",
             )
         )
@@ -1316,53 +1332,57 @@ def _run_data(exp, ctx, scn: Paper003Scenario, per_run: Array) -> list[str]:
     return ["data/runs.parquet"]
 
 
-def record_sample(exp: Experiment, scn: Paper003Scenario, seed: int, run: int, out_dir) -> str:
-    """Write ``recording.rrd`` of one run (re-simulated: identical to its batch numbers) and its
-    Parquet time series ``data/run-NNNNNN.parquet``."""
-    s = simulate(scn, seed, (run,))
-    t = s.truth.t_s
+def record_sample(
+    exp: Experiment, scn: Paper003Scenario, seed: int, run: int, one: dict, out_dir
+) -> list[str]:
+    """Write ``recording.rrd`` and the Parquet time series ``data/run-NNNNNN.parquet`` of the
+    single sample from its block data (the batch's own numbers)."""
+    truth = _truth(scn, scenario_reading(scn).geometry)
+    t = truth.t_s
+    t_fix = t[periodic_fix_ticks(scn)]
 
     def z3(p: Array) -> Array:
         return np.concatenate([p, np.zeros((len(p), 1))], axis=1)
 
-    rec = Recording(out_dir / "recording.rrd", exp.name, f"{exp.name}/seed{seed}/run{run}")
-    rec.track("leader", t, z3(s.truth.leader_m), (120, 120, 120))
-    rec.track("truth", t, z3(s.truth.follower_m), COLORS["truth"])
-    colors = {
-        "DR": COLORS["dr"],
-        "GA1": (44, 160, 44),
-        "GA2": (148, 103, 189),
-        "EKF": COLORS["ekf"],
-    }
-    for k, v in s.tracks.items():
-        rec.track(k.lower(), t, z3(v[0]), colors[k])
-    d = s.distances()
-    t_fix = t[s.meas.fix_tick]
-    for k in FIXED:
-        f = s.fixed[k]
-        ok = f.accepted[0]
-        rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(f.fix_position_m[0][ok]), colors[k])
-        rec.scalars(f"hdop/{k.lower()}", t_fix[ok], f.hdop[0][ok], colors[k], f"{k} HDOP")
-    for k in METHODS:
-        rec.scalars(f"distance/{k.lower()}", t, d[k][0], colors[k], k)
-    rec.blueprint("distance", "hdop")
-    rec.close()
-    cols = {
-        "t": export.Column(t, "s", "time"),
-        "leader": export.Column(s.truth.leader_m, "m", "leader reference", ("east", "north")),
-        "reference": export.Column(
-            s.truth.follower_m, "m", "follower reference", ("east", "north")
-        ),
-    }
-    for k, v in s.tracks.items():
-        cols[k] = export.Column(v[0], "m", f"{k} estimate", ("east", "north"))
-        cols[f"{k}.distance"] = export.Column(d[k][0], "m", f"{k}: distance to the reference")
-    export.write_parquet(
-        out_dir / "data" / f"run-{run:06d}.parquet",
-        cols,
-        {"experiment": exp.name, "seed": str(seed), "run": str(run)},
-    )
-    return "recording.rrd"
+    files = []
+    if scn.report.recording:
+        rec = Recording(out_dir / "recording.rrd", exp.name, f"{exp.name}/seed{seed}/run{run}")
+        rec.track("leader", t, z3(truth.leader_m), (120, 120, 120))
+        rec.track("truth", t, z3(truth.follower_m), COLORS["truth"])
+        for k in METHODS:
+            rec.track(k.lower(), t, z3(one[f"track/{k}"]), REC_COLORS[k])
+        for k in FIXED:
+            ok = one[f"accepted/{k}"]
+            rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(one[f"fix/{k}"][ok]), REC_COLORS[k])
+            rec.scalars(f"hdop/{k.lower()}", t_fix[ok], one[f"hdop/{k}"][ok], REC_COLORS[k], k)
+        for k in METHODS:
+            rec.scalars(f"distance/{k.lower()}", t, one[f"distance/{k}"], REC_COLORS[k], k)
+        rec.blueprint("distance", "hdop")
+        rec.close()
+        files.append("recording.rrd")
+    if scn.report.run_data:
+        en = ("east", "north")
+        cols = {
+            "t": export.Column(t, "s", "time"),
+            "leader": export.Column(truth.leader_m, "m", "leader reference", en),
+            "reference": export.Column(truth.follower_m, "m", "follower reference", en),
+        }
+        for k in METHODS:
+            cols[k] = export.Column(one[f"track/{k}"], "m", f"{k} estimate", en)
+            cols[f"{k}.distance"] = export.Column(
+                one[f"distance/{k}"], "m", f"{k}: distance to the reference"
+            )
+        rel = f"data/run-{run:06d}.parquet"
+        meta = {"experiment": exp.name, "seed": str(seed), "run": str(run)}
+        export.write_parquet(out_dir / rel, cols, meta)
+        files.append(rel)
+    return files
+
+
+def periodic_fix_ticks(scn: Paper003Scenario) -> NDArray[np.intp]:
+    """Ticks of the ranges, shape (K,)."""
+    every = check_multiple(scn.sensors.modem.period_s, scn.path.tick_s, "sensors.modem.period_s")
+    return periodic_indices(scn.path.n_ticks, every)
 
 
 def preset_of(test: str) -> dict:
