@@ -15,6 +15,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.collections import LineCollection
 from numpy.typing import NDArray
 
 from nav.metrics import Histogram
@@ -74,16 +75,17 @@ def routes(
                     label=name if i == 0 else None,
                 )
     for name, trs in tracks.items():
-        alpha = 0.9 if len(trs) == 1 else max(0.08, 3.0 / len(trs))
-        for i, tr in enumerate(trs):
-            ax.plot(
-                tr[:, 0],
-                tr[:, 1],
-                lw=0.8,
-                alpha=alpha,
-                color=MPL_COLORS.get(name),
-                label=name if i == 0 else None,
-            )
+        color = MPL_COLORS.get(name)
+        if len(trs) == 1:
+            tr = trs[0]
+            ax.plot(tr[:, 0], tr[:, 1], lw=0.8, alpha=0.9, color=color, label=name)
+        elif len(trs) > 1:  # many runs: one collection (one draw call) instead of a line each
+            alpha = max(0.08, 3.0 / len(trs))
+            lines = LineCollection([np.asarray(tr)[:, :2] for tr in trs], lw=0.8, alpha=alpha)
+            lines.set_color(color)
+            lines.set_label(name)
+            ax.add_collection(lines)
+            ax.autoscale_view()
     ax.plot(reference_en[:, 0], reference_en[:, 1], "k-", lw=1.6, label="reference")
     for label, line in (extra or {}).items():
         ax.plot(
@@ -207,7 +209,9 @@ def field_map(
     top = vmax if vmax is not None else float(np.nanmax(np.where(np.isfinite(v), v, np.nan)))
     v = np.where(np.isfinite(v), np.minimum(v, top), top)
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
-    mesh = ax.pcolormesh(east_m, north_m, v, shading="auto", cmap="viridis_r", vmax=top)
+    de, dn = (east_m[1] - east_m[0]) / 2, (north_m[1] - north_m[0]) / 2
+    extent = (east_m[0] - de, east_m[-1] + de, north_m[0] - dn, north_m[-1] + dn)
+    mesh = ax.imshow(v, origin="lower", extent=extent, cmap="viridis_r", vmax=top)
     cs = ax.contour(east_m, north_m, v, levels=[1.5, 2, 3, 5], colors="white", linewidths=0.7)
     ax.clabel(cs, fmt="%g", fontsize=7)
     fig.colorbar(mesh, ax=ax, label=label)
