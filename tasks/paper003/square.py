@@ -184,7 +184,10 @@ class ReportConfig(Config):
     run_data: bool = Field(True, description="write Parquet run data (single sample, per run)")
     hdop_map: HdopMapConfig = Field(default_factory=HdopMapConfig)
     warn_hdop: float = Field(
-        5.0, gt=0, description="warn when the median HDOP of the accepted fixes exceeds this"
+        3.0,
+        gt=0,
+        description="warn when the median HDOP of the accepted fixes exceeds this (abeam ~1.4; "
+        "on the course line ~D_r, 5 in 5 s)",
     )
     consistency_probability: float = Field(0.95, gt=0, lt=1)
 
