@@ -57,7 +57,7 @@ from bauv_sim.kinematic.seed003 import (
     square_truth,
 )
 from bauv_sim.sensors.base import check_multiple, periodic_indices
-from nav.metrics import SeriesSum, nees_band
+from nav.metrics import nees_band
 from nav.relative import GaOptions, dr_increment_covariance, dr_step, ga_fix, hdop, range_update
 from tasks.core import export, figures, store
 from tasks.core.recording import COLORS, Recording
@@ -78,7 +78,6 @@ REC_COLORS = {
     "EKF": COLORS["ekf"],
 }
 
-store.plain_data("nav.metrics.SeriesSum")(SeriesSum)
 
 # The paper's Tables 1-3: method -> (max, mean, std) for (single sample, 100 samples), m.
 PaperCells = dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]]
@@ -524,7 +523,6 @@ class Paper003Block:
         fixes: shape (n, R, 3, 6): ranges expected, received, accepted, refused as too short,
             refused for HDOP, sum of the accepted fixes' HDOP.
         longest_gap_s: longest time without an accepted fix, shape (n, R, 3), s.
-        mean_curve: method -> sum over runs of the distance at each tick (default reading).
         hdop_median: median HDOP of the accepted fixes per run and method, shape (n, 3) (default
             reading; NaN where none was accepted).
         routes: run -> method (and ``"reference"``) -> path points (float32), runs below
@@ -541,7 +539,6 @@ class Paper003Block:
     consistency: Array
     fixes: Array
     longest_gap_s: Array
-    mean_curve: dict[str, SeriesSum]
     hdop_median: Array
     routes: dict[int, dict[str, NDArray[np.float32]]] = field(default_factory=dict)
     single: dict[int, dict[str, NDArray]] = field(default_factory=dict)
@@ -650,7 +647,6 @@ def _default_parts(scn: Paper003Scenario, s: Samples, d: dict[str, Array]) -> Pa
         consistency=np.empty(0),
         fixes=np.empty(0),
         longest_gap_s=np.empty(0),
-        mean_curve={k: SeriesSum.of(v) for k, v in d.items()},
         hdop_median=med,
     )
     for i, run in enumerate(s.runs):
@@ -899,7 +895,6 @@ class _Totals:
     fixes: list[Array] = field(default_factory=list)
     gaps: list[Array] = field(default_factory=list)
     hdop_median: list[Array] = field(default_factory=list)
-    mean_curve: dict[str, SeriesSum] | None = None
     routes: dict[int, dict[str, NDArray[np.float32]]] = field(default_factory=dict)
     single: dict[int, dict[str, Array]] = field(default_factory=dict)
 
@@ -916,10 +911,6 @@ def _merge(ctx: ReportContext) -> _Totals:
         tot.fixes.append(b.fixes)
         tot.gaps.append(b.longest_gap_s)
         tot.hdop_median.append(b.hdop_median)
-        if tot.mean_curve is None:
-            tot.mean_curve = b.mean_curve
-        else:
-            tot.mean_curve = {k: tot.mean_curve[k].merge(v) for k, v in b.mean_curve.items()}
         tot.routes.update(b.routes)
         tot.single.update(b.single)
     if tot is None:
