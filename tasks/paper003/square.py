@@ -142,6 +142,12 @@ class NavigationConfig(Config):
     max_hdop: float | None = Field(
         None, gt=0, description="GA fixes with a larger HDOP are refused (none: keep all)"
     )
+    leader_sigma_m: float = Field(
+        0.0,
+        ge=0,
+        description="the EKF's sigma per axis of the leader's broadcast position, m (0: taken "
+        "as exact, as in the paper; set it with sensors.modem.broadcast)",
+    )
     ekf_initial_sigma_m: float = Field(
         0.0, ge=0, description="EKF's initial sigma per axis, m (0: the start is known)"
     )
@@ -412,6 +418,9 @@ def ekf_track(
     accepted = np.zeros((n, K), dtype=bool)
     hd = np.zeros((n, K))
     short = np.zeros((n, K), dtype=bool)
+    leader_cov = None
+    if nav_cfg.leader_sigma_m > 0:
+        leader_cov = np.broadcast_to(np.eye(2) * nav_cfg.leader_sigma_m**2, (n, 2, 2))
     for j, t in enumerate(meas.fix_tick):
         x_prior = x + (pos[:, t] - pos[:, prev])
         P_prior = P + (cum[:, t] - cum[:, prev])
@@ -424,6 +433,7 @@ def ekf_track(
             meas.leader_m[:, j],
             meas.range_m[:, j],
             nav_cfg.sigma_range_m,
+            leader_cov=leader_cov,
             present=use,
         )
         accepted[:, j] = info.applied

@@ -103,7 +103,7 @@ def test_the_reading_notes_ga_observations_hold_on_the_printed_equations(tmp_pat
     assert "Every reading" in md and "leg/L-from-F/true/no-restart" in md
 
 
-def _one_run_online(scn, s, method, restart):
+def _one_run_online(scn, s, method, restart, leader_cov=None):
     """The same run through nav.relative.FollowerNavigator, tick by tick."""
     m = s.meas
     opt = scn.navigation.ga_options(restart=restart)
@@ -121,7 +121,7 @@ def _one_run_online(scn, s, method, restart):
         j = fix_at.get(k + 1)
         if j is not None:
             ok = m.range_produced[0, j]
-            nav.fix(m.leader_m[0, j], m.range_m[0, j] if ok else None)
+            nav.fix(m.leader_m[0, j], m.range_m[0, j] if ok else None, leader_cov)
         out.append(nav.position)
     return np.array(out)
 
@@ -142,6 +142,20 @@ def test_batched_navigation_equals_the_online_follower(restart):
     for k, method in (("GA1", "ga1"), ("GA2", "ga2"), ("EKF", "ekf"), ("DR", "dr")):
         online = _one_run_online(scn, one, method, restart)
         np.testing.assert_allclose(one.tracks[k][0], online, rtol=0, atol=1e-6, err_msg=k)
+
+
+def test_noisy_broadcast_and_the_ekf_that_knows_it():
+    over = {"sensors": {"modem": {"broadcast": {"sigma_m": 0.5}}}}
+    scn = sq.scenario_of("test-3", {**over, "navigation": {"leader_sigma_m": 0.5}})
+    one = sq.simulate(scn, 2, (1,))
+    online = _one_run_online(scn, one, "ekf", True, np.eye(2) * 0.25)
+    np.testing.assert_allclose(one.tracks["EKF"][0], online, rtol=0, atol=1e-9)
+    blind = sq.simulate(sq.scenario_of("test-3", over), 2, (1,))
+    np.testing.assert_array_equal(blind.meas.leader_m, one.meas.leader_m)  # the same draws
+    # R grows by the leader's variance on the line of sight: a larger stated covariance
+    tr = np.trace(one.fixed["EKF"].fix_cov_m2[0], axis1=-2, axis2=-1)
+    tr_blind = np.trace(blind.fixed["EKF"].fix_cov_m2[0], axis1=-2, axis2=-1)
+    assert (tr > tr_blind).all()
 
 
 def test_same_seed_same_numbers_whatever_the_block_split(tmp_path):
