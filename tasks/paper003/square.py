@@ -70,6 +70,10 @@ METHODS = ("DR", "GA1", "GA2", "EKF")
 """Positioning methods, in table order (EKF is beyond the paper)."""
 FIXED = ("GA1", "GA2", "EKF")
 """The methods that use the ranges."""
+CONSISTENCY_ROWS = ("GA1", "GA2", "EKF", "GA1 prior", "GA2 prior")
+"""Stated accuracies compared with the actual error: GA's ``GaFix.covariance`` (with the
+a-posteriori variance factor delta_0^2, redundancy 1), the EKF's posterior, and GA's
+``covariance_prior`` ``(A^T P A)^-1`` (without the factor)."""
 STATS = ("max", "mean", "std")
 REC_COLORS = {
     "DR": COLORS["dr"],
@@ -318,6 +322,7 @@ class FixedTrack:
         fix_position_m: the estimate right after each range, shape (n, K, 2), m.
         fix_cov_m2: its stated covariance, shape (n, K, 2, 2), m^2 (GA: ``GaFix.covariance``;
             EKF: the posterior).
+        fix_cov_prior_m2: GA's ``GaFix.covariance_prior`` (EKF: the posterior), same shape.
         accepted: whether each range corrected the estimate, shape (n, K).
         hdop: HDOP at each accepted fix, shape (n, K) (0 where not accepted).
         refused_short: ranges refused for being below ``min_range_m``, shape (n, K).
@@ -327,6 +332,7 @@ class FixedTrack:
     position_m: Array
     fix_position_m: Array
     fix_cov_m2: Array
+    fix_cov_prior_m2: Array
     accepted: NDArray[np.bool_]
     hdop: Array
     refused_short: NDArray[np.bool_]
@@ -365,6 +371,7 @@ def ga_track(
     offsets = np.zeros((n, K + 1, 2))
     fix_pos = np.empty((n, K, 2))
     fix_cov = np.empty((n, K, 2, 2))
+    fix_prior = np.empty((n, K, 2, 2))
     accepted = np.zeros((n, K), dtype=bool)
     hd = np.zeros((n, K))
     short = np.zeros((n, K), dtype=bool)
@@ -388,13 +395,21 @@ def ga_track(
         est = anchor + since
         fix_pos[:, j] = np.where(ok[:, None], fix.position, est)
         fix_cov[:, j] = fix.covariance
+        fix_prior[:, j] = fix.covariance_prior
         accepted[:, j] = ok
         hd[:, j] = np.where(ok, fix.hdop, 0.0)
         anchor = np.where(ok[:, None], fix.position, anchor)
         prev = np.where(ok, t, prev)
         offsets[:, j + 1] = anchor - pos[rows, prev]
     return FixedTrack(
-        _assemble(pos, offsets, meas.fix_tick), fix_pos, fix_cov, accepted, hd, short, high
+        _assemble(pos, offsets, meas.fix_tick),
+        fix_pos,
+        fix_cov,
+        fix_prior,
+        accepted,
+        hd,
+        short,
+        high,
     )
 
 
@@ -445,6 +460,7 @@ def ekf_track(
     return FixedTrack(
         _assemble(pos, offsets, meas.fix_tick),
         fix_pos,
+        fix_cov,
         fix_cov,
         accepted,
         hd,
@@ -527,9 +543,9 @@ class Paper003Block:
         labels: reading labels, in :func:`readings` order (R).
         per_run: shape (n, R, 4 methods, 4): count, sum, sum of squares and max of the distance
             to the reference over ticks 1..T, m.
-        consistency: shape (n, R, 3 (GA1, GA2, EKF), 4): accepted fixes with a finite stated
-            covariance, sum of their NEES, sum of the stated covariance's trace (m^2) and of the
-            squared actual error (m^2).
+        consistency: shape (n, R, 5 (:data:`CONSISTENCY_ROWS`), 4): accepted fixes with a
+            finite stated covariance, sum of their NEES, sum of the stated covariance's trace
+            (m^2) and of the squared actual error (m^2).
         fixes: shape (n, R, 3, 6): ranges expected, received, accepted, refused as too short,
             refused for HDOP, sum of the accepted fixes' HDOP.
         longest_gap_s: longest time without an accepted fix, shape (n, R, 3), s.
@@ -562,11 +578,12 @@ def _per_run(d: Array) -> Array:
     )
 
 
-def _consistency(s: Samples, name: str) -> Array:
+def _consistency(s: Samples, row: str) -> Array:
+    name, _, prior = row.partition(" ")
     f = s.fixed[name]
     ref = s.truth.follower_m[s.meas.fix_tick]
     e = f.fix_position_m - ref  # (n, K, 2)
-    C = f.fix_cov_m2
+    C = f.fix_cov_prior_m2 if prior else f.fix_cov_m2
     det = C[..., 0, 0] * C[..., 1, 1] - C[..., 0, 1] ** 2
     ok = f.accepted & np.isfinite(det) & (det > 0) & np.isfinite(C).all(axis=(-1, -2))
     Cs = np.where(ok[..., None, None], C, np.eye(2))
@@ -612,7 +629,7 @@ def reduce_block(scn: Paper003Scenario, seed: int, runs: tuple[int, ...]) -> Pap
     rds = readings(scn)
     n, R = len(runs), len(rds)
     per_run = np.empty((n, R, len(METHODS), N_RUN_STATS))
-    cons = np.empty((n, R, len(FIXED), N_CONS))
+    cons = np.empty((n, R, len(CONSISTENCY_ROWS), N_CONS))
     fixes = np.empty((n, R, len(FIXED), N_FIX))
     gaps = np.empty((n, R, len(FIXED)))
     shared: dict[tuple[str, str], tuple[SquareTruth, Seed003Measurements, DeadReckoning]] = {}
@@ -630,8 +647,9 @@ def reduce_block(scn: Paper003Scenario, seed: int, runs: tuple[int, ...]) -> Pap
             if not np.isfinite(d[name]).all():
                 raise ValueError(f"{name}: a non-finite estimate in runs {runs[0]}-{runs[-1]}")
             per_run[:, r, m] = _per_run(d[name])
+        for m, row in enumerate(CONSISTENCY_ROWS):
+            cons[:, r, m] = _consistency(s, row)
         for m, name in enumerate(FIXED):
-            cons[:, r, m] = _consistency(s, name)
             fixes[:, r, m], gaps[:, r, m] = _fix_stats(s, name, t_end)
         if r == 0:
             block = _default_parts(scn, s, d)
@@ -971,7 +989,7 @@ def report_paper003(exp: SquareExperiment, ctx: ReportContext) -> ReportSummary:
             )
     # consistency of the stated accuracy (default reading)
     consistency = []
-    for m, name in enumerate(FIXED):
+    for m, name in enumerate(CONSISTENCY_ROWS):
         c = cons[:, 0, m].sum(axis=0)
         nf = int(c[0])
         if nf == 0:

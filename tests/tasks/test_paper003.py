@@ -268,7 +268,8 @@ def test_follower_on_the_leaders_course_line(tmp_path):
 
 def test_consistency_report_compares_stated_and_actual_accuracy(tests100):
     c = {x["method"]: x for x in tests100["test-1"]["consistency"]}
-    for k in ("GA1", "GA2", "EKF"):
+    assert set(c) == {"GA1", "GA2", "EKF", "GA1 prior", "GA2 prior"}
+    for k in c:
         x = c[k]
         assert x["n_fixes"] == 9600
         lo, hi = x["band_low"], x["band_high"]
