@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from nav.metrics import Histogram
 from tasks.core import style
 
-__all__ = ["consistency", "distances", "histograms", "route_alpha", "routes"]
+__all__ = ["consistency", "distances", "field_map", "histograms", "route_alpha", "routes"]
 
 Array = NDArray[np.float64]
 
@@ -55,8 +55,9 @@ def routes(
     points: Mapping[str, Sequence[Array]] | None = None,
     landmarks: Mapping[str, Array] | None = None,
     title: str = "",
+    extra: Mapping[str, Array] | None = None,
 ) -> list[str]:
-    """Routes in the horizontal plane (seed 000 Figures 8, 19, 24, 30).
+    """Routes in the horizontal plane (seed 000 Figures 8, 19, 24, 30; seed 003 Figures 3, 5, 7).
 
     Panel (a) is the plan view (east, north, equal scales); when the reference is a straight line
     panel (b) shows each method's offset across it against the distance along it, where metres of
@@ -70,6 +71,8 @@ def routes(
         points: method -> list of point sets, each (k, 2+), m (USBL fixes).
         landmarks: label -> position (2+,), m.
         title: the figure's title, in words.
+        extra: label -> another reference line (T, 2+), m, drawn dashed in the label's style
+            (seed 003: the leader).
 
     Returns:
         The files written (PNG, PDF).
@@ -109,6 +112,9 @@ def routes(
                 )
         q = xy(ref)
         ax.plot(q[:, 0], q[:, 1], **style.line("reference", lw=1.2, zorder=4))
+        for lab, line_en in (extra or {}).items():
+            q = xy(np.asarray(line_en, dtype=float))
+            ax.plot(q[:, 0], q[:, 1], **style.line(lab, lw=1.0, ls="--", zorder=4))
 
     draw(axes[0], lambda p: p[:, :2])
     for lab, p in (landmarks or {}).items():
@@ -310,4 +316,65 @@ def consistency(
     if title:
         fig.suptitle(title)
     style.figure_legend(fig, (ax,), ncol=3)
+    return style.save(fig, path)
+
+
+@style.styled
+def field_map(
+    path: Path,
+    east_m: Array,
+    north_m: Array,
+    values: Array,
+    title: str = "",
+    label: str = "",
+    marks: Mapping[str, Array] | None = None,
+    arrow: tuple[float, float] | None = None,
+    vmax: float | None = None,
+) -> list[str]:
+    """A scalar field over the horizontal plane (seed 003 Figure 2, the HDOP map).
+
+    Args:
+        east_m: grid east coordinates, shape (nx,), m.
+        north_m: grid north coordinates, shape (ny,), m.
+        values: the field, shape (ny, nx); non-finite cells are drawn at ``vmax``.
+        label: colour-bar label.
+        marks: label -> position (2,), m, marked with a triangle.
+        arrow: ``(course_deg, length_m)`` of an arrow drawn at the centre (the follower's motion).
+        vmax: top of the colour scale (values above are clipped).
+
+    Returns:
+        The files written (PNG, PDF).
+    """
+    v = np.asarray(values, dtype=float)
+    top = vmax if vmax is not None else float(np.nanmax(np.where(np.isfinite(v), v, np.nan)))
+    v = np.where(np.isfinite(v), np.minimum(v, top), top)
+    fig, ax = style.subplots("column", 3.2)
+    de, dn = (east_m[1] - east_m[0]) / 2, (north_m[1] - north_m[0]) / 2
+    extent = (east_m[0] - de, east_m[-1] + de, north_m[0] - dn, north_m[-1] + dn)
+    mesh = ax.imshow(v, origin="lower", extent=extent, cmap="viridis_r", vmax=top)
+    cs = ax.contour(east_m, north_m, v, levels=[1.5, 2, 3, 5], colors="white", linewidths=0.7)
+    ax.clabel(cs, fmt="%g", fontsize=7)
+    fig.colorbar(mesh, ax=ax, label=label)
+    for name, p in (marks or {}).items():
+        ax.plot(p[0], p[1], "k^", ms=6)
+        ax.annotate(name, (p[0], p[1]), textcoords="offset points", xytext=(6, 6))
+    if arrow is not None:  # the follower's motion, drawn in the upper left corner
+        c, length = np.radians(arrow[0]), arrow[1]
+        x0 = east_m[0] + 0.08 * (east_m[-1] - east_m[0]) + length / 2
+        y0 = north_m[-1] - 0.08 * (north_m[-1] - north_m[0]) - length / 2
+        ax.annotate(
+            "",
+            xy=(x0 + length * np.sin(c) / 2, y0 + length * np.cos(c) / 2),
+            xytext=(x0 - length * np.sin(c) / 2, y0 - length * np.cos(c) / 2),
+            arrowprops={"arrowstyle": "->", "color": "black", "lw": 1.5},
+        )
+        ax.annotate(
+            "F's DR step", (x0, y0), textcoords="offset points", xytext=(-20, 6), fontsize=6.5
+        )
+    ax.set_xlabel(style.label("east of the leader", "m"))
+    ax.set_ylabel(style.label("north of the leader", "m"))
+    ax.set_aspect("equal")
+    ax.grid(False)
+    if title:
+        ax.set_title(title)
     return style.save(fig, path)

@@ -95,6 +95,9 @@ METHODS: dict[str, dict[str, Any]] = {
     "current": {"color": _P["wine"], "ls": "-", "label": "current"},
     "waypoint": {"color": _P["dark_grey"], "ls": "-", "label": "way-point"},
     "bound": {"color": _P["blue"], "ls": ":", "label": "bound"},
+    "GA1": {"color": _P["reddish_purple"], "ls": "-", "label": "GA1"},
+    "GA2": {"color": _P["sky_blue"], "ls": "-", "label": "GA2"},
+    "leader": {"color": _P["grey"], "ls": "--", "label": "leader"},
 }
 """Fixed look of each method: colour, line style (marker for fixes) and legend label."""
 
