@@ -432,17 +432,57 @@ def _run_block_in_worker(
 
 
 class InlineExecutor(cf.Executor):
-    """Runs each submitted call at once in the calling thread (one local worker)."""
+    """One local worker: each submitted call runs in the calling thread when its result is asked
+    for (:meth:`~concurrent.futures.Future.result` of the returned future), not in ``submit``.
+
+    The runner asks for the blocks one by one in its save loop, so each block is saved and the
+    progress bar moves as soon as that block is computed, and Ctrl-C keeps the finished blocks, as
+    with a process pool.
+    """
 
     def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future:
-        fut: cf.Future = cf.Future()
+        return _LazyFuture(fn, args, kwargs)
+
+
+class _LazyFuture(cf.Future):
+    """A future whose call runs, in the calling thread, the first time its result is asked for."""
+
+    def __init__(self, fn: Callable[..., Any], args: tuple[Any, ...], kwargs: dict[str, Any]):
+        super().__init__()
+        self._call: tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]] | None = (
+            fn,
+            args,
+            kwargs,
+        )
+
+    def _run(self) -> None:
+        if self._call is None or not self.set_running_or_notify_cancel():
+            return
+        fn, args, kwargs = self._call
+        self._call = None
         try:
-            fut.set_result(fn(*args, **kwargs))
-        except BaseException as exc:
-            if isinstance(exc, KeyboardInterrupt):
-                raise
-            fut.set_exception(exc)
-        return fut
+            value = fn(*args, **kwargs)
+        except Exception as exc:
+            self.set_exception(exc)
+        else:
+            self.set_result(value)
+
+    def result(self, timeout: float | None = None) -> Any:
+        self._run()
+        return super().result(timeout)
+
+    def exception(self, timeout: float | None = None) -> BaseException | None:
+        self._run()
+        return super().exception(timeout)
+
+
+def _completed(futures: dict[cf.Future, int]) -> Iterator[cf.Future]:
+    """The futures as they finish: in submission order for lazy (inline) futures, which run when
+    asked for, else in completion order (:func:`concurrent.futures.as_completed`)."""
+    if all(isinstance(f, _LazyFuture) for f in futures):
+        yield from futures
+    else:
+        yield from cf.as_completed(futures)
 
 
 @contextlib.contextmanager
@@ -555,7 +595,7 @@ def execute(
                     for i in todo
                 }
                 try:
-                    for fut in cf.as_completed(futures):
+                    for fut in _completed(futures):
                         i = futures[fut]
                         try:
                             payload = fut.result()

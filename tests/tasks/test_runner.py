@@ -322,3 +322,30 @@ def test_a_block_without_its_sha256_is_computed_again(batches, tmp_path, capsys)
     assert code == 0, err
     assert block.read_bytes() == original
     assert _bytes(out) == batches["metrics"]
+
+
+def test_one_worker_saves_each_block_as_it_finishes(reference, tmp_path, monkeypatch):
+    """``--workers 1`` (the inline executor) computes the blocks one by one in the save loop: a
+    Ctrl-C during the fourth block keeps the three finished ones, and ``--resume`` completes the
+    batch to the same bytes as a batch run straight through."""
+    from tasks.core import runner
+
+    real = runner._run_block_in_worker
+    calls = []
+
+    def interrupt_fourth(*args):
+        calls.append(args[3])
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(runner, "_run_block_in_worker", interrupt_fourth)
+    out = tmp_path / "a"
+    with pytest.raises(runner.BatchInterrupted, match="3 of 5 blocks are saved"):
+        _batch(out)
+    assert sorted(p.name for p in (out / "blocks").glob("*.sha256")) == [
+        f"block-00000{i}.sha256" for i in range(3)
+    ]
+    monkeypatch.setattr(runner, "_run_block_in_worker", real)
+    run("paper-000/test-2", seed=5, out_dir=out, resume=True, progress=False)
+    assert _bytes(out) == reference
