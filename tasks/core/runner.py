@@ -485,6 +485,47 @@ def _completed(futures: dict[cf.Future, int]) -> Iterator[cf.Future]:
         yield from cf.as_completed(futures)
 
 
+EXECUTORS = ("local", "dask")
+DASK_CONNECT_TIMEOUT_S = 10.0
+"""How long ``--executor dask --address ...`` waits for the scheduler before giving up, s."""
+
+
+def check_executor(kind: str, workers: int, address: str | None) -> None:
+    """Check the executor options without starting or connecting to anything.
+
+    Args:
+        kind: ``"local"`` or ``"dask"``.
+        workers: worker processes, an integer >= 1.
+        address: a Dask scheduler address ``[scheme://]host:port`` or ``None``.
+
+    Raises:
+        ConfigError: naming the option, its value and what is allowed.
+    """
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ConfigError(f"workers = {workers!r}: must be an integer >= 1")
+    if kind not in EXECUTORS:
+        raise ConfigError(f"executor = {kind!r}: must be 'local' or 'dask'")
+    if address is None:
+        return
+    if kind == "local":
+        raise ConfigError(
+            f"address = {address!r}: --address is for --executor dask (the local executor "
+            "takes none)"
+        )
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, where = parse_address(address, strict=False)
+        if scheme in ("tcp", "tls"):
+            host, port = parse_host_port(where)
+            if not host or port is None:
+                raise ValueError("no host")
+    except (ValueError, TypeError):
+        raise ConfigError(
+            f"address = {address!r}: must be a Dask scheduler address such as tcp://host:8786"
+        ) from None
+
+
 @contextlib.contextmanager
 def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.Executor]:
     """Open an executor of the given kind.
@@ -496,12 +537,13 @@ def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.E
 
     Yields:
         The executor; it is shut down on exit.
+
+    Raises:
+        ConfigError: on invalid options (:func:`check_executor`), or when the Dask scheduler at
+            ``address`` does not answer within :data:`DASK_CONNECT_TIMEOUT_S`.
     """
-    if workers < 1:
-        raise ConfigError(f"workers = {workers}: must be >= 1")
+    check_executor(kind, workers, address)
     if kind == "local":
-        if address is not None:
-            raise ConfigError("--address is for --executor dask")
         if workers == 1:
             yield InlineExecutor()
             return
@@ -513,32 +555,36 @@ def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.E
         finally:
             ex.shutdown(wait=False, cancel_futures=True)
         return
-    if kind == "dask":
-        import logging
+    import logging
 
-        from distributed import Client, LocalCluster
+    from distributed import Client, LocalCluster
 
-        logging.getLogger("distributed").setLevel(logging.ERROR)
-        cluster = None
-        if address is None:
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
-            client = Client(cluster)
-        else:
-            client = Client(address)
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    cluster = None
+    if address is None:
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        client = Client(cluster)
+    else:
         try:
-            yield client.get_executor(pure=False)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-        return
-    raise ConfigError(f"executor = {kind!r}: must be 'local' or 'dask'")
+            client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            what = " ".join(str(exc).split())
+            raise ConfigError(
+                f"address = {address!r}: no Dask scheduler answered within "
+                f"{DASK_CONNECT_TIMEOUT_S:g} s ({what})"
+            ) from None
+    try:
+        yield client.get_executor(pure=False)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def execute(
@@ -548,6 +594,7 @@ def execute(
     workers: int = 1,
     address: str | None = None,
     progress: bool = True,
+    pool: cf.Executor | None = None,
 ) -> ReportSummary:
     """Compute the missing blocks of a prepared batch and write its report.
 
@@ -558,6 +605,9 @@ def execute(
         workers: number of worker processes.
         address: Dask scheduler address, if any.
         progress: show a progress bar on a terminal.
+        pool: an executor already opened by :func:`make_executor` (then ``executor``,
+            ``workers`` and ``address`` are not used), or ``None`` to open one when a block is
+            missing.
 
     Returns:
         The report summary.
@@ -582,7 +632,11 @@ def execute(
     )
     try:
         if todo:
-            with make_executor(executor, workers, address) as ex:
+            with (
+                contextlib.nullcontext(pool)
+                if pool is not None
+                else make_executor(executor, workers, address)
+            ) as ex:
                 futures = {
                     ex.submit(
                         _run_block_in_worker,
@@ -663,7 +717,14 @@ def run(
 
     Returns:
         ``(run folder, report summary)``.
+
+    Raises:
+        ConfigError: on any invalid input, including the executor options and a Dask scheduler
+            that does not answer, before anything is written.
+        BatchInterrupted: on SIGINT (finished blocks are kept).
+        BatchFailed: if a block raised.
     """
+    check_executor(executor, workers, address)
     if resume:
         if out_dir is None:
             raise ConfigError("--resume needs --out: the folder of the batch to complete")
@@ -672,5 +733,12 @@ def run(
     else:
         plan = plan_batch(name, n_runs, 0 if seed is None else seed, overrides, scenario_files)
         out = Path(out_dir) if out_dir is not None else default_out_dir(name, plan.seed)
-        prepare_out_dir(plan, out)
-    return out, execute(plan, out, executor, workers, address, progress)
+    with contextlib.ExitStack() as stack:
+        pool = None
+        if address is not None:
+            # connect to the scheduler before anything is written: an address that does not
+            # answer leaves no folder behind
+            pool = stack.enter_context(make_executor(executor, workers, address))
+        if not resume:
+            prepare_out_dir(plan, out)
+        return out, execute(plan, out, executor, workers, address, progress, pool)

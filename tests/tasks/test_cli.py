@@ -86,3 +86,42 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     time.sleep(1.0)
     left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
     assert f"--web-viewer-port {v.web_port}" not in left
+
+
+def _main(capsys, *args):
+    """``bauv ARGS`` in this process: (exit status, stderr)."""
+    capsys.readouterr()
+    try:
+        cli.main(list(args))
+        code = 0
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("args", "pattern"),
+    [
+        (["--workers", "0"], "workers = 0: must be"),
+        (["--address", "tcp://127.0.0.1:8786"], "--address is for --executor dask"),
+        (["--executor", "dask", "--address", "notanaddress"], "must be a Dask scheduler address"),
+        (["--executor", "dask", "--address", "tcp://127.0.0.1:1"], "no Dask scheduler answered"),
+    ],
+    ids=["workers-0", "address-local", "address-garbage", "address-silent"],
+)
+def test_executor_options_are_checked_before_the_folder_is_written(
+    args, pattern, tmp_path, capsys, monkeypatch
+):
+    """Bad executor options: one line, exit 2, no folder; the same --out then works."""
+    from tasks.core import runner
+
+    if "dask" in args:
+        pytest.importorskip("distributed")
+    monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT_S", 1.0, raising=False)
+    out = tmp_path / "out"
+    code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out), *args)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and pattern in lines[0], err
+    assert not out.exists()
+    code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out))
+    assert code == 0, err
