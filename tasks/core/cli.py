@@ -139,6 +139,13 @@ def run_cmd(
     if rec.is_file():
         click.echo(f"recording: {rec}  (open it with: bauv view {out_dir} [--web])")
     click.echo(f"tables:    {out_dir / 'tables.md'}\nmetrics:   {out_dir / 'metrics.json'}")
+    if summary.failures:
+        click.echo(
+            f"error: {len(summary.failures)} run(s) failed; the report covers the runs that "
+            "completed",
+            err=True,
+        )
+        sys.exit(EXIT_FAILED)
 
 
 def rerun_command() -> list[str]:

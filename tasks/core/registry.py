@@ -62,11 +62,17 @@ class ReportContext:
 
 @dataclass(frozen=True)
 class ReportSummary:
-    """What :meth:`Experiment.report` returns: the text printed to the console and the files
-    written (paths relative to the run folder)."""
+    """What :meth:`Experiment.report` returns.
+
+    Attributes:
+        text: printed to the console.
+        files: the files written, paths relative to the run folder.
+        failures: one line per run that failed (``bauv run`` then exits with status 1).
+    """
 
     text: str
     files: tuple[str, ...] = ()
+    failures: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

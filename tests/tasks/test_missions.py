@@ -5,6 +5,8 @@ the test's own)."""
 
 import json
 import math
+import subprocess
+import sys
 from dataclasses import dataclass
 
 import dm_env
@@ -401,3 +403,32 @@ def test_a_mission_with_its_own_guidance_law_defined_in_the_test():
     turned = np.unwrap(v["truth_rph"][late, 2])
     assert turned[-1] - turned[0] > 2 * math.pi  # clockwise, at least once around
     assert "waypoints_reached_by_truth" not in v.summary  # no way-points to judge
+
+
+def test_a_batch_with_failed_runs_exits_1_and_says_how_many_completed(tmp_path):
+    """``bauv run`` exits 1 when a run failed (the CLI's promise); the report still is written,
+    and its message does not claim that others completed when none did."""
+    out = tmp_path / "batch"
+    res = subprocess.run(
+        [sys.executable, "-m", "tasks.core.cli", "run", SHORT, "--quiet", "--out", str(out)]
+        + [
+            f"--set={s}"
+            for s in (
+                "timing.max_duration_s=20",
+                "faults.physics_nan_at_s=5",
+                "faults.physics_nan_runs=[0]",
+                "report.figures=false",
+                "report.recording=false",
+            )
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert res.returncode == 1, res.stderr
+    assert (
+        "1 of 1 run(s) failed (none completed)" in res.stdout
+        and "the others completed" not in res.stdout
+    )
+    assert "Traceback" not in res.stderr and "error: 1 run(s) failed" in res.stderr
+    assert json.loads((out / "run.json").read_text())["state"] == "complete"
