@@ -36,9 +36,7 @@ import datetime as _dt
 import hashlib
 import json
 import multiprocessing
-import os
 import re
-import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +49,7 @@ from bauv_sim.config import Config, load_config, to_plain, validate
 from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.rng import check_seed
 from tasks.core import registry, store
+from tasks.core.files import atomic_write_bytes
 from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 RUN_FILE = "run.json"
@@ -148,22 +147,9 @@ def default_out_dir(name: str, seed: int) -> Path:
     return Path("runs") / name.replace("/", "_") / f"{stamp}-seed{seed}"
 
 
-def _atomic_write_bytes(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-
-
 def atomic_write_text(path: Path, text: str) -> None:
     """Write a text file so that it either exists whole or not at all."""
-    _atomic_write_bytes(path, text.encode("utf-8"))
+    atomic_write_bytes(path, text.encode("utf-8"))
 
 
 def _block_path(out_dir: Path, index: int) -> Path:
@@ -183,7 +169,7 @@ def _save_block(out_dir: Path, index: int, payload: bytes) -> None:
     """Write a block's bytes, then its sha256 (a crash in between leaves it unsaved)."""
     path = _block_path(out_dir, index)
     _digest_path(out_dir, index).unlink(missing_ok=True)
-    _atomic_write_bytes(path, payload)
+    atomic_write_bytes(path, payload)
     atomic_write_text(_digest_path(out_dir, index), f"{_sha256(payload)}  {path.name}\n")
 
 

@@ -349,3 +349,29 @@ def test_one_worker_saves_each_block_as_it_finishes(reference, tmp_path, monkeyp
     monkeypatch.setattr(runner, "_run_block_in_worker", real)
     run("paper-000/test-2", seed=5, out_dir=out, resume=True, progress=False)
     assert _bytes(out) == reference
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_run_folder_files_honour_the_umask(tmp_path, umask):
+    """Every file the runner, the report and the Parquet export write has mode 0o666 & ~umask,
+    as files made by ``open`` (atomically written files were 0o600 while the PNGs were 0o644)."""
+    import numpy as np
+
+    from tasks.core.export import Column, write_parquet
+
+    previous = os.umask(umask)
+    try:
+        _batch(tmp_path / "a")
+        write_parquet(
+            tmp_path / "a" / "data" / "x.parquet",
+            {"t_s": Column(np.arange(3.0), "s", "time")},
+            {"experiment": "x"},
+        )
+    finally:
+        os.umask(previous)
+    files = [p for p in (tmp_path / "a").rglob("*") if p.is_file()]
+    assert {"run.json", "scenario.toml", "metrics.json", "x.parquet"} <= {p.name for p in files}
+    assert any(p.suffix == ".sha256" for p in files) and any(p.suffix == ".zip" for p in files)
+    modes = {str(p.relative_to(tmp_path)): oct(p.stat().st_mode & 0o777) for p in files}
+    assert set(modes.values()) == {oct(0o666 & ~umask)}, modes
+    assert not [p for p in (tmp_path / "a").rglob(".*.tmp")]
