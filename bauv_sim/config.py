@@ -111,13 +111,24 @@ def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[s
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file, raising :class:`ConfigError` with the file name on a syntax error."""
+    """Read a TOML file.
+
+    Raises:
+        ConfigError: naming the file when it is missing, unreadable, not UTF-8 or not TOML.
+    """
     p = Path(path)
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ConfigError(f"scenario file {str(p)!r}: not found") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"scenario file {str(p)!r}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+            f"offset {exc.start}); TOML files are UTF-8"
+        ) from None
+    except OSError as exc:
+        raise ConfigError(f"scenario file {str(p)!r}: cannot read it ({exc.strerror})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"scenario file {str(p)!r}: {exc}") from None
 

@@ -224,7 +224,7 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the CLI and map errors to exit statuses without tracebacks."""
-    from tasks.core.runner import BatchFailed, BatchInterrupted
+    from tasks.core.runner import BatchFailed, BatchInterrupted, os_error_text
 
     try:
         cli.main(args=argv, prog_name="bauv", standalone_mode=False)
@@ -249,6 +249,9 @@ def main(argv: list[str] | None = None) -> None:
     except KeyboardInterrupt:
         click.echo("interrupted", err=True)
         sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        click.echo(f"error: {os_error_text(exc)}", err=True)
+        sys.exit(EXIT_FAILED)
 
 
 if __name__ == "__main__":

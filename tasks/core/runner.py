@@ -264,19 +264,48 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
     """Create a fresh run folder with ``run.json`` (incomplete) and ``scenario.toml``.
 
     Raises:
-        ConfigError: if the folder exists and is not empty.
+        ConfigError: if the folder exists and is not empty, is not a folder, or cannot be created
+            or written (read-only or full file system, a file in its path, a name too long); a
+            folder created here is removed again then.
     """
-    if out_dir.exists() and any(out_dir.iterdir()):
-        raise ConfigError(
-            f"out = {str(out_dir)!r}: folder exists and is not empty; "
-            "use --resume to complete it or choose another --out"
-        )
     text = scenario_text(plan.scenario)
     if _sha256(text.encode("utf-8")) != plan.scenario_sha256:
         raise ValueError("plan.scenario_sha256 is not the digest of plan.scenario")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out_dir / SCENARIO_FILE, text)
-    _write_run_record(out_dir, plan, "incomplete")
+    where = f"out = {str(out_dir)!r}"
+    created: list[Path] = []
+    try:
+        if out_dir.exists() or out_dir.is_symlink():
+            if not out_dir.is_dir():
+                raise ConfigError(f"{where}: exists and is not a folder; choose another --out")
+            if any(out_dir.iterdir()):
+                raise ConfigError(
+                    f"{where}: folder exists and is not empty; "
+                    "use --resume to complete it or choose another --out"
+                )
+        created = [p for p in (out_dir, *out_dir.parents) if not p.exists()]
+        out_dir.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(out_dir / SCENARIO_FILE, text)
+        _write_run_record(out_dir, plan, "incomplete")
+    except OSError as exc:
+        for path in (out_dir / SCENARIO_FILE, out_dir / RUN_FILE):
+            with contextlib.suppress(OSError):
+                path.unlink(missing_ok=True)
+        for folder in created:  # deepest first
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        reason = exc.strerror if exc.filename == str(out_dir) else os_error_text(exc)
+        raise ConfigError(f"{where}: cannot create the run folder ({reason})") from None
+
+
+def os_error_text(exc: OSError) -> str:
+    """An :class:`OSError` in a few words: its reason and the file it names."""
+    reason = exc.strerror or type(exc).__name__
+    return f"{reason}: {exc.filename!r}" if exc.filename else reason
+
+
+class OutputError(BauvSimError):
+    """A file of the run folder could not be written during the batch (e.g. the disk is full);
+    the blocks saved before are kept and ``--resume`` completes the batch."""
 
 
 def _read_record(out_dir: Path) -> dict[str, Any]:
@@ -601,6 +630,7 @@ def execute(
     Raises:
         BatchInterrupted: on SIGINT, after the finished blocks are saved.
         BatchFailed: if a block raised (the others are saved).
+        OutputError: if a block or the report cannot be written (a full disk).
     """
     from tqdm import tqdm
 
@@ -646,7 +676,12 @@ def execute(
                                 f"{type(exc).__name__}: {exc}"
                             )
                             continue
-                        _save_block(out_dir, i, payload)
+                        try:
+                            _save_block(out_dir, i, payload)
+                        except OSError as exc:
+                            for f in futures:
+                                f.cancel()
+                            raise _output_error(plan, out_dir, f"block {i}", exc) from None
                         bar.update(len(plan.blocks[i]))
                 except KeyboardInterrupt:
                     for f in futures:
@@ -682,8 +717,22 @@ def execute(
             f"{out_dir}; write the report with: bauv run {plan.experiment.name} --resume "
             f"--out {out_dir}"
         ) from None
-    _write_run_record(out_dir, plan, "complete")
+    except OSError as exc:
+        raise _output_error(plan, out_dir, "the report", exc) from None
+    try:
+        _write_run_record(out_dir, plan, "complete")
+    except OSError as exc:
+        raise _output_error(plan, out_dir, RUN_FILE, exc) from None
     return summary
+
+
+def _output_error(plan: BatchPlan, out_dir: Path, what: str, exc: OSError) -> OutputError:
+    n_done = sum(_saved(out_dir, i) for i in range(len(plan.blocks)))
+    return OutputError(
+        f"cannot write {what} ({os_error_text(exc)}); {n_done} of {len(plan.blocks)} blocks are "
+        f"saved in {out_dir}; make room and complete the batch with: bauv run "
+        f"{plan.experiment.name} --resume --out {out_dir}"
+    )
 
 
 def run(
@@ -715,7 +764,12 @@ def run(
         if out_dir is None:
             raise ConfigError("--resume needs --out: the folder of the batch to complete")
         out = Path(out_dir)
-        plan = plan_resume(out, name, n_runs, seed, overrides, scenario_files)
+        try:
+            plan = plan_resume(out, name, n_runs, seed, overrides, scenario_files)
+        except OSError as exc:
+            raise ConfigError(
+                f"--resume: cannot read {str(out)!r} ({os_error_text(exc)})"
+            ) from None
     else:
         plan = plan_batch(name, n_runs, 0 if seed is None else seed, overrides, scenario_files)
         out = Path(out_dir) if out_dir is not None else default_out_dir(name, plan.seed)

@@ -1,5 +1,6 @@
 """Bad input: one clear line, exit status 2, no traceback, no folder left looking complete."""
 
+import os
 import subprocess
 import sys
 
@@ -125,3 +126,87 @@ def test_executor_options_are_checked_before_the_folder_is_written(
     assert not out.exists()
     code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out))
     assert code == 0, err
+
+
+def _no_space(names=None):
+    """A stand-in for the runner's atomic write that fails like a full disk (for the files whose
+    name starts with one of ``names``, or for every file)."""
+    import errno
+
+    from tasks.core import runner
+
+    real = runner.atomic_write_bytes
+
+    def write(path, data):
+        if names is None or path.name.startswith(names):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real(path, data)
+
+    return write
+
+
+def _read_only(path, data):
+    import errno
+
+    raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(path))
+
+
+@pytest.mark.parametrize(
+    ("where", "write", "pattern"),
+    [
+        ("afile/sub", None, "cannot create the run folder (Not a directory"),
+        ("x" * 300, None, "cannot create the run folder (File name too long)"),
+        ("out", _read_only, "cannot create the run folder (Read-only file system"),
+        ("out", _no_space(), "cannot create the run folder (No space left on device)"),
+    ],
+    ids=["file-in-path", "name-too-long", "read-only", "disk-full"],
+)
+def test_an_out_folder_that_cannot_be_written_is_one_line(
+    tmp_path, capsys, monkeypatch, where, write, pattern
+):
+    from tasks.core import runner
+
+    (tmp_path / "afile").write_text("x")
+    if write is not None:
+        monkeypatch.setattr(runner, "atomic_write_bytes", write)
+    monkeypatch.chdir(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", where)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and pattern in lines[0], err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing left behind
+
+
+def test_a_disk_full_during_the_batch_keeps_the_saved_blocks(tmp_path, capsys, monkeypatch):
+    """The disk fills while block 1 is written: one line, exit 1, block 0 kept; once there is room
+    --resume completes the batch to the bytes of a batch run straight through."""
+    from tasks.core import runner
+
+    args = ["paper-000/test-1", "--quiet", "--runs", "10", "--seed", "3"]
+    args += [f"--set={s}" for s in ["runner.block_size=5", "passage.duration_s=100"]]
+    args += ["--set=passage.closest_approach_time_s=50", "--set=report.figures=false"]
+    args += ["--set=report.recording=false"]
+    code, err = _main(capsys, "run", *args, "--out", str(tmp_path / "straight"))
+    assert code == 0, err
+    monkeypatch.setattr(runner, "atomic_write_bytes", _no_space(("block-000001",)))
+    out = tmp_path / "full"
+    code, err = _main(capsys, "run", *args, "--out", str(out))
+    lines = err.strip().splitlines()
+    assert code == 1 and len(lines) == 1, err
+    assert "cannot write block 1 (No space left on device); 1 of 2 blocks are saved" in lines[0]
+    monkeypatch.undo()
+    code, err = _main(capsys, "run", "paper-000/test-1", "--quiet", "--resume", "--out", str(out))
+    assert code == 0, err
+    metrics = (out / "metrics.json").read_bytes()
+    assert metrics == (tmp_path / "straight" / "metrics.json").read_bytes()
+
+
+def test_a_scenario_file_that_is_not_utf8_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_bytes(b'[passage]\nname = "\xff\xfe"\n')
+    out = tmp_path / "out"
+    code, err = _main(capsys, "run", "paper-000/test-1", "--out", str(out), "--scenario", str(bad))
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert "bad.toml': not UTF-8 text (byte 0xff at offset 18)" in lines[0]
+    assert not out.exists()

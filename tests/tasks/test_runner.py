@@ -195,6 +195,12 @@ def _block_of_another_index(out, other):
     _sidecar(path)
 
 
+def _truncated_block(out, other):
+    path = out / "blocks" / "block-000001.zip"
+    path.write_bytes(path.read_bytes()[:100])
+    _sidecar(path)  # its digest recorded too: only the decoding stops it
+
+
 def _garbage_sidecar(out, other):
     (out / "blocks" / "block-000001.sha256").write_text("not a digest\n")
 
@@ -221,7 +227,7 @@ _DROP = object()
 
 def _record(text):
     def tamper(out, other):
-        (out / "run.json").write_text(text)
+        (out / "run.json").write_bytes(text if isinstance(text, bytes) else text.encode())
 
     return tamper
 
@@ -252,7 +258,9 @@ class _Touch:
         (_pickle_block, "block-000000.zip': not a bauv-sim/plain-data file"),
         (_block_of_another_seed, "header says seed = 3 but this batch has 2"),
         (_block_of_another_index, "header says block = 1 but this batch has 0"),
+        (_truncated_block, "block-000001.zip': not a bauv-sim/plain-data file"),
         (_garbage_sidecar, "block-000001.sha256': not a line"),
+        (_record(b"\xff\xfe{"), "is not valid JSON"),
         (_edit_scenario, "scenario.toml' was changed since the batch started"),
         (_scenario_with_another_layout, "block_size = 5 but the scenario's runner gives"),
         (_record("{ this is not json"), "is not valid JSON"),
