@@ -138,3 +138,54 @@ def test_usbl_range_limit_and_dropouts_reduce_availability(tmp_path):
     in_range = np.mean(np.linalg.norm(rel, axis=1) <= 200)
     assert m["usbl_fix_availability"] == pytest.approx(in_range * 0.8, abs=0.05)
     assert math.isfinite(m["passages"]["EKF"]["mean_m"])
+
+
+SHORT_PASSAGE = ["passage.duration_s=200", "passage.closest_approach_time_s=100"]
+
+
+@pytest.mark.parametrize(
+    "no_fix",
+    [
+        "sensors.usbl.max_range_m=1e-3",
+        "passage.closest_approach_offset_m=600",
+        "passage.closest_approach_time_s=5000",
+    ],
+)
+def test_a_method_without_data_is_reported_as_such(no_fix, tmp_path):
+    """No USBL fix at all: the report completes; USBL's statistics are null with a reason; no NaN
+    reaches metrics.json or the tables, and there is no ratio to the paper's table."""
+    out = tmp_path / "run"
+    extra = [] if "time_s" in no_fix else SHORT_PASSAGE
+    run("paper-000/test-1", 6, 0, out, [*FAST, *extra, no_fix], progress=False)
+    text = (out / "metrics.json").read_text()
+    assert "NaN" not in text and "nan" not in (out / "tables.md").read_text().lower()
+    m = json.loads(text)
+    assert m["passages"]["USBL"] == {"min_m": None, "max_m": None, "mean_m": None}
+    assert m["per_run_mean_m"]["USBL"] == {"min_m": None, "max_m": None, "mean_m": None}
+    assert "no USBL fix was produced" in m["no_data"]["USBL"]
+    assert set(m["no_data"]) == {"USBL"} and m["usbl_fix_availability"] == 0.0
+    assert m["mean_ratio_to_paper"]["USBL"] is None
+    assert all(math.isfinite(m["passages"][k]["mean_m"]) for k in ("EKF", "DR"))
+    assert "USBL: no data: no USBL fix was produced" in (out / "tables.md").read_text()
+
+
+def test_only_the_papers_setting_is_compared_with_the_paper(tmp_path):
+    """The paper's table, its values and the ratio to it only when the scenario is the paper's
+    (report and runner fields aside); otherwise the report names the fields that differ."""
+    on, off = tmp_path / "on", tmp_path / "off"
+    run("paper-000/test-1", 4, 0, on, [*FAST, "runner.block_size=2"], progress=False)
+    run("paper-000/test-1", 4, 0, off, [*FAST, "passage.speed_m_s=1.5"], progress=False)
+    m_on, m_off = _metrics(on), _metrics(off)
+    assert m_on["paper_setting"] == "paper" and m_on["paper_table"] == "Table 4"
+    assert m_on["mean_ratio_to_paper"]["EKF"] == pytest.approx(
+        m_on["passages"]["EKF"]["mean_m"] / paper000.PAPER_TABLES["test-1"]["hundred"][1]["EKF"][2]
+    )
+    assert m_on["single_passages"][0]["paper_table"] == "Table 1"
+    assert m_off["paper_setting"] == "passage.speed_m_s"
+    assert m_off["paper_table"] is None and m_off["paper"] is None
+    assert set(m_off["mean_ratio_to_paper"].values()) == {None}
+    assert all(sp["paper_table"] is None for sp in m_off["single_passages"])
+    md = (off / "tables.md").read_text()
+    assert "Table 4" not in md and "Paper" not in md and "ratio" not in md
+    assert "Not the paper's setting (changed: passage.speed_m_s)" in md
+    assert "(paper: Table 4, 100 passages)" in (on / "tables.md").read_text()
