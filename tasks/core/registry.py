@@ -76,6 +76,23 @@ class ReportSummary:
 
 
 @dataclass(frozen=True)
+class MemoryTerm:
+    """One part of a batch's estimated memory, with the fields that drive it.
+
+    Attributes:
+        bytes: estimated peak memory of this part, bytes.
+        per_block: whether every worker holds it while it computes a block (else it is held once,
+            by the process that writes the report).
+        fields: the scenario fields (and values) that make it, as the user typed them, e.g.
+            ``"passage.duration_s = 1e+12 (1e+12 ticks of passage.tick_s = 1 s)"``.
+    """
+
+    bytes: float
+    per_block: bool
+    fields: str
+
+
+@dataclass(frozen=True)
 class Experiment:
     """Base of every registered experiment or mission.
 
@@ -106,6 +123,12 @@ class Experiment:
 
     def check(self, scenario: Config, n_runs: int) -> None:
         """Checks that involve the batch size (raise :class:`ConfigError`); none by default."""
+
+    def memory(self, scenario: Config, n_runs: int) -> list[MemoryTerm]:
+        """The batch's estimated peak memory, in parts, so that the runner can refuse a batch that
+        cannot fit before any work starts (:func:`tasks.core.runner.check_memory`). None by
+        default (an experiment whose size is bounded by its fields' ranges)."""
+        return []
 
     def run_block(self, scenario: Config, seed: int, runs: tuple[int, ...]) -> Any:
         """Compute the runs of one block; see the module docstring."""

@@ -36,6 +36,7 @@ import datetime as _dt
 import hashlib
 import json
 import multiprocessing
+import os
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -122,10 +123,80 @@ def plan_batch(
         raise ConfigError(f"runs = {n!r}: must be an integer >= 1")
     if exp.max_runs is not None and n > exp.max_runs:
         raise ConfigError(f"runs = {n}: {name} allows at most {exp.max_runs}")
+    if n > MAX_RUNS:
+        raise ConfigError(
+            f"runs = {n}: at most {MAX_RUNS} runs in one batch (its layout and per-run results "
+            "are held in memory); run several batches with different seeds"
+        )
     scenario = load_config(exp.scenario_type, exp.preset, scenario_files, overrides)
     exp.check(scenario, n)
+    check_layout(n, exp.block_size(scenario))
+    check_memory(exp, scenario, n)
     digest = _sha256(scenario_text(scenario).encode("utf-8"))
     return BatchPlan(exp, scenario, seed, n, _blocks(n, exp.block_size(scenario)), digest)
+
+
+MAX_RUNS = 10_000_000
+"""The largest batch: its block layout (~36 bytes per run) and per-run results stay in memory."""
+MAX_BLOCKS = 1_000_000
+"""The most blocks in a batch (each is two files in ``blocks/``)."""
+MEMORY_FRACTION = 0.5
+"""Share of the machine's physical memory a batch may be estimated to use."""
+
+
+def memory_limit_bytes() -> float:
+    """The memory a batch may use: :data:`MEMORY_FRACTION` of the machine's physical memory,
+    bytes (8 GiB when the platform does not say)."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        total = 16 * 2**30
+    return MEMORY_FRACTION * total
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def check_layout(n_runs: int, block_size: int) -> None:
+    """Refuse a layout with more than :data:`MAX_BLOCKS` blocks.
+
+    Raises:
+        ConfigError: naming the runs, the block size and the limit.
+    """
+    n_blocks = -(-n_runs // block_size)
+    if n_blocks > MAX_BLOCKS:
+        raise ConfigError(
+            f"runs = {n_runs} in blocks of {block_size} make {n_blocks} blocks: at most "
+            f"{MAX_BLOCKS} (each block is two files); raise runner.block_size"
+        )
+
+
+def check_memory(exp: Experiment, scenario: Config, n_runs: int, workers: int = 1) -> None:
+    """Refuse a batch whose estimated memory (:meth:`Experiment.memory`) exceeds
+    :func:`memory_limit_bytes`, before anything is computed or written.
+
+    Args:
+        exp: the experiment.
+        scenario: its validated scenario.
+        n_runs: the number of runs.
+        workers: processes that hold a block at the same time on this machine.
+
+    Raises:
+        ConfigError: naming the field (and value) of the largest part, the estimate and the
+            limit.
+    """
+    terms = exp.memory(scenario, n_runs)
+    if not terms:
+        return
+    total = sum(t.bytes * (workers if t.per_block else 1) for t in terms)
+    limit = memory_limit_bytes()
+    if total > limit:
+        worst = max(terms, key=lambda t: t.bytes * (workers if t.per_block else 1))
+        raise ConfigError(
+            f"{worst.fields}: the batch would need about {_gb(total)} of memory, above the limit "
+            f"of {_gb(limit)} ({MEMORY_FRACTION:.0%} of this machine's memory)"
+        )
 
 
 def scenario_text(scenario: Config) -> str:
@@ -376,6 +447,12 @@ def plan_resume(
         raise ConfigError(
             f"--resume: {where!r}: n_runs = {rec_runs}, block_size = {block_size}: must be >= 1"
         )
+    if rec_runs > MAX_RUNS:
+        raise ConfigError(f"--resume: {where!r}: n_runs = {rec_runs}: at most {MAX_RUNS}")
+    try:
+        check_layout(rec_runs, block_size)
+    except ConfigError as exc:
+        raise ConfigError(f"--resume: {where!r}: {exc}") from None
     layout = _blocks(rec_runs, block_size)
     if n_blocks != len(layout):
         raise ConfigError(
@@ -773,6 +850,9 @@ def run(
     else:
         plan = plan_batch(name, n_runs, 0 if seed is None else seed, overrides, scenario_files)
         out = Path(out_dir) if out_dir is not None else default_out_dir(name, plan.seed)
+    if executor == "local" or address is None:
+        # this machine's workers each hold a block at the same time
+        check_memory(plan.experiment, plan.scenario, plan.n_runs, workers)
     with contextlib.ExitStack() as stack:
         pool = None
         if address is not None:

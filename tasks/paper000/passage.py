@@ -73,10 +73,14 @@ from nav.metrics import (
 from nav.models import CourseSpeedDepthMotion, UsblMeasurement
 from tasks.core import figures, store
 from tasks.core.recording import COLORS, Recording
-from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
 
 METHODS = ("EKF", "DR", "USBL")
+BLOCK_BYTES_PER_RUN_TICK = 200.0
+"""Peak memory of :meth:`StraightPassageExperiment.run_block` per passage and tick, bytes:
+measured with :mod:`tracemalloc` (201-203 B for 600 and 6000 ticks, 50 and 100 passages, fixes
+every 5 s; 194 B with fixes every 100 s): states, covariances, inputs and distances."""
 SIGMA_SOG_M_S = 0.5 * KNOT_M_S
 """Seed 000 section 3: ALIZE log, sigma_SOG = 0.5 kn."""
 
@@ -678,6 +682,38 @@ class StraightPassageExperiment(Experiment):
 
     def run_block(self, scenario: Paper000Scenario, seed: int, runs: tuple[int, ...]):
         return reduce_block(scenario, simulate_passages(scenario, seed, runs))
+
+    def memory(self, scenario: Paper000Scenario, n_runs: int) -> list[MemoryTerm]:
+        """Estimated peak memory of a batch, bytes, in parts (see :class:`MemoryTerm`).
+
+        A block holds every passage's paths for every tick (:data:`BLOCK_BYTES_PER_RUN_TICK`),
+        and its histograms; the report holds the per-tick sums of every method, the routes and
+        single passages it draws, the histograms and a few numbers per run.
+        """
+        p, rep = scenario.passage, scenario.report
+        ticks = p.duration_s / p.tick_s + 1
+        block = min(scenario.runner.block_size, n_runs)
+        bins = rep.histogram_max_m / rep.histogram_bin_m
+        timing = (
+            f"passage.duration_s = {p.duration_s:g} with passage.tick_s = {p.tick_s:g} s "
+            f"({ticks:.3g} ticks)"
+        )
+        paths = min(rep.routes_max, n_runs) * 36 + rep.single_passages * 24 + 160
+        return [
+            MemoryTerm(
+                BLOCK_BYTES_PER_RUN_TICK * block * ticks,
+                True,
+                f"{timing} in blocks of runner.block_size = {block} passages",
+            ),
+            MemoryTerm(paths * ticks, False, timing),
+            MemoryTerm(
+                2 * len(METHODS) * 8 * bins,
+                True,
+                f"report.histogram_bin_m = {rep.histogram_bin_m:g} ({bins:.3g} bins up to "
+                f"report.histogram_max_m = {rep.histogram_max_m:g})",
+            ),
+            MemoryTerm(110.0 * n_runs, False, f"runs = {n_runs}"),
+        ]
 
     def off_paper_fields(self, scenario: Paper000Scenario) -> list[str]:
         """The scenario fields that differ from the paper's setting of this test.

@@ -210,3 +210,71 @@ def test_a_scenario_file_that_is_not_utf8_is_one_line(tmp_path, capsys):
     assert code == 2 and len(lines) == 1, err
     assert "bad.toml': not UTF-8 text (byte 0xff at offset 18)" in lines[0]
     assert not out.exists()
+
+
+PASSAGE_AT_EVERY_TICK = [f"sensors.{d}.period_s=1e-9" for d in ("ins", "log", "pressure")]
+
+
+@pytest.mark.parametrize(
+    ("name", "args", "pattern"),
+    [
+        ("paper-000/test-1", ["--runs", "99999999999999999999"], "runs = 99999999999999999999: at"),
+        (
+            "paper-000/test-1",
+            ["--runs", "2000000", "--set", "runner.block_size=1"],
+            "make 2000000 blocks: at most 1000000",
+        ),
+        ("paper-000/test-1", ["--set", "passage.duration_s=1e12"], "passage.duration_s = 1e+12"),
+        (
+            "paper-000/test-1",
+            ["--set", "passage.tick_s=1e-9", *(f"--set={s}" for s in PASSAGE_AT_EVERY_TICK)],
+            "passage.tick_s = 1e-09 s (6e+11 ticks)",
+        ),
+        (
+            "paper-000/test-1",
+            ["--set", "passage.duration_s=1e300", "--set", "passage.tick_s=1e-10"]
+            + [f"--set={s.replace('1e-9', '1e-10')}" for s in PASSAGE_AT_EVERY_TICK],
+            "passage.duration_s = 1e+300: inf ticks",
+        ),
+        ("paper-000/test-1", ["--set", "report.histogram_bin_m=1e-9"], "report.histogram_bin_m"),
+        ("mission/short", ["--set", "timing.max_duration_s=1e12"], "timing.max_duration_s = 1e+12"),
+    ],
+    ids=["runs", "blocks", "duration", "tick", "ticks-overflow", "histogram", "mission"],
+)
+def test_a_batch_too_big_for_memory_is_refused_before_work_starts(
+    name, args, pattern, tmp_path, capsys, monkeypatch
+):
+    """One line naming the field, its value and the limit; nothing written, nothing computed."""
+    from tasks.core import registry
+
+    def never(*_):
+        raise AssertionError("a block was computed")
+
+    for exp in registry.all_experiments():
+        monkeypatch.setattr(type(exp), "run_block", never)
+    out = tmp_path / "out"
+    code, err = _main(capsys, "run", name, "--quiet", "--out", str(out), *args)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and pattern in lines[0], err
+    memory = any(f in pattern for f in ("duration_s = 1e+12", "tick_s", "histogram"))
+    assert memory == ("of memory, above the limit of" in lines[0]), err
+    assert not out.exists()
+
+
+def test_the_memory_estimate_follows_the_measured_peak():
+    """The estimate of a seed 000 block is the measured peak of computing it, within 30%."""
+    import tracemalloc
+
+    from bauv_sim.config import load_config
+    from tasks.core import registry
+
+    exp = registry.get("paper-000/test-1")
+    scn = load_config(exp.scenario_type, exp.preset, (), ["passage.duration_s=2000"])
+    tracemalloc.start()
+    try:
+        exp.run_block(scn, 0, tuple(range(20)))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    block = sum(t.bytes for t in exp.memory(scn, 20) if t.per_block)
+    assert 0.7 * peak < block < 1.3 * peak, (block, peak)
