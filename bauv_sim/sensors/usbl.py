@@ -43,8 +43,18 @@ class UsblConfig(Config):
         -90.0, ge=-90, le=90, description="no fix below this elevation (field of view), deg"
     )
     dropout_probability: float = Field(0.0, ge=0, lt=1, description="probability a fix is lost")
-    sound_speed_m_s: float = Field(1500.0, gt=0, description="for the travel-time latency, m/s")
-    processing_delay_s: float = Field(0.0, ge=0, description="added latency, s")
+    sound_speed_m_s: float = Field(
+        1500.0,
+        gt=0,
+        description="for the travel-time latency, m/s (online rigs; seed 000's passage has no "
+        "latency and refuses a change)",
+    )
+    processing_delay_s: float = Field(
+        0.0,
+        ge=0,
+        description="added latency, s (online rigs; seed 000's passage has no latency and "
+        "refuses a change)",
+    )
     transponder_body_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="transponder relative to the vehicle reference point, m, body"
     )

@@ -81,6 +81,9 @@ BLOCK_BYTES_PER_RUN_TICK = 200.0
 """Peak memory of :meth:`StraightPassageExperiment.run_block` per passage and tick, bytes:
 measured with :mod:`tracemalloc` (201-203 B for 600 and 6000 ticks, 50 and 100 passages, fixes
 every 5 s; 194 B with fixes every 100 s): states, covariances, inputs and distances."""
+LATENCY_FIELDS = ("processing_delay_s", "sound_speed_m_s")
+"""USBL fields seed 000's batched passage does not use: it applies a fix at the tick it is valid
+for (the paper's model), so a latency set here is refused rather than silently ignored."""
 SIGMA_SOG_M_S = 0.5 * KNOT_M_S
 """Seed 000 section 3: ALIZE log, sigma_SOG = 0.5 kn."""
 
@@ -250,6 +253,16 @@ class Paper000Scenario(Config):
                     f"sampled every tick (passage.tick_s = {tick:g} s)"
                 )
         check_multiple(self.sensors.usbl.period_s, tick, "sensors.usbl.period_s")
+        usbl, default = self.sensors.usbl, UsblConfig()
+        for name in LATENCY_FIELDS:
+            value = getattr(usbl, name)
+            if value != getattr(default, name):
+                raise ValueError(
+                    f"sensors.usbl.{name} = {value:g}: not used by seed 000's passage, which "
+                    "applies each fix at its time of validity as the paper does (no latency); "
+                    f"leave it at {getattr(default, name):g}, or fly a mission (mission/*), "
+                    "where fixes arrive after the travel time and the processing delay"
+                )
         return self
 
 

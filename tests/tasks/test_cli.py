@@ -278,3 +278,59 @@ def test_the_memory_estimate_follows_the_measured_peak():
         tracemalloc.stop()
     block = sum(t.bytes for t in exp.memory(scn, 20) if t.per_block)
     assert 0.7 * peak < block < 1.3 * peak, (block, peak)
+
+
+@pytest.mark.parametrize(
+    ("name", "override", "pattern"),
+    [
+        (
+            "paper-000/test-1",
+            "passage.speed_m_s=true",
+            "passage.speed_m_s = true: must be a number",
+        ),
+        ("paper-000/test-1", 'passage.speed_m_s="1.5"', "passage.speed_m_s = '1.5': must be a"),
+        ("paper-000/test-1", "runner.block_size=true", "runner.block_size = true: must be an int"),
+        (
+            "mission/short",
+            "sensors.usbl.transponder_body_m=[true, 0, 0]",
+            "element 0 must be a number, not a boolean",
+        ),
+        ("mission/short", "faults.physics_nan_runs=[-1]", "faults.physics_nan_runs = [-1]: run -1"),
+        ("mission/short", "faults.physics_nan_runs=[1]", "run 1 is not a run of this batch"),
+        (
+            "mission/short",
+            "guidance.waypoints.0.depth_m=500",
+            "guidance.waypoints.0.depth_m = 500: the water is 5.13 m deep at east 0 m, north 50 m",
+        ),
+        ("mission/short", "start.depth_m=50", "start.depth_m = 50: the water is"),
+        (
+            "paper-000/test-1",
+            "sensors.usbl.processing_delay_s=30",
+            "sensors.usbl.processing_delay_s = 30: not used by seed 000's passage",
+        ),
+        (
+            "paper-000/test-2",
+            "sensors.usbl.sound_speed_m_s=1450",
+            "sensors.usbl.sound_speed_m_s = 1450: not used by seed 000's passage",
+        ),
+    ],
+)
+def test_accepted_but_absurd_input_is_refused(name, override, pattern, tmp_path, capsys):
+    out = tmp_path / "out"
+    code, err = _main(capsys, "run", name, "--quiet", "--out", str(out), "--set", override)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and pattern in lines[0], err
+    assert not out.exists()
+
+
+def test_a_waypoint_within_the_water_is_accepted():
+    """The depth check uses the scene's seabed: 4.5 m is allowed where the water is 5.13 m deep,
+    and the seabed there is the one the scene is built with."""
+    from bauv_sim import seabed
+    from bauv_sim.build import VEHICLE_CLEARANCE_M
+    from tasks.core.runner import plan_batch
+
+    scn = plan_batch("mission/short", overrides=["guidance.waypoints.0.depth_m=4.5"]).scenario
+    w = scn.guidance.waypoints[0]
+    water = float(seabed.generate(scn.seabed).depth_at(w.east_m, w.north_m))
+    assert water - VEHICLE_CLEARANCE_M > 4.5 and water == pytest.approx(5.13, abs=0.005)
