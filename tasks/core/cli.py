@@ -157,7 +157,13 @@ def rerun_command() -> list[str]:
 def view_command(
     recording: Path, web: bool, web_port: int = 9090, grpc_port: int = 9876
 ) -> list[str]:
-    """The viewer command line; with ``web`` it serves on 127.0.0.1 only."""
+    """The viewer command line; its servers listen on 127.0.0.1 only.
+
+    With ``web`` the rerun process serves the web viewer (``web_port``) and the recording over
+    gRPC (``grpc_port``); without, the native viewer still starts a gRPC server (``grpc_port``),
+    which rerun binds to 0.0.0.0 unless told otherwise (``rerun --help``: ``--bind``, default
+    ``0.0.0.0``).
+    """
     cmd = rerun_command()
     if web:
         return [
@@ -171,15 +177,15 @@ def view_command(
             str(grpc_port),
             str(recording),
         ]
-    return [*cmd, str(recording)]
+    return [*cmd, "--bind", "127.0.0.1", "--port", str(grpc_port), str(recording)]
 
 
 def run_viewer(cmd: list[str]) -> int:
     """Run the viewer in its own process group and take the whole group down with us.
 
     The ``rerun`` launcher starts the viewer binary as a child; stopping only the launcher (or
-    this process) would leave the server running. SIGINT, SIGTERM and normal exit all stop the
-    group.
+    this process) would leave the server running. SIGINT, SIGTERM, SIGHUP (the terminal closed)
+    and normal exit all stop the group.
     """
     proc = subprocess.Popen(cmd, start_new_session=True)
 
@@ -187,7 +193,8 @@ def run_viewer(cmd: list[str]) -> int:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGTERM)
 
-    previous = signal.signal(signal.SIGTERM, lambda *_: (stop(), sys.exit(0)))
+    stops = [s for s in (signal.SIGTERM, getattr(signal, "SIGHUP", None)) if s is not None]
+    previous = {s: signal.signal(s, lambda *_: (stop(), sys.exit(0))) for s in stops}
     try:
         return proc.wait()
     except KeyboardInterrupt:
@@ -196,7 +203,8 @@ def run_viewer(cmd: list[str]) -> int:
         stop()
         with contextlib.suppress(subprocess.TimeoutExpired):
             proc.wait(timeout=5)
-        signal.signal(signal.SIGTERM, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 @cli.command("view")
@@ -222,10 +230,22 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
     sys.exit(code)
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Entry point: run the CLI and map errors to exit statuses without tracebacks."""
+    """Entry point: run the CLI and map errors to exit statuses without tracebacks.
+
+    SIGTERM and SIGHUP (the terminal closed) stop ``bauv`` as Ctrl-C does: a batch keeps its
+    finished blocks and stops its workers, the viewer stops the rerun server it started.
+    """
     from tasks.core.runner import BatchFailed, BatchInterrupted, os_error_text
 
+    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if sig is not None:
+            with contextlib.suppress(ValueError):  # not the main thread
+                signal.signal(sig, _interrupt)
     try:
         cli.main(args=argv, prog_name="bauv", standalone_mode=False)
     except click.exceptions.Abort:

@@ -38,6 +38,10 @@ import json
 import multiprocessing
 import os
 import re
+import signal
+import sys
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -577,6 +581,50 @@ def _completed(futures: dict[cf.Future, int]) -> Iterator[cf.Future]:
         yield from cf.as_completed(futures)
 
 
+PARENT_POLL_S = 0.5
+"""How often a local worker checks that the ``bauv`` process that started it is alive, s."""
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Initializer of a local worker process: exit when the process that started it is gone.
+
+    ``bauv`` may be stopped by a signal it cannot handle (SIGKILL); its workers must not go on
+    computing blocks nobody will save (and keep the resource tracker alive with them). On Linux
+    the kernel sends the worker SIGKILL when its parent dies (``PR_SET_PDEATHSIG``); everywhere a
+    daemon thread also polls the parent's pid every :data:`PARENT_POLL_S` seconds.
+
+    Args:
+        parent_pid: pid of the process that created the pool.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            import ctypes
+
+            pr_set_pdeathsig = 1
+            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+    if os.getppid() != parent_pid:  # the parent died before the line above
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="bauv-parent-watch", daemon=True).start()
+
+
+def _terminate_workers(ex: cf.ProcessPoolExecutor) -> None:
+    """Shut a process pool down and stop its workers now (their running blocks are lost)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.join(timeout=5)
+
+
 EXECUTORS = ("local", "dask")
 DASK_CONNECT_TIMEOUT_S = 10.0
 """How long ``--executor dask --address ...`` waits for the scheduler before giving up, s."""
@@ -640,11 +688,18 @@ def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.E
             yield InlineExecutor()
             return
         ex = cf.ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn")
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_die_with_parent,
+            initargs=(os.getpid(),),
         )
         try:
             yield ex
-        finally:
+        except BaseException:
+            # interrupted or failed: stop the blocks being computed now, not after they finish
+            _terminate_workers(ex)
+            raise
+        else:
             ex.shutdown(wait=False, cancel_futures=True)
         return
     import logging

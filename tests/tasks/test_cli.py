@@ -334,3 +334,42 @@ def test_a_waypoint_within_the_water_is_accepted():
     w = scn.guidance.waypoints[0]
     water = float(seabed.generate(scn.seabed).depth_at(w.east_m, w.north_m))
     assert water - VEHICLE_CLEARANCE_M > 4.5 and water == pytest.approx(5.13, abs=0.005)
+
+
+def test_view_web_stops_its_server_on_sighup(tmp_path):
+    """The terminal that ran `bauv view --web` closes (SIGHUP): the rerun server stops too."""
+    import signal
+    import socket
+    import time
+
+    from tasks.core.recording import Recording
+    from tests.webviewer import web_viewer
+
+    rec = Recording(tmp_path / "recording.rrd", "test", "test")
+    rec.point("x", [0.0, 0.0, 0.0], (0, 0, 0), "x")
+    rec.close()
+    with web_viewer(tmp_path) as v:
+        assert b"re_viewer" in v.html
+        os.kill(v.proc.pid, signal.SIGHUP)
+        v.proc.wait(timeout=10)
+        deadline = time.time() + 10
+        while time.time() < deadline:
+            left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
+            if f"--web-viewer-port {v.web_port}" not in left:
+                break
+            time.sleep(0.2)
+        assert f"--web-viewer-port {v.web_port}" not in left
+        with pytest.raises(OSError):
+            socket.create_connection(("127.0.0.1", v.web_port), timeout=1).close()
+
+
+def test_native_viewer_binds_loopback_only(tmp_path):
+    """The native viewer's gRPC server listens on 127.0.0.1 (rerun's default is 0.0.0.0), and the
+    installed rerun accepts the options (it may still fail for want of a display)."""
+    cmd = cli.view_command(tmp_path / "recording.rrd", web=False, grpc_port=9878)
+    assert cmd[cmd.index("--bind") + 1] == "127.0.0.1"
+    assert cmd[cmd.index("--port") + 1] == "9878"
+    res = subprocess.run(
+        [*cmd[:-1], "--help"], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert res.returncode == 0 and "--bind" in res.stdout, res.stderr

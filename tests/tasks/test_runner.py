@@ -383,3 +383,51 @@ def test_run_folder_files_honour_the_umask(tmp_path, umask):
     modes = {str(p.relative_to(tmp_path)): oct(p.stat().st_mode & 0o777) for p in files}
     assert set(modes.values()) == {oct(0o666 & ~umask)}, modes
     assert not [p for p in (tmp_path / "a").rglob(".*.tmp")]
+
+
+def _alive(procs):
+    psutil = pytest.importorskip("psutil")
+    out = []
+    for p in procs:
+        try:
+            if p.status() != psutil.STATUS_ZOMBIE:
+                out.append(p)
+        except psutil.NoSuchProcess:
+            pass
+    return out
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+def test_workers_die_with_bauv(tmp_path, sig):
+    """``bauv run --workers 2`` stopped by SIGTERM (handled: blocks kept, exit 130) or SIGKILL
+    (not handled) leaves no worker nor resource tracker running."""
+    psutil = pytest.importorskip("psutil")
+    args = ["paper-000/test-1", "--runs", "4000", "--workers", "2", "--quiet"]
+    args += ["--set=report.figures=false", "--set=report.recording=false"]
+    args += ["--set=runner.block_size=10", "--out", str(tmp_path / "out")]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "tasks.core.cli", "run", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    parent = psutil.Process(proc.pid)
+    deadline = time.time() + 60
+    children = []
+    while time.time() < deadline:
+        children = parent.children(recursive=True)
+        if len(children) >= 3 and (tmp_path / "out" / "blocks").is_dir():
+            break  # two workers, the resource tracker, and work under way
+        time.sleep(0.1)
+    assert len(children) >= 3, children
+    os.kill(proc.pid, sig)
+    _, err = proc.communicate(timeout=60)
+    deadline = time.time() + 20
+    while _alive(children) and time.time() < deadline:
+        time.sleep(0.2)
+    left = _alive(children)
+    for p in left:
+        p.kill()
+    assert not left, [p.cmdline() for p in left]
+    if sig == signal.SIGTERM:
+        assert proc.returncode == 130 and "--resume" in err and "Traceback" not in err, err
