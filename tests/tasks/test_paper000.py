@@ -91,6 +91,22 @@ def test_matched_gaussian_errors_are_consistent(tmp_path):
     assert c["fraction_in_band"] >= 0.9 and c["consistent"]
 
 
+def test_matched_gaussian_innovations_are_white_and_in_band():
+    """Seed 000's EKF with errors drawn as it assumes: its USBL innovations are white, so the NIS
+    of every fix of every passage is one chi-square sample of size runs x fixes (24,000), and its
+    mean must lie in the 99% band of that size (3 +- 0.05). The filter's R or Q scaled by 4 or 1/4
+    moves it to 1.2, 8.6, 2.1 or 4.9 (``benchmarks/mutation_consistency.py``)."""
+    from scipy.stats import chi2
+
+    scn = plan_batch("paper-000/test-1", overrides=FAST + GAUSSIAN).scenario
+    p = paper000.simulate_passages(scn, 3, tuple(range(200)))
+    nis = p.nis[np.isfinite(p.nis)]
+    n = len(nis)
+    assert n == 200 * 120
+    lo, hi = chi2.ppf(0.005, 3 * n) / n, chi2.ppf(0.995, 3 * n) / n
+    assert lo < nis.mean() < hi, (nis.mean(), lo, hi)
+
+
 def test_recording_holds_the_runs_arrays(test1):
     scn = plan_batch("paper-000/test-1").scenario
     p = paper000.simulate_passages(scn, 0, (0,))
