@@ -7,8 +7,11 @@
     bauv view RUN_DIR [--web] [--web-port P] [--grpc-port Q]
 
 Exit status: 0 on success, 2 on invalid input (one line naming the field, the value and what is
-allowed; nothing written), 1 when a run fails (the message says which run, when and why), 130 when
-interrupted (finished blocks are kept; ``--resume`` completes the batch).
+allowed; nothing written: bad options, a batch too big for memory, an out folder that cannot be
+created), 1 when a run fails (the message says which run, when and why; the report is written) or
+a file cannot be written during the batch (a full disk: the saved blocks are kept), 130 when
+interrupted by Ctrl-C, SIGTERM or SIGHUP (finished blocks are kept, workers stopped; ``--resume``
+completes the batch).
 """
 
 from __future__ import annotations
