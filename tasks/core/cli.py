@@ -196,8 +196,7 @@ def run_viewer(cmd: list[str]) -> int:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGTERM)
 
-    stops = [s for s in (signal.SIGTERM, getattr(signal, "SIGHUP", None)) if s is not None]
-    previous = {s: signal.signal(s, lambda *_: (stop(), sys.exit(0))) for s in stops}
+    previous = {s: signal.signal(s, lambda *_: (stop(), sys.exit(0))) for s in _stop_signals()}
     try:
         return proc.wait()
     except KeyboardInterrupt:
@@ -233,6 +232,12 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
     sys.exit(code)
 
 
+def _stop_signals() -> list[signal.Signals]:
+    """SIGTERM and SIGHUP, unless ignored (``nohup bauv run ...`` must survive the terminal)."""
+    sigs = [s for s in (signal.SIGTERM, getattr(signal, "SIGHUP", None)) if s is not None]
+    return [s for s in sigs if signal.getsignal(s) is not signal.SIG_IGN]
+
+
 def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt(signal.Signals(signum).name)
 
@@ -241,14 +246,14 @@ def main(argv: list[str] | None = None) -> None:
     """Entry point: run the CLI and map errors to exit statuses without tracebacks.
 
     SIGTERM and SIGHUP (the terminal closed) stop ``bauv`` as Ctrl-C does: a batch keeps its
-    finished blocks and stops its workers, the viewer stops the rerun server it started.
+    finished blocks and stops its workers, the viewer stops the rerun server it started. A signal
+    ignored when ``bauv`` starts (``nohup``) stays ignored.
     """
     from tasks.core.runner import BatchFailed, BatchInterrupted, os_error_text
 
-    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
-        if sig is not None:
-            with contextlib.suppress(ValueError):  # not the main thread
-                signal.signal(sig, _interrupt)
+    for sig in _stop_signals():
+        with contextlib.suppress(ValueError):  # not the main thread
+            signal.signal(sig, _interrupt)
     try:
         cli.main(args=argv, prog_name="bauv", standalone_mode=False)
     except click.exceptions.Abort:

@@ -373,3 +373,28 @@ def test_native_viewer_binds_loopback_only(tmp_path):
         [*cmd[:-1], "--help"], capture_output=True, text=True, timeout=60, check=False
     )
     assert res.returncode == 0 and "--bind" in res.stdout, res.stderr
+
+
+def test_nohup_keeps_a_batch_running_when_the_terminal_closes(tmp_path):
+    """A SIGHUP ignored at start (``nohup bauv run``) stays ignored: the batch completes."""
+    import signal
+    import time
+
+    out = tmp_path / "out"
+    args = ["run", "paper-000/test-1", "--runs", "40", "--quiet", "--out", str(out)]
+    args += ["--set=runner.block_size=5", "--set=report.figures=false"]
+    args += ["--set=report.recording=false"]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "tasks.core.cli", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN),
+    )
+    deadline = time.time() + 60
+    while time.time() < deadline and not list(out.glob("blocks/*.sha256")):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGHUP)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert (out / "metrics.json").is_file()
