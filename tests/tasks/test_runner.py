@@ -405,29 +405,35 @@ def test_workers_die_with_bauv(tmp_path, sig):
     args = ["paper-000/test-1", "--runs", "4000", "--workers", "2", "--quiet"]
     args += ["--set=report.figures=false", "--set=report.recording=false"]
     args += ["--set=runner.block_size=10", "--out", str(tmp_path / "out")]
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "tasks.core.cli", "run", *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    # output to a file, not a pipe: orphaned workers would hold a pipe open
+    with (tmp_path / "stderr.txt").open("w") as err_file:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "tasks.core.cli", "run", *args],
+            stdout=subprocess.DEVNULL,
+            stderr=err_file,
+        )
     parent = psutil.Process(proc.pid)
-    deadline = time.time() + 60
     children = []
-    while time.time() < deadline:
-        children = parent.children(recursive=True)
-        if len(children) >= 3 and (tmp_path / "out" / "blocks").is_dir():
-            break  # two workers, the resource tracker, and work under way
-        time.sleep(0.1)
-    assert len(children) >= 3, children
-    os.kill(proc.pid, sig)
-    _, err = proc.communicate(timeout=60)
-    deadline = time.time() + 20
-    while _alive(children) and time.time() < deadline:
-        time.sleep(0.2)
-    left = _alive(children)
-    for p in left:
-        p.kill()
-    assert not left, [p.cmdline() for p in left]
+    try:
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            children = parent.children(recursive=True)
+            if len(children) >= 3 and (tmp_path / "out" / "blocks").is_dir():
+                break  # two workers, the resource tracker, and work under way
+            time.sleep(0.1)
+        assert len(children) >= 3, children
+        os.kill(proc.pid, sig)
+        proc.wait(timeout=60)
+        deadline = time.time() + 20
+        while _alive(children) and time.time() < deadline:
+            time.sleep(0.2)
+        left = _alive(children)
+        assert not left, [p.cmdline() for p in left]
+    finally:
+        for p in _alive(children):  # a failing run must not leave them behind either
+            p.kill()
+        if proc.poll() is None:
+            proc.kill()
+    err = (tmp_path / "stderr.txt").read_text()
     if sig == signal.SIGTERM:
         assert proc.returncode == 130 and "--resume" in err and "Traceback" not in err, err
