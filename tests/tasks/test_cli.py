@@ -85,8 +85,7 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
                 socket.create_connection((host_ip, v.web_port), timeout=1).close()
     # stopping bauv view stops the rerun server it started (no leaked process)
     time.sleep(1.0)
-    left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
-    assert f"--web-viewer-port {v.web_port}" not in left
+    assert not _servers(v.web_port)
 
 
 def _main(capsys, *args):
@@ -349,18 +348,26 @@ def test_view_web_stops_its_server_on_sighup(tmp_path):
     rec.point("x", [0.0, 0.0, 0.0], (0, 0, 0), "x")
     rec.close()
     with web_viewer(tmp_path) as v:
-        assert b"re_viewer" in v.html
-        os.kill(v.proc.pid, signal.SIGHUP)
-        v.proc.wait(timeout=10)
-        deadline = time.time() + 10
-        while time.time() < deadline:
-            left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
-            if f"--web-viewer-port {v.web_port}" not in left:
-                break
-            time.sleep(0.2)
-        assert f"--web-viewer-port {v.web_port}" not in left
-        with pytest.raises(OSError):
-            socket.create_connection(("127.0.0.1", v.web_port), timeout=1).close()
+        try:
+            assert b"re_viewer" in v.html
+            os.kill(v.proc.pid, signal.SIGHUP)
+            v.proc.wait(timeout=10)
+            deadline = time.time() + 10
+            while _servers(v.web_port) and time.time() < deadline:
+                time.sleep(0.2)
+            assert not _servers(v.web_port)
+            with pytest.raises(OSError):
+                socket.create_connection(("127.0.0.1", v.web_port), timeout=1).close()
+        finally:
+            for pid in _servers(v.web_port):  # a failing run must not leave the server behind
+                os.kill(pid, signal.SIGKILL)
+
+
+def _servers(web_port):
+    """Pids of the rerun processes serving ``web_port`` (``ps -ww``: without it, ps cuts its
+    lines to 80 columns when its output is not a terminal, and the port would never be seen)."""
+    ps = subprocess.run(["ps", "-ww", "-eo", "pid,args"], capture_output=True, text=True).stdout
+    return [int(ln.split()[0]) for ln in ps.splitlines() if f"--web-viewer-port {web_port}" in ln]
 
 
 def test_native_viewer_binds_loopback_only(tmp_path):
