@@ -10,11 +10,14 @@ allowed (:class:`~bauv_sim.errors.ConfigError`).
 from __future__ import annotations
 
 import copy
+import types
+import typing
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
 import pydantic
+import pydantic_core
 import tomllib
 from pydantic import BaseModel, ConfigDict
 
@@ -35,6 +38,60 @@ class Config(BaseModel):
     model_config = ConfigDict(
         frozen=True, extra="forbid", allow_inf_nan=False, validate_default=True
     )
+
+    @pydantic.model_validator(mode="before")
+    @classmethod
+    def _numbers_are_numbers(cls, data: Any) -> Any:
+        """A number field takes a number: ``true`` is not 1.0 and ``"1.5"`` is not 1.5 (pydantic's
+        lax mode would convert both); in a tuple of numbers, each element.
+
+        Raises:
+            ValueError: naming the field (the message becomes one line of :class:`ConfigError`).
+        """
+        if isinstance(data, Mapping):
+            for name, field in cls.model_fields.items():
+                if name in data:
+                    problem = _number_problem(field.annotation, data[name])
+                    if problem is not None:
+                        raise pydantic_core.PydanticCustomError(
+                            "number_type", problem[1], {"field": name, "value": problem[0]}
+                        ) from None
+        return data
+
+
+def _number_kind(annotation: Any) -> str | None:
+    """``"float"``/``"int"`` when every alternative of ``annotation`` (``None`` aside) is that
+    number type, else ``None`` (the field also takes other values, and pydantic checks them)."""
+    if annotation is float:
+        return "float"
+    if annotation is int:
+        return "int"
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        kinds = {_number_kind(a) for a in typing.get_args(annotation) if a is not type(None)}
+        return kinds.pop() if len(kinds) == 1 else None
+    return None
+
+
+def _number_problem(annotation: Any, value: Any) -> tuple[str, str] | None:
+    """What is wrong with ``value`` for a number field of type ``annotation``: ``(the value as
+    shown, what is allowed)``, or ``None``."""
+    kind = _number_kind(annotation)
+    if kind is not None:
+        if isinstance(value, bool | str | bytes):
+            what = "a boolean" if isinstance(value, bool) else "a string"
+            shown = str(value).lower() if isinstance(value, bool) else repr(value)
+            return shown, f"must be {'an integer' if kind == 'int' else 'a number'}, not {what}"
+        return None
+    if typing.get_origin(annotation) is tuple and isinstance(value, list | tuple):
+        args = typing.get_args(annotation)
+        if len(args) == 2 and args[1] is Ellipsis:
+            args = (args[0],) * len(value)
+        if len(args) == len(value):
+            for i, (a, v) in enumerate(zip(args, value, strict=True)):
+                problem = _number_problem(a, v)
+                if problem is not None:
+                    return repr(list(value)), f"element {i} {problem[1]}"
+    return None
 
 
 def parse_override(text: str) -> tuple[list[str], Any]:
@@ -111,13 +168,24 @@ def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[s
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file, raising :class:`ConfigError` with the file name on a syntax error."""
+    """Read a TOML file.
+
+    Raises:
+        ConfigError: naming the file when it is missing, unreadable, not UTF-8 or not TOML.
+    """
     p = Path(path)
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ConfigError(f"scenario file {str(p)!r}: not found") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"scenario file {str(p)!r}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+            f"offset {exc.start}); TOML files are UTF-8"
+        ) from None
+    except OSError as exc:
+        raise ConfigError(f"scenario file {str(p)!r}: cannot read it ({exc.strerror})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"scenario file {str(p)!r}: {exc}") from None
 
@@ -220,6 +288,11 @@ def format_validation_error(exc: pydantic.ValidationError, what: str) -> str:
             continue
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, ") :]
+        if err["type"] == "number_type":
+            ctx = err.get("ctx") or {}
+            where = ".".join([*(str(p) for p in err["loc"]), str(ctx.get("field"))])
+            lines.append(f"{what}: {where} = {ctx.get('value')}: {msg}")
+            continue
         if err["type"] == "missing":
             lines.append(f"{what}: {loc}: required field is missing")
             continue

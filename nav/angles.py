@@ -283,3 +283,30 @@ def rel_from_range_azimuth_elevation(rae: ArrayLike) -> Array:
     r, alpha, beta = a[..., 0], a[..., 1], a[..., 2]
     horizontal = velocity_from_course_speed(alpha, r * np.cos(beta))
     return np.concatenate([horizontal, (r * np.sin(beta))[..., None]], axis=-1)
+
+
+def fold_azimuth_elevation(azimuth_rad: ArrayLike, elevation_rad: ArrayLike) -> tuple[Array, Array]:
+    """The same direction with the elevation in [-pi/2, pi/2] and the azimuth in [0, 2 pi).
+
+    An elevation past the zenith (``beta > pi/2``) points over the top, to the azimuth 180 deg
+    around: ``(alpha, beta) -> (alpha + pi, pi - beta)``; past the nadir ``(alpha + pi, -pi -
+    beta)``. The unit vector ``(cos b sin a, cos b cos a, sin b)`` is unchanged, so a measured
+    direction whose error carries it over the pole keeps its geometry (clipping the elevation to
+    +-pi/2 would put every such fix straight above the observer).
+
+    Args:
+        azimuth_rad: azimuth clockwise from north, any shape, rad.
+        elevation_rad: elevation positive up, broadcastable with ``azimuth_rad``, rad, within
+            (-3 pi/2, 3 pi/2) (one fold).
+
+    Returns:
+        ``(azimuth in [0, 2 pi), elevation in [-pi/2, pi/2])``, broadcast shape, rad.
+    """
+    a, b = np.broadcast_arrays(
+        np.asarray(azimuth_rad, dtype=float), np.asarray(elevation_rad, dtype=float)
+    )
+    over = b > np.pi / 2
+    under = b < -np.pi / 2
+    flipped = over | under
+    b = np.where(over, np.pi - b, np.where(under, -np.pi - b, b))
+    return wrap_2pi(np.where(flipped, a + np.pi, a)), b

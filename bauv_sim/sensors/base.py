@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,10 @@ def check_multiple(value_s: float, tick_s: float, field: str) -> int:
         ConfigError: naming the field if the period is not a whole multiple.
     """
     ratio = value_s / tick_s
+    if not math.isfinite(ratio):
+        raise ConfigError(
+            f"{field} = {value_s:g}: {ratio:g} ticks of {tick_s:g} s is not a number of ticks"
+        )
     m = round(ratio)
     if m < 1 or abs(ratio - m) > 1e-9 * max(1.0, ratio):
         raise ConfigError(

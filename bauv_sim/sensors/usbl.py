@@ -4,6 +4,10 @@ Seed 000 (Tritech MicronNav): sigma_r = 0.2 m, sigma_alpha = sigma_beta = 3 deg,
 The geometry is seed 000 eq. 15 with world z up (:func:`bauv_sim.frames.range_azimuth_elevation`):
 azimuth clockwise from north, elevation positive when the vehicle is above the transceiver.
 
+The measured elevation stays in [-90, 90] deg: an elevation error that carries it past the zenith
+(right above the transceiver) gives the direction over the top, 180 deg around in azimuth
+(:func:`bauv_sim.frames.fold_azimuth_elevation`), never a clipped 90 deg.
+
 Besides the per-component errors (:mod:`bauv_sim.sensors.errors`), a fix is not produced beyond
 ``max_range_m``, outside the transceiver's field of view (``min_elevation_deg``), or with
 ``dropout_probability``; it reaches the vehicle after the acoustic travel time plus a processing
@@ -18,7 +22,7 @@ from pydantic import Field
 
 from bauv_sim import rng as rng_mod
 from bauv_sim.config import Config
-from bauv_sim.frames import range_azimuth_elevation, wrap_2pi
+from bauv_sim.frames import fold_azimuth_elevation, range_azimuth_elevation
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess, LengthErrorConfig
 from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
@@ -43,8 +47,18 @@ class UsblConfig(Config):
         -90.0, ge=-90, le=90, description="no fix below this elevation (field of view), deg"
     )
     dropout_probability: float = Field(0.0, ge=0, lt=1, description="probability a fix is lost")
-    sound_speed_m_s: float = Field(1500.0, gt=0, description="for the travel-time latency, m/s")
-    processing_delay_s: float = Field(0.0, ge=0, description="added latency, s")
+    sound_speed_m_s: float = Field(
+        1500.0,
+        gt=0,
+        description="for the travel-time latency, m/s (online rigs; seed 000's passage has no "
+        "latency and refuses a change)",
+    )
+    processing_delay_s: float = Field(
+        0.0,
+        ge=0,
+        description="added latency, s (online rigs; seed 000's passage has no latency and "
+        "refuses a change)",
+    )
     transponder_body_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="transponder relative to the vehicle reference point, m, body"
     )
@@ -89,7 +103,8 @@ class Usbl:
 
         Returns:
             Samples with values ``(r, alpha, beta)``, shape (n, k, 3): m, rad in [0, 2 pi),
-            rad; ``t_arrival_s`` includes the travel time r / c and the processing delay.
+            rad in [-pi/2, pi/2]; ``t_arrival_s`` includes the travel time r / c and the
+            processing delay.
         """
         tr = truth.take(index)
         pos = broadcast_runs(point_world(tr, self.cfg.transponder_body_m), self.n)
@@ -103,8 +118,8 @@ class Usbl:
             produced &= ok
         meas = np.stack(comps, axis=-1)
         meas[..., 0] = np.abs(meas[..., 0])
-        meas[..., 1] = wrap_2pi(meas[..., 1])
-        meas[..., 2] = np.clip(meas[..., 2], -np.pi / 2, np.pi / 2)
+        # an elevation error past the zenith is the direction over the top (not a clip)
+        meas[..., 1], meas[..., 2] = fold_azimuth_elevation(meas[..., 1], meas[..., 2])
         produced &= true_rae[..., 0] <= self.cfg.max_range_m
         produced &= true_rae[..., 2] >= np.radians(self.cfg.min_elevation_deg)
         if self._drop is not None:

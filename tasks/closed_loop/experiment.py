@@ -4,13 +4,46 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from bauv_sim.errors import ConfigError
+from bauv_sim import seabed
+from bauv_sim.build import VEHICLE_CLEARANCE_M
+from bauv_sim.errors import ConfigError, GeometryError
 from tasks.closed_loop.parts import MissionDesign
 from tasks.closed_loop.report import MissionMetrics, report_mission
 from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario
 from tasks.closed_loop.world import WaypointMission, fly
-from tasks.core.registry import Experiment, ReportContext, ReportSummary
+from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary
+
+BYTES_PER_TICK = 500.0
+"""A run's memory per control tick, bytes: its per-tick columns measured 411 B per tick on
+mission/short (one vehicle), plus the fix tables. Applied to ``timing.max_duration_s``, an upper
+bound of a run's length."""
+
+
+def check_in_water(scenario: MissionScenario) -> None:
+    """Refuse a start or a way-point below the seabed of the scene (or within
+    :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` of it): a depth the vehicle cannot reach, whose
+    way-point would still count as reached since the acceptance radius is judged horizontally.
+    Points outside the seabed grid are not checked (as when the scene is built).
+
+    Raises:
+        ConfigError: naming the field, its value and the water depth there.
+    """
+    bed = seabed.generate(scenario.seabed)
+    points = [("start.depth_m", scenario.start)] + [
+        (f"guidance.waypoints.{i}.depth_m", w) for i, w in enumerate(scenario.guidance.waypoints)
+    ]
+    for field_name, p in points:
+        try:
+            water = float(bed.depth_at(p.east_m, p.north_m))
+        except GeometryError:
+            continue
+        if p.depth_m > water - VEHICLE_CLEARANCE_M:
+            raise ConfigError(
+                f"{field_name} = {p.depth_m:g}: the water is {water:.2f} m deep at east "
+                f"{p.east_m:g} m, north {p.north_m:g} m; must be at most "
+                f"{water - VEHICLE_CLEARANCE_M:.2f} m ({VEHICLE_CLEARANCE_M:g} m above the seabed)"
+            )
 
 
 @dataclass(frozen=True)
@@ -33,10 +66,38 @@ class MissionExperiment(Experiment):
         return self.design, scenario
 
     def check(self, scenario: MissionScenario, n_runs: int) -> None:
+        """Checks of a batch: the recorded run and the faulty runs are runs of the batch; the
+        start and every way-point are in the water (above the scene's seabed by at least
+        :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` where the seabed grid covers them).
+
+        Raises:
+            ConfigError: naming the field, its value and what is allowed.
+        """
         if scenario.report.record_run >= n_runs:
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
             )
+        bad = [r for r in scenario.faults.physics_nan_runs if not 0 <= r < n_runs]
+        if bad:
+            raise ConfigError(
+                f"faults.physics_nan_runs = {list(scenario.faults.physics_nan_runs)}: run "
+                f"{bad[0]} is not a run of this batch (0 <= run < runs = {n_runs})"
+            )
+        check_in_water(scenario)
+
+    def memory(self, scenario: MissionScenario, n_runs: int) -> list[MemoryTerm]:
+        """Estimated peak memory, bytes: a run of ``timing.max_duration_s`` in the worker that
+        flies it, and every run in the report (which reads them all)."""
+        t = scenario.timing
+        ticks = t.max_duration_s / t.control_tick_s + 1
+        what = (
+            f"timing.max_duration_s = {t.max_duration_s:g} with timing.control_tick_s = "
+            f"{t.control_tick_s:g} s ({ticks:.3g} ticks)"
+        )
+        return [
+            MemoryTerm(BYTES_PER_TICK * ticks, True, what),
+            MemoryTerm(BYTES_PER_TICK * ticks * n_runs, False, f"{what} for runs = {n_runs}"),
+        ]
 
     def run_block(
         self, scenario: MissionScenario, seed: int, runs: tuple[int, ...]

@@ -194,13 +194,20 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
             files.append(record_mission(exp.name, scn, rec_run, ctx.out_dir))
     text = "".join(t.to_text() + "\n" for t in tables)
     if failures:
+        rest = (
+            "none completed"
+            if not ok
+            else f"the other {len(ok)} completed"
+            if len(ok) > 1
+            else "the other one completed"
+        )
         text += (
-            f"{len(failures)} run(s) failed (the others completed):\n  "
+            f"{len(failures)} of {len(runs)} run(s) failed ({rest}):\n  "
             + "\n  ".join(failures)
             + "\n"
         )
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"
-    return ReportSummary(text, tuple(files))
+    return ReportSummary(text, tuple(files), tuple(failures))
 
 
 def circle(cx: float, cy: float, r: float, z: float = 0.0, n: int = 48) -> NDArray[np.float64]:

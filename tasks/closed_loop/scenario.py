@@ -163,7 +163,9 @@ class FaultConfig(Config):
     """Injected faults, for testing that failures are reported."""
 
     physics_nan_at_s: float | None = Field(None, ge=0, description="corrupt the physics at t")
-    physics_nan_runs: tuple[int, ...] = Field((), description="runs that get the fault")
+    physics_nan_runs: tuple[int, ...] = Field(
+        (), description="runs that get the fault (each 0 <= run < runs, checked with the batch)"
+    )
 
 
 class MissionReportConfig(Config):

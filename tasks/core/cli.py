@@ -8,8 +8,11 @@
     bauv view RUN_DIR [--web] [--web-port P] [--grpc-port Q]
 
 Exit status: 0 on success, 2 on invalid input (one line naming the field, the value and what is
-allowed; nothing written), 1 when a run fails (the message says which run, when and why), 130 when
-interrupted (finished blocks are kept; ``--resume`` completes the batch).
+allowed; nothing written: bad options, a batch too big for memory, an out folder that cannot be
+created), 1 when a run fails (the message says which run, when and why; the report is written) or
+a file cannot be written during the batch (a full disk: the saved blocks are kept), 130 when
+interrupted by Ctrl-C, SIGTERM or SIGHUP (finished blocks are kept, workers stopped; ``--resume``
+completes the batch).
 """
 
 from __future__ import annotations
@@ -150,6 +153,13 @@ def run_cmd(
     if rec.is_file():
         click.echo(f"recording: {rec}  (open it with: bauv view {out_dir} [--web])")
     click.echo(f"tables:    {out_dir / 'tables.md'}\nmetrics:   {out_dir / 'metrics.json'}")
+    if summary.failures:
+        click.echo(
+            f"error: {len(summary.failures)} run(s) failed; the report covers the runs that "
+            "completed",
+            err=True,
+        )
+        sys.exit(EXIT_FAILED)
 
 
 def rerun_command() -> list[str]:
@@ -161,7 +171,13 @@ def rerun_command() -> list[str]:
 def view_command(
     recording: Path, web: bool, web_port: int = 9090, grpc_port: int = 9876
 ) -> list[str]:
-    """The viewer command line; with ``web`` it serves on 127.0.0.1 only."""
+    """The viewer command line; its servers listen on 127.0.0.1 only.
+
+    With ``web`` the rerun process serves the web viewer (``web_port``) and the recording over
+    gRPC (``grpc_port``); without, the native viewer still starts a gRPC server (``grpc_port``),
+    which rerun binds to 0.0.0.0 unless told otherwise (``rerun --help``: ``--bind``, default
+    ``0.0.0.0``).
+    """
     cmd = rerun_command()
     if web:
         return [
@@ -175,15 +191,15 @@ def view_command(
             str(grpc_port),
             str(recording),
         ]
-    return [*cmd, str(recording)]
+    return [*cmd, "--bind", "127.0.0.1", "--port", str(grpc_port), str(recording)]
 
 
 def run_viewer(cmd: list[str]) -> int:
     """Run the viewer in its own process group and take the whole group down with us.
 
     The ``rerun`` launcher starts the viewer binary as a child; stopping only the launcher (or
-    this process) would leave the server running. SIGINT, SIGTERM and normal exit all stop the
-    group.
+    this process) would leave the server running. SIGINT, SIGTERM, SIGHUP (the terminal closed)
+    and normal exit all stop the group.
     """
     proc = subprocess.Popen(cmd, start_new_session=True)
 
@@ -191,7 +207,7 @@ def run_viewer(cmd: list[str]) -> int:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGTERM)
 
-    previous = signal.signal(signal.SIGTERM, lambda *_: (stop(), sys.exit(0)))
+    previous = {s: signal.signal(s, lambda *_: (stop(), sys.exit(0))) for s in _stop_signals()}
     try:
         return proc.wait()
     except KeyboardInterrupt:
@@ -200,7 +216,8 @@ def run_viewer(cmd: list[str]) -> int:
         stop()
         with contextlib.suppress(subprocess.TimeoutExpired):
             proc.wait(timeout=5)
-        signal.signal(signal.SIGTERM, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 @cli.command("view")
@@ -226,10 +243,28 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
     sys.exit(code)
 
 
-def main(argv: list[str] | None = None) -> None:
-    """Entry point: run the CLI and map errors to exit statuses without tracebacks."""
-    from tasks.core.runner import BatchFailed, BatchInterrupted
+def _stop_signals() -> list[signal.Signals]:
+    """SIGTERM and SIGHUP, unless ignored (``nohup bauv run ...`` must survive the terminal)."""
+    sigs = [s for s in (signal.SIGTERM, getattr(signal, "SIGHUP", None)) if s is not None]
+    return [s for s in sigs if signal.getsignal(s) is not signal.SIG_IGN]
 
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: run the CLI and map errors to exit statuses without tracebacks.
+
+    SIGTERM and SIGHUP (the terminal closed) stop ``bauv`` as Ctrl-C does: a batch keeps its
+    finished blocks and stops its workers, the viewer stops the rerun server it started. A signal
+    ignored when ``bauv`` starts (``nohup``) stays ignored.
+    """
+    from tasks.core.runner import BatchFailed, BatchInterrupted, os_error_text
+
+    for sig in _stop_signals():
+        with contextlib.suppress(ValueError):  # not the main thread
+            signal.signal(sig, _interrupt)
     try:
         cli.main(args=argv, prog_name="bauv", standalone_mode=False)
     except click.exceptions.Abort:
@@ -253,6 +288,9 @@ def main(argv: list[str] | None = None) -> None:
     except KeyboardInterrupt:
         click.echo("interrupted", err=True)
         sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        click.echo(f"error: {os_error_text(exc)}", err=True)
+        sys.exit(EXIT_FAILED)
 
 
 if __name__ == "__main__":

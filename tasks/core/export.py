@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ import pyarrow.parquet as pq
 
 from bauv_sim.errors import BauvSimError
 from tasks.core import store
+from tasks.core.files import create_beside
 
 FORMAT_KEY = "bauv-sim.export"
 """Key of the table metadata marking a file written by :func:`write_parquet`."""
@@ -197,8 +197,7 @@ def write_parquet(
     schema = pa.schema(fields, metadata={**metadata, FORMAT_KEY: FORMAT_VERSION})
     table = pa.Table.from_arrays(arrays, schema=schema)
     out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
+    fd, tmp = create_beside(out)
     os.close(fd)
     try:
         pq.write_table(table, tmp)

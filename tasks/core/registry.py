@@ -68,11 +68,34 @@ class ReportContext:
 
 @dataclass(frozen=True)
 class ReportSummary:
-    """What :meth:`Experiment.report` returns: the text printed to the console and the files
-    written (paths relative to the run folder)."""
+    """What :meth:`Experiment.report` returns.
+
+    Attributes:
+        text: printed to the console.
+        files: the files written, paths relative to the run folder.
+        failures: one line per run that failed (``bauv run`` then exits with status 1).
+    """
 
     text: str
     files: tuple[str, ...] = ()
+    failures: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class MemoryTerm:
+    """One part of a batch's estimated memory, with the fields that drive it.
+
+    Attributes:
+        bytes: estimated peak memory of this part, bytes.
+        per_block: whether every worker holds it while it computes a block (else it is held once,
+            by the process that writes the report).
+        fields: the scenario fields (and values) that make it, as the user typed them, e.g.
+            ``"passage.duration_s = 1e+12 (1e+12 ticks of passage.tick_s = 1 s)"``.
+    """
+
+    bytes: float
+    per_block: bool
+    fields: str
 
 
 @dataclass(frozen=True)
@@ -106,6 +129,12 @@ class Experiment:
 
     def check(self, scenario: Config, n_runs: int) -> None:
         """Checks that involve the batch size (raise :class:`ConfigError`); none by default."""
+
+    def memory(self, scenario: Config, n_runs: int) -> list[MemoryTerm]:
+        """The batch's estimated peak memory, in parts, so that the runner can refuse a batch that
+        cannot fit before any work starts (:func:`tasks.core.runner.check_memory`). None by
+        default (an experiment whose size is bounded by its fields' ranges)."""
+        return []
 
     def run_block(self, scenario: Config, seed: int, runs: tuple[int, ...]) -> Any:
         """Compute the runs of one block; see the module docstring."""

@@ -38,7 +38,10 @@ import json
 import multiprocessing
 import os
 import re
-import tempfile
+import signal
+import sys
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +54,7 @@ from bauv_sim.config import Config, load_config, to_plain, validate
 from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.rng import check_seed
 from tasks.core import registry, store
+from tasks.core.files import atomic_write_bytes
 from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 RUN_FILE = "run.json"
@@ -123,10 +127,80 @@ def plan_batch(
         raise ConfigError(f"runs = {n!r}: must be an integer >= 1")
     if exp.max_runs is not None and n > exp.max_runs:
         raise ConfigError(f"runs = {n}: {name} allows at most {exp.max_runs}")
+    if n > MAX_RUNS:
+        raise ConfigError(
+            f"runs = {n}: at most {MAX_RUNS} runs in one batch (its layout and per-run results "
+            "are held in memory); run several batches with different seeds"
+        )
     scenario = load_config(exp.scenario_type, exp.preset, scenario_files, overrides)
     exp.check(scenario, n)
+    check_layout(n, exp.block_size(scenario))
+    check_memory(exp, scenario, n)
     digest = _sha256(scenario_text(scenario).encode("utf-8"))
     return BatchPlan(exp, scenario, seed, n, _blocks(n, exp.block_size(scenario)), digest)
+
+
+MAX_RUNS = 10_000_000
+"""The largest batch: its block layout (~36 bytes per run) and per-run results stay in memory."""
+MAX_BLOCKS = 1_000_000
+"""The most blocks in a batch (each is two files in ``blocks/``)."""
+MEMORY_FRACTION = 0.5
+"""Share of the machine's physical memory a batch may be estimated to use."""
+
+
+def memory_limit_bytes() -> float:
+    """The memory a batch may use: :data:`MEMORY_FRACTION` of the machine's physical memory,
+    bytes (8 GiB when the platform does not say)."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        total = 16 * 2**30
+    return MEMORY_FRACTION * total
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def check_layout(n_runs: int, block_size: int) -> None:
+    """Refuse a layout with more than :data:`MAX_BLOCKS` blocks.
+
+    Raises:
+        ConfigError: naming the runs, the block size and the limit.
+    """
+    n_blocks = -(-n_runs // block_size)
+    if n_blocks > MAX_BLOCKS:
+        raise ConfigError(
+            f"runs = {n_runs} in blocks of {block_size} make {n_blocks} blocks: at most "
+            f"{MAX_BLOCKS} (each block is two files); raise runner.block_size"
+        )
+
+
+def check_memory(exp: Experiment, scenario: Config, n_runs: int, workers: int = 1) -> None:
+    """Refuse a batch whose estimated memory (:meth:`Experiment.memory`) exceeds
+    :func:`memory_limit_bytes`, before anything is computed or written.
+
+    Args:
+        exp: the experiment.
+        scenario: its validated scenario.
+        n_runs: the number of runs.
+        workers: processes that hold a block at the same time on this machine.
+
+    Raises:
+        ConfigError: naming the field (and value) of the largest part, the estimate and the
+            limit.
+    """
+    terms = exp.memory(scenario, n_runs)
+    if not terms:
+        return
+    total = sum(t.bytes * (workers if t.per_block else 1) for t in terms)
+    limit = memory_limit_bytes()
+    if total > limit:
+        worst = max(terms, key=lambda t: t.bytes * (workers if t.per_block else 1))
+        raise ConfigError(
+            f"{worst.fields}: the batch would need about {_gb(total)} of memory, above the limit "
+            f"of {_gb(limit)} ({MEMORY_FRACTION:.0%} of this machine's memory)"
+        )
 
 
 def scenario_text(scenario: Config) -> str:
@@ -148,22 +222,9 @@ def default_out_dir(name: str, seed: int) -> Path:
     return Path("runs") / name.replace("/", "_") / f"{stamp}-seed{seed}"
 
 
-def _atomic_write_bytes(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-
-
 def atomic_write_text(path: Path, text: str) -> None:
     """Write a text file so that it either exists whole or not at all."""
-    _atomic_write_bytes(path, text.encode("utf-8"))
+    atomic_write_bytes(path, text.encode("utf-8"))
 
 
 def _block_path(out_dir: Path, index: int) -> Path:
@@ -183,7 +244,7 @@ def _save_block(out_dir: Path, index: int, payload: bytes) -> None:
     """Write a block's bytes, then its sha256 (a crash in between leaves it unsaved)."""
     path = _block_path(out_dir, index)
     _digest_path(out_dir, index).unlink(missing_ok=True)
-    _atomic_write_bytes(path, payload)
+    atomic_write_bytes(path, payload)
     atomic_write_text(_digest_path(out_dir, index), f"{_sha256(payload)}  {path.name}\n")
 
 
@@ -278,19 +339,48 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
     """Create a fresh run folder with ``run.json`` (incomplete) and ``scenario.toml``.
 
     Raises:
-        ConfigError: if the folder exists and is not empty.
+        ConfigError: if the folder exists and is not empty, is not a folder, or cannot be created
+            or written (read-only or full file system, a file in its path, a name too long); a
+            folder created here is removed again then.
     """
-    if out_dir.exists() and any(out_dir.iterdir()):
-        raise ConfigError(
-            f"out = {str(out_dir)!r}: folder exists and is not empty; "
-            "use --resume to complete it or choose another --out"
-        )
     text = scenario_text(plan.scenario)
     if _sha256(text.encode("utf-8")) != plan.scenario_sha256:
         raise ValueError("plan.scenario_sha256 is not the digest of plan.scenario")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out_dir / SCENARIO_FILE, text)
-    _write_run_record(out_dir, plan, "incomplete")
+    where = f"out = {str(out_dir)!r}"
+    created: list[Path] = []
+    try:
+        if out_dir.exists() or out_dir.is_symlink():
+            if not out_dir.is_dir():
+                raise ConfigError(f"{where}: exists and is not a folder; choose another --out")
+            if any(out_dir.iterdir()):
+                raise ConfigError(
+                    f"{where}: folder exists and is not empty; "
+                    "use --resume to complete it or choose another --out"
+                )
+        created = [p for p in (out_dir, *out_dir.parents) if not p.exists()]
+        out_dir.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(out_dir / SCENARIO_FILE, text)
+        _write_run_record(out_dir, plan, "incomplete")
+    except OSError as exc:
+        for path in (out_dir / SCENARIO_FILE, out_dir / RUN_FILE):
+            with contextlib.suppress(OSError):
+                path.unlink(missing_ok=True)
+        for folder in created:  # deepest first
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        reason = exc.strerror if exc.filename == str(out_dir) else os_error_text(exc)
+        raise ConfigError(f"{where}: cannot create the run folder ({reason})") from None
+
+
+def os_error_text(exc: OSError) -> str:
+    """An :class:`OSError` in a few words: its reason and the file it names."""
+    reason = exc.strerror or type(exc).__name__
+    return f"{reason}: {exc.filename!r}" if exc.filename else reason
+
+
+class OutputError(BauvSimError):
+    """A file of the run folder could not be written during the batch (e.g. the disk is full);
+    the blocks saved before are kept and ``--resume`` completes the batch."""
 
 
 def _read_record(out_dir: Path) -> dict[str, Any]:
@@ -361,6 +451,12 @@ def plan_resume(
         raise ConfigError(
             f"--resume: {where!r}: n_runs = {rec_runs}, block_size = {block_size}: must be >= 1"
         )
+    if rec_runs > MAX_RUNS:
+        raise ConfigError(f"--resume: {where!r}: n_runs = {rec_runs}: at most {MAX_RUNS}")
+    try:
+        check_layout(rec_runs, block_size)
+    except ConfigError as exc:
+        raise ConfigError(f"--resume: {where!r}: {exc}") from None
     layout = _blocks(rec_runs, block_size)
     if n_blocks != len(layout):
         raise ConfigError(
@@ -432,17 +528,142 @@ def _run_block_in_worker(
 
 
 class InlineExecutor(cf.Executor):
-    """Runs each submitted call at once in the calling thread (one local worker)."""
+    """One local worker: each submitted call runs in the calling thread when its result is asked
+    for (:meth:`~concurrent.futures.Future.result` of the returned future), not in ``submit``.
+
+    The runner asks for the blocks one by one in its save loop, so each block is saved and the
+    progress bar moves as soon as that block is computed, and Ctrl-C keeps the finished blocks, as
+    with a process pool.
+    """
 
     def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future:
-        fut: cf.Future = cf.Future()
+        return _LazyFuture(fn, args, kwargs)
+
+
+class _LazyFuture(cf.Future):
+    """A future whose call runs, in the calling thread, the first time its result is asked for."""
+
+    def __init__(self, fn: Callable[..., Any], args: tuple[Any, ...], kwargs: dict[str, Any]):
+        super().__init__()
+        self._call: tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]] | None = (
+            fn,
+            args,
+            kwargs,
+        )
+
+    def _run(self) -> None:
+        if self._call is None or not self.set_running_or_notify_cancel():
+            return
+        fn, args, kwargs = self._call
+        self._call = None
         try:
-            fut.set_result(fn(*args, **kwargs))
-        except BaseException as exc:
-            if isinstance(exc, KeyboardInterrupt):
-                raise
-            fut.set_exception(exc)
-        return fut
+            value = fn(*args, **kwargs)
+        except Exception as exc:
+            self.set_exception(exc)
+        else:
+            self.set_result(value)
+
+    def result(self, timeout: float | None = None) -> Any:
+        self._run()
+        return super().result(timeout)
+
+    def exception(self, timeout: float | None = None) -> BaseException | None:
+        self._run()
+        return super().exception(timeout)
+
+
+def _completed(futures: dict[cf.Future, int]) -> Iterator[cf.Future]:
+    """The futures as they finish: in submission order for lazy (inline) futures, which run when
+    asked for, else in completion order (:func:`concurrent.futures.as_completed`)."""
+    if all(isinstance(f, _LazyFuture) for f in futures):
+        yield from futures
+    else:
+        yield from cf.as_completed(futures)
+
+
+PARENT_POLL_S = 0.5
+"""How often a local worker checks that the ``bauv`` process that started it is alive, s."""
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Initializer of a local worker process: exit when the process that started it is gone.
+
+    ``bauv`` may be stopped by a signal it cannot handle (SIGKILL); its workers must not go on
+    computing blocks nobody will save (and keep the resource tracker alive with them). On Linux
+    the kernel sends the worker SIGKILL when its parent dies (``PR_SET_PDEATHSIG``); everywhere a
+    daemon thread also polls the parent's pid every :data:`PARENT_POLL_S` seconds.
+
+    Args:
+        parent_pid: pid of the process that created the pool.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            import ctypes
+
+            pr_set_pdeathsig = 1
+            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+    if os.getppid() != parent_pid:  # the parent died before the line above
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="bauv-parent-watch", daemon=True).start()
+
+
+def _terminate_workers(ex: cf.ProcessPoolExecutor) -> None:
+    """Shut a process pool down and stop its workers now (their running blocks are lost)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.join(timeout=5)
+
+
+EXECUTORS = ("local", "dask")
+DASK_CONNECT_TIMEOUT_S = 10.0
+"""How long ``--executor dask --address ...`` waits for the scheduler before giving up, s."""
+
+
+def check_executor(kind: str, workers: int, address: str | None) -> None:
+    """Check the executor options without starting or connecting to anything.
+
+    Args:
+        kind: ``"local"`` or ``"dask"``.
+        workers: worker processes, an integer >= 1.
+        address: a Dask scheduler address ``[scheme://]host:port`` or ``None``.
+
+    Raises:
+        ConfigError: naming the option, its value and what is allowed.
+    """
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ConfigError(f"workers = {workers!r}: must be an integer >= 1")
+    if kind not in EXECUTORS:
+        raise ConfigError(f"executor = {kind!r}: must be 'local' or 'dask'")
+    if address is None:
+        return
+    if kind == "local":
+        raise ConfigError(
+            f"address = {address!r}: --address is for --executor dask (the local executor "
+            "takes none)"
+        )
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, where = parse_address(address, strict=False)
+        if scheme in ("tcp", "tls"):
+            host, port = parse_host_port(where)
+            if not host or port is None:
+                raise ValueError("no host")
+    except (ValueError, TypeError):
+        raise ConfigError(
+            f"address = {address!r}: must be a Dask scheduler address such as tcp://host:8786"
+        ) from None
 
 
 @contextlib.contextmanager
@@ -456,49 +677,61 @@ def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.E
 
     Yields:
         The executor; it is shut down on exit.
+
+    Raises:
+        ConfigError: on invalid options (:func:`check_executor`), or when the Dask scheduler at
+            ``address`` does not answer within :data:`DASK_CONNECT_TIMEOUT_S`.
     """
-    if workers < 1:
-        raise ConfigError(f"workers = {workers}: must be >= 1")
+    check_executor(kind, workers, address)
     if kind == "local":
-        if address is not None:
-            raise ConfigError("--address is for --executor dask")
         if workers == 1:
             yield InlineExecutor()
             return
         ex = cf.ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn")
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_die_with_parent,
+            initargs=(os.getpid(),),
         )
         try:
             yield ex
-        finally:
+        except BaseException:
+            # interrupted or failed: stop the blocks being computed now, not after they finish
+            _terminate_workers(ex)
+            raise
+        else:
             ex.shutdown(wait=False, cancel_futures=True)
         return
-    if kind == "dask":
-        import logging
+    import logging
 
-        from distributed import Client, LocalCluster
+    from distributed import Client, LocalCluster
 
-        logging.getLogger("distributed").setLevel(logging.ERROR)
-        cluster = None
-        if address is None:
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
-            client = Client(cluster)
-        else:
-            client = Client(address)
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    cluster = None
+    if address is None:
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        client = Client(cluster)
+    else:
         try:
-            yield client.get_executor(pure=False)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-        return
-    raise ConfigError(f"executor = {kind!r}: must be 'local' or 'dask'")
+            client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            what = " ".join(str(exc).split())
+            raise ConfigError(
+                f"address = {address!r}: no Dask scheduler answered within "
+                f"{DASK_CONNECT_TIMEOUT_S:g} s ({what})"
+            ) from None
+    try:
+        yield client.get_executor(pure=False)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def execute(
@@ -508,6 +741,7 @@ def execute(
     workers: int = 1,
     address: str | None = None,
     progress: bool = True,
+    pool: cf.Executor | None = None,
 ) -> ReportSummary:
     """Compute the missing blocks of a prepared batch and write its report.
 
@@ -518,6 +752,9 @@ def execute(
         workers: number of worker processes.
         address: Dask scheduler address, if any.
         progress: show a progress bar on a terminal.
+        pool: an executor already opened by :func:`make_executor` (then ``executor``,
+            ``workers`` and ``address`` are not used), or ``None`` to open one when a block is
+            missing.
 
     Returns:
         The report summary.
@@ -525,6 +762,7 @@ def execute(
     Raises:
         BatchInterrupted: on SIGINT, after the finished blocks are saved.
         BatchFailed: if a block raised (the others are saved).
+        OutputError: if a block or the report cannot be written (a full disk).
     """
     from tqdm import tqdm
 
@@ -542,7 +780,11 @@ def execute(
     )
     try:
         if todo:
-            with make_executor(executor, workers, address) as ex:
+            with (
+                contextlib.nullcontext(pool)
+                if pool is not None
+                else make_executor(executor, workers, address)
+            ) as ex:
                 futures = {
                     ex.submit(
                         _run_block_in_worker,
@@ -555,7 +797,7 @@ def execute(
                     for i in todo
                 }
                 try:
-                    for fut in cf.as_completed(futures):
+                    for fut in _completed(futures):
                         i = futures[fut]
                         try:
                             payload = fut.result()
@@ -566,7 +808,12 @@ def execute(
                                 f"{type(exc).__name__}: {exc}"
                             )
                             continue
-                        _save_block(out_dir, i, payload)
+                        try:
+                            _save_block(out_dir, i, payload)
+                        except OSError as exc:
+                            for f in futures:
+                                f.cancel()
+                            raise _output_error(plan, out_dir, f"block {i}", exc) from None
                         bar.update(len(plan.blocks[i]))
                 except KeyboardInterrupt:
                     for f in futures:
@@ -602,8 +849,22 @@ def execute(
             f"{out_dir}; write the report with: bauv run {plan.experiment.name} --resume "
             f"--out {out_dir}"
         ) from None
-    _write_run_record(out_dir, plan, "complete")
+    except OSError as exc:
+        raise _output_error(plan, out_dir, "the report", exc) from None
+    try:
+        _write_run_record(out_dir, plan, "complete")
+    except OSError as exc:
+        raise _output_error(plan, out_dir, RUN_FILE, exc) from None
     return summary
+
+
+def _output_error(plan: BatchPlan, out_dir: Path, what: str, exc: OSError) -> OutputError:
+    n_done = sum(_saved(out_dir, i) for i in range(len(plan.blocks)))
+    return OutputError(
+        f"cannot write {what} ({os_error_text(exc)}); {n_done} of {len(plan.blocks)} blocks are "
+        f"saved in {out_dir}; make room and complete the batch with: bauv run "
+        f"{plan.experiment.name} --resume --out {out_dir}"
+    )
 
 
 def run(
@@ -623,14 +884,36 @@ def run(
 
     Returns:
         ``(run folder, report summary)``.
+
+    Raises:
+        ConfigError: on any invalid input, including the executor options and a Dask scheduler
+            that does not answer, before anything is written.
+        BatchInterrupted: on SIGINT (finished blocks are kept).
+        BatchFailed: if a block raised.
     """
+    check_executor(executor, workers, address)
     if resume:
         if out_dir is None:
             raise ConfigError("--resume needs --out: the folder of the batch to complete")
         out = Path(out_dir)
-        plan = plan_resume(out, name, n_runs, seed, overrides, scenario_files)
+        try:
+            plan = plan_resume(out, name, n_runs, seed, overrides, scenario_files)
+        except OSError as exc:
+            raise ConfigError(
+                f"--resume: cannot read {str(out)!r} ({os_error_text(exc)})"
+            ) from None
     else:
         plan = plan_batch(name, n_runs, 0 if seed is None else seed, overrides, scenario_files)
         out = Path(out_dir) if out_dir is not None else default_out_dir(name, plan.seed)
-        prepare_out_dir(plan, out)
-    return out, execute(plan, out, executor, workers, address, progress)
+    if executor == "local" or address is None:
+        # this machine's workers each hold a block at the same time
+        check_memory(plan.experiment, plan.scenario, plan.n_runs, workers)
+    with contextlib.ExitStack() as stack:
+        pool = None
+        if address is not None:
+            # connect to the scheduler before anything is written: an address that does not
+            # answer leaves no folder behind
+            pool = stack.enter_context(make_executor(executor, workers, address))
+        if not resume:
+            prepare_out_dir(plan, out)
+        return out, execute(plan, out, executor, workers, address, progress, pool)

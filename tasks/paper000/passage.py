@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, Field, model_validator
 
 from bauv_sim import rng as rng_mod
-from bauv_sim.config import Config
+from bauv_sim.config import Config, load_config, to_plain
 from bauv_sim.errors import ConfigError
 from bauv_sim.frames import KNOT_M_S
 from bauv_sim.kinematic.passage import (
@@ -73,10 +73,17 @@ from nav.metrics import (
 from nav.models import CourseSpeedDepthMotion, UsblMeasurement
 from tasks.core import figures, store
 from tasks.core.recording import COLORS, Recording
-from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
 
 METHODS = ("EKF", "DR", "USBL")
+BLOCK_BYTES_PER_RUN_TICK = 200.0
+"""Peak memory of :meth:`StraightPassageExperiment.run_block` per passage and tick, bytes:
+measured with :mod:`tracemalloc` (201-203 B for 600 and 6000 ticks, 50 and 100 passages, fixes
+every 5 s; 194 B with fixes every 100 s): states, covariances, inputs and distances."""
+LATENCY_FIELDS = ("processing_delay_s", "sound_speed_m_s")
+"""USBL fields seed 000's batched passage does not use: it applies a fix at the tick it is valid
+for (the paper's model), so a latency set here is refused rather than silently ignored."""
 SIGMA_SOG_M_S = 0.5 * KNOT_M_S
 """Seed 000 section 3: ALIZE log, sigma_SOG = 0.5 kn."""
 
@@ -246,6 +253,16 @@ class Paper000Scenario(Config):
                     f"sampled every tick (passage.tick_s = {tick:g} s)"
                 )
         check_multiple(self.sensors.usbl.period_s, tick, "sensors.usbl.period_s")
+        usbl, default = self.sensors.usbl, UsblConfig()
+        for name in LATENCY_FIELDS:
+            value = getattr(usbl, name)
+            if value != getattr(default, name):
+                raise ValueError(
+                    f"sensors.usbl.{name} = {value:g}: not used by seed 000's passage, which "
+                    "applies each fix at its time of validity as the paper does (no latency); "
+                    f"leave it at {getattr(default, name):g}, or fly a mission (mission/*), "
+                    "where fixes arrive after the travel time and the processing delay"
+                )
         return self
 
 
@@ -607,9 +624,23 @@ class Paper000Metrics(BaseModel):
     passages: dict[str, MethodStats] = Field(
         description="min / max / mean over ticks 1..T of zeta(k), the mean over runs (eq. 24)"
     )
-    paper_table: str
-    paper: dict[str, MethodStats]
-    mean_ratio_to_paper: dict[str, float]
+    paper_table: str | None = Field(
+        description="the paper's table of this test, or null when the scenario is not the "
+        "paper's setting (see paper_setting)"
+    )
+    paper: dict[str, MethodStats] | None
+    mean_ratio_to_paper: dict[str, float | None] = Field(
+        description="mean distance over the paper's; null when the method has no data or the "
+        "scenario is not the paper's setting"
+    )
+    paper_setting: str = Field(
+        description="'paper' when the scenario is the paper's setting (report and runner "
+        "fields aside), else the fields that differ"
+    )
+    no_data: dict[str, str] = Field(
+        description="methods without a single sample, each with the reason (their statistics "
+        "are null)"
+    )
     single_passages: list[SinglePassage]
     per_run_mean_m: dict[str, MethodStats] = Field(
         description="min / max / mean over runs of each run's mean distance"
@@ -680,8 +711,90 @@ class StraightPassageExperiment(Experiment):
     def run_block(self, scenario: Paper000Scenario, seed: int, runs: tuple[int, ...]):
         return reduce_block(scenario, simulate_passages(scenario, seed, runs))
 
+    def memory(self, scenario: Paper000Scenario, n_runs: int) -> list[MemoryTerm]:
+        """Estimated peak memory of a batch, bytes, in parts (see :class:`MemoryTerm`).
+
+        A block holds every passage's paths for every tick (:data:`BLOCK_BYTES_PER_RUN_TICK`),
+        and its histograms; the report holds the per-tick sums of every method, the routes and
+        single passages it draws, the histograms and a few numbers per run.
+        """
+        p, rep = scenario.passage, scenario.report
+        ticks = p.duration_s / p.tick_s + 1
+        block = min(scenario.runner.block_size, n_runs)
+        bins = rep.histogram_max_m / rep.histogram_bin_m
+        timing = (
+            f"passage.duration_s = {p.duration_s:g} with passage.tick_s = {p.tick_s:g} s "
+            f"({ticks:.3g} ticks)"
+        )
+        paths = min(rep.routes_max, n_runs) * 36 + rep.single_passages * 24 + 160
+        return [
+            MemoryTerm(
+                BLOCK_BYTES_PER_RUN_TICK * block * ticks,
+                True,
+                f"{timing} in blocks of runner.block_size = {block} passages",
+            ),
+            MemoryTerm(paths * ticks, False, timing),
+            MemoryTerm(
+                2 * len(METHODS) * 8 * bins,
+                True,
+                f"report.histogram_bin_m = {rep.histogram_bin_m:g} ({bins:.3g} bins up to "
+                f"report.histogram_max_m = {rep.histogram_max_m:g})",
+            ),
+            MemoryTerm(110.0 * n_runs, False, f"runs = {n_runs}"),
+        ]
+
+    def off_paper_fields(self, scenario: Paper000Scenario) -> list[str]:
+        """The scenario fields that differ from the paper's setting of this test.
+
+        The ``report`` and ``runner`` sections do not change the numbers and are left out. The
+        paper's tables are compared (labelled, with a ratio) only when this list is empty.
+
+        Returns:
+            Dotted field names, sorted.
+        """
+        paper = _flat(to_plain(load_config(Paper000Scenario, self.preset)))
+        mine = _flat(to_plain(scenario))
+        return sorted(
+            k
+            for k in set(paper) | set(mine)
+            if k.split(".")[0] not in ("report", "runner") and paper.get(k) != mine.get(k)
+        )
+
     def report(self, ctx: ReportContext) -> ReportSummary:
         return report_paper000(self, ctx)
+
+
+def _flat(data: dict, prefix: str = "") -> dict[str, object]:
+    out: dict[str, object] = {}
+    for k, v in data.items():
+        if isinstance(v, dict):
+            out.update(_flat(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def _no_data_reasons(scn: Paper000Scenario, tot: Paper000Block) -> dict[str, str]:
+    """Why a method has no sample at all (only the USBL can have none: EKF and DR always have a
+    position)."""
+    reasons = {}
+    if not np.any(tot.zeta["USBL"].count > 0):
+        usbl = scn.sensors.usbl
+        reasons["USBL"] = (
+            f"no USBL fix was produced in {tot.fixes_expected} attempts (the vehicle stays beyond "
+            f"sensors.usbl.max_range_m = {usbl.max_range_m:g} m or below "
+            f"sensors.usbl.min_elevation_deg = {usbl.min_elevation_deg:g}, or every fix dropped "
+            "out)"
+        )
+    return reasons
+
+
+def _per_run_stats(values: NDArray[np.float64]) -> MethodStats:
+    """Min / max / mean over runs of each run's mean distance, ignoring runs without data."""
+    v = values[np.isfinite(values)]
+    if v.size == 0:
+        return MethodStats(min_m=None, max_m=None, mean_m=None)
+    return _stats(float(v.min()), float(v.max()), float(v.mean()))
 
 
 def _merge_blocks(ctx: ReportContext) -> Paper000Block:
@@ -725,9 +838,14 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
         k: _stats(*(lambda s: (s.min, s.max, s.mean))(series_stats(v, np.isfinite(v))))
         for k, v in zeta_window.items()
     }
+    no_data = _no_data_reasons(scn, tot)
+    off_paper = exp.off_paper_fields(scn)
+    on_paper = not off_paper
     paper_name, paper_rows = ref["hundred"]  # type: ignore[misc]
-    ratio = {
-        k: float(passages[k].mean_m / paper_rows[k][2]) if passages[k].mean_m else float("nan")
+    ratio: dict[str, float | None] = {
+        k: float(passages[k].mean_m / paper_rows[k][2])
+        if on_paper and passages[k].mean_m is not None
+        else None
         for k in METHODS
     }
     singles = []
@@ -738,7 +856,11 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
             v = d[k] if k == "USBL" else d[k][1:]
             st = series_stats(v, np.isfinite(v))
             methods[k] = _stats(st.min, st.max, st.mean)
-        tab = ref["single"][run] if run < len(ref["single"]) else None  # type: ignore[arg-type]
+        tab = (
+            ref["single"][run]  # type: ignore[index]
+            if on_paper and run < len(ref["single"])  # type: ignore[arg-type]
+            else None
+        )
         singles.append(
             SinglePassage(
                 run=run,
@@ -747,14 +869,7 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
                 paper=_paper_stats(tab[1]) if tab else None,
             )
         )
-    per_run_mean = {
-        k: _stats(
-            float(np.nanmin(tot.per_run[:, m, 2])),
-            float(np.nanmax(tot.per_run[:, m, 2])),
-            float(np.nanmean(tot.per_run[:, m, 2])),
-        )
-        for m, k in enumerate(METHODS)
-    }
+    per_run_mean = {k: _per_run_stats(tot.per_run[:, m, 2]) for m, k in enumerate(METHODS)}
     # consistency of the EKF
     mean_nees = tot.nees_ekf.mean()
     lo, hi = nees_band(3, ctx.n_runs, scn.report.consistency_probability)
@@ -794,9 +909,11 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
         n_runs=ctx.n_runs,
         usbl_period_s=scn.sensors.usbl.period_s,
         passages=passages,
-        paper_table=paper_name,
-        paper=_paper_stats(paper_rows),
+        paper_table=paper_name if on_paper else None,
+        paper=_paper_stats(paper_rows) if on_paper else None,
         mean_ratio_to_paper=ratio,
+        paper_setting="paper" if on_paper else ", ".join(off_paper),
+        no_data=no_data,
         single_passages=singles,
         per_run_mean_m=per_run_mean,
         consistency=consistency,
@@ -816,6 +933,15 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
         "Paper max",
         "Paper average",
     ]
+    if not on_paper:
+        cols = cols[:4]
+    no_data_note = "".join(f"\n{k}: no data: {why}." for k, why in no_data.items())
+    off_note = (
+        ""
+        if on_paper
+        else f"Not the paper's setting (changed: {', '.join(off_paper)}): no comparison with the "
+        "paper's tables."
+    )
     tables = []
     for sp in singles:
         rows = []
@@ -830,22 +956,38 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
                     paper.min_m,
                     paper.max_m,
                     paper.mean_m,
-                ]
+                ][: len(cols)]
             )
         title = f"Single passage {sp.run + 1}" + (
             f" (paper: {sp.paper_table})" if sp.paper_table else ""
         )
-        tables.append(Table(title, cols, rows, slug=f"single-passage-{sp.run + 1}"))
+        tables.append(
+            Table(
+                title,
+                cols,
+                rows,
+                slug=f"single-passage-{sp.run + 1}",
+                note=(off_note + no_data_note).strip(),
+            )
+        )
     rows = [
-        [k, passages[k].min_m, passages[k].max_m, passages[k].mean_m, *paper_rows[k]]
+        [k, passages[k].min_m, passages[k].max_m, passages[k].mean_m, *paper_rows[k]][: len(cols)]
         for k in METHODS
     ]
+    ratio_note = (
+        "Mean ratio to the paper: "
+        + ", ".join(f"{k} {ratio[k]:.2f}" for k in METHODS if ratio[k] is not None)
+        + "".join(f", {k} none (no data)" for k in METHODS if ratio[k] is None)
+        if on_paper
+        else off_note
+    )
     main = Table(
-        f"{ctx.n_runs} passages: statistics of zeta(k) (paper: {paper_name}, 100 passages)",
+        f"{ctx.n_runs} passages: statistics of zeta(k)"
+        + (f" (paper: {paper_name}, 100 passages)" if on_paper else ""),
         cols,
         rows,
         slug="passages",
-        note="Mean ratio to the paper: " + ", ".join(f"{k} {ratio[k]:.2f}" for k in METHODS),
+        note=ratio_note + no_data_note,
     )
     tables.append(main)
     tables.append(

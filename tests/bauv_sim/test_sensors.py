@@ -200,3 +200,44 @@ def test_odometry_reads_the_calibration_not_the_motion():
     assert np.allclose(s.values, [[0.33, 0.88, 1.1]] * 2)
     with pytest.raises(Exception, match="strictly increasing"):
         OdometryConfig(frequency_hz=(1.0, 0.5), speed_m_s=(0.0, 1.0))
+
+
+def test_usbl_elevation_past_the_zenith_is_the_direction_over_the_top():
+    """Right above the transceiver half the elevation errors carry the direction past 90 deg.
+    Each fix must be the point the perturbed direction gives, ``(r + e_r)(cos b sin a, cos b cos
+    a, sin b)`` with ``b = 90 deg + e_b``, ``a = e_a`` (continuous through the pole), and the
+    horizontal error must follow the error model: mean ``r sigma_b sqrt(2 / pi)`` for gaussian
+    elevation errors. Clipping the elevation at 90 deg put half the fixes straight above the
+    transceiver (a mean about half as large)."""
+    from bauv_sim.frames import rel_from_range_azimuth_elevation, wrap_pi
+
+    n, h = 4000, 30.0
+    runs = tuple(range(n))
+    tx = np.array([0.0, 0.0, -33.0])
+    sigma_b = math.radians(3.0)
+    cfg = UsblConfig(
+        range={"sigma_m": 0.2}, azimuth={"sigma_deg": 3.0}, elevation={"sigma_deg": 3.0}
+    )
+
+    def sample(rel):
+        pos = np.broadcast_to(tx + rel, (n, 1, 3)).copy()
+        zeros = np.zeros((n, 1, 3))
+        return Usbl(cfg, tx, 7, runs).sample(
+            _truth(pos, zeros, zeros, np.zeros((n, 1))), np.arange(1)
+        )
+
+    # the same streams at elevation 0, azimuth 0 (no fold there): the drawn errors
+    level = sample(np.array([0.0, h, 0.0])).values[:, 0]
+    e_r, e_a, e_b = level[:, 0] - h, wrap_pi(level[:, 1]), level[:, 2]
+    assert np.mean(e_b > 0) == pytest.approx(0.5, abs=0.05)
+    above = sample(np.array([0.0, 0.0, h])).values[:, 0]
+    assert np.all(np.abs(above[:, 2]) <= np.pi / 2)
+    assert np.all((above[:, 1] >= 0) & (above[:, 1] < 2 * np.pi))
+    b = np.pi / 2 + e_b
+    expected = (h + e_r)[:, None] * np.stack(
+        [np.cos(b) * np.sin(e_a), np.cos(b) * np.cos(e_a), np.sin(b)], axis=-1
+    )
+    assert np.allclose(rel_from_range_azimuth_elevation(above), expected, atol=1e-9)
+    horizontal = np.hypot(*rel_from_range_azimuth_elevation(above)[:, :2].T)
+    mean, sd = h * sigma_b * math.sqrt(2 / math.pi), h * sigma_b * math.sqrt(1 - 2 / math.pi)
+    assert abs(horizontal.mean() - mean) < 4 * sd / math.sqrt(n), (horizontal.mean(), mean)

@@ -169,3 +169,23 @@ def test_range_azimuth_elevation_definition_and_round_trip():
     above = an.range_azimuth_elevation([0.0, 0.0, 5.0])
     assert np.allclose(above, [5.0, 0.0, PI / 2])
     assert an.elevation_angle(-1.0, 1.0) == pytest.approx(-PI / 4)
+
+
+def test_fold_azimuth_elevation_keeps_the_direction():
+    """Law: the folded angles give the same unit vector, with the elevation in [-90, 90] deg and
+    the azimuth in [0, 360) deg; inside that range nothing changes."""
+    from nav.angles import fold_azimuth_elevation
+
+    rng = np.random.default_rng(3)
+    a = rng.uniform(-np.pi, 3 * np.pi, 2000)
+    b = rng.uniform(-1.49 * np.pi, 1.49 * np.pi, 2000)
+    fa, fb = fold_azimuth_elevation(a, b)
+
+    def unit(az, el):
+        return np.stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)], -1)
+
+    assert np.allclose(unit(fa, fb), unit(a, b), atol=1e-12)
+    assert np.all(np.abs(fb) <= np.pi / 2) and np.all((fa >= 0) & (fa < 2 * np.pi))
+    inside = np.abs(b) <= np.pi / 2
+    assert np.array_equal(fb[inside], b[inside])
+    assert np.allclose(fold_azimuth_elevation(0.3, np.radians(95.0)), (0.3 + np.pi, np.radians(85)))

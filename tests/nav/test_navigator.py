@@ -171,3 +171,71 @@ def test_lock_out_applies_a_fix_after_consecutive_rejections():
     assert info.applied[0] and not info.rejected[0] and nav.n_rejected == 2
     assert nav.estimate.x[0] > 40.0
     assert nav.update(gps, np.array([200.0, 0.0])).rejected[0]  # the gate is back
+
+
+# ---------------------------------------------------------------------------------------------
+# Consistency on a world that follows the filter's own models (Bar-Shalom's NEES/NIS tests)
+
+N_RUNS, DT_S, FIX_EVERY, N_TICKS = 150, 1.0, 20, 400
+SIGMA_WALK = 0.005  # (m/s)/sqrt(s), the navigator's default random walk of the current
+SIGMA_C0 = 0.2  # m/s, initial sigma of each current component
+P0 = np.diag([4.0, 4.0, 0.25])
+
+
+def _matched_world(seed: int = 11):
+    """N_RUNS runs of a vehicle whose truth follows :class:`CurrentAwareMotion` exactly: the
+    measured heading, speed through water and depth change are the true ones plus gaussian noise
+    of the motion model's sigmas, the current walks with ``SIGMA_WALK``, the start and the current
+    are drawn from the navigator's initial covariance, and each USBL fix is ``h(x) + v``, ``v ~
+    N(0, R)`` (the truth's noise is written out: the same numbers as the models'). Returns the NIS
+    of every fix, and the NEES of the full state (position and current, 5-D) at the last tick and
+    of the position (3-D) just before the last fix, one sample per run each."""
+    rng = np.random.default_rng(seed)
+    # the truth's noise, written out (the filter's models are given the same numbers)
+    R_sd = np.array([0.2, math.radians(1), math.radians(1)])  # as USBL
+    sd_u = np.array([math.radians(3), 0.05, 0.02])  # as MOTION
+    nis, nees_end, nees_prior = [], [], []
+    for _ in range(N_RUNS):
+        x0 = np.array([0.0, 0.0, -5.0])
+        truth = np.concatenate([x0 + rng.multivariate_normal(np.zeros(3), P0), np.zeros(2)])
+        truth[3:] = SIGMA_C0 * rng.standard_normal(2)
+        nav = Navigator(
+            0.0, x0, P0, MOTION, current_sigma0_m_s=SIGMA_C0, current_walk_m_s_per_sqrt_s=SIGMA_WALK
+        )
+        for k in range(1, N_TICKS + 1):
+            u_true = np.array([0.4 + 0.002 * k, 1.0, 0.0])
+            u = u_true + sd_u * rng.standard_normal(3)
+            truth[:3] += MOTION.increment_one(u_true, DT_S) + DT_S * np.r_[truth[3:], 0.0]
+            truth[3:] += SIGMA_WALK * math.sqrt(DT_S) * rng.standard_normal(2)
+            nav.predict(k * DT_S, *u)
+            if k % FIX_EVERY == 0:
+                if k == N_TICKS:
+                    e = nav.estimate.x - truth[:3]
+                    nees_prior.append(e @ np.linalg.solve(nav.estimate.P, e))
+                z = USBL.h(truth[None, :3])[0] + R_sd * rng.standard_normal(3)
+                nis.append(nav.update(USBL, z).nis[0])
+        last = nav._hist[-1]  # the full state (position and current) and its covariance
+        e = last.x[0] - truth
+        Ps = last.P[0]
+        nees_end.append(e @ np.linalg.solve(Ps, e))
+    return np.array(nis), np.array(nees_end), np.array(nees_prior)
+
+
+def _band(dim, n, p=0.99):
+    from scipy.stats import chi2
+
+    return chi2.ppf((1 - p) / 2, dim * n) / n, chi2.ppf((1 + p) / 2, dim * n) / n
+
+
+def test_navigator_is_consistent_on_a_matched_world():
+    """Innovations of a consistent filter are white: the NIS of all fixes of all runs is one
+    sample of size N_RUNS * fixes, and its mean must lie in the 99% chi-square band of that size;
+    the NEES at a fixed time is one sample per run (band of size N_RUNS). Scaling the filter's R
+    or Q by 4 or 1/4 moves them out (benchmarks/mutation_consistency.py)."""
+    nis, nees_end, nees_prior = _matched_world()
+    lo, hi = _band(3, len(nis))
+    assert lo < nis.mean() < hi, (nis.mean(), lo, hi)
+    lo, hi = _band(5, N_RUNS)
+    assert lo < nees_end.mean() < hi, (nees_end.mean(), lo, hi)
+    lo, hi = _band(3, N_RUNS)
+    assert lo < nees_prior.mean() < hi, (nees_prior.mean(), lo, hi)

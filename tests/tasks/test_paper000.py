@@ -91,6 +91,22 @@ def test_matched_gaussian_errors_are_consistent(tmp_path):
     assert c["fraction_in_band"] >= 0.9 and c["consistent"]
 
 
+def test_matched_gaussian_innovations_are_white_and_in_band():
+    """Seed 000's EKF with errors drawn as it assumes: its USBL innovations are white, so the NIS
+    of every fix of every passage is one chi-square sample of size runs x fixes (24,000), and its
+    mean must lie in the 99% band of that size (3 +- 0.05). The filter's R or Q scaled by 4 or 1/4
+    moves it to 1.2, 8.6, 2.1 or 4.9 (``benchmarks/mutation_consistency.py``)."""
+    from scipy.stats import chi2
+
+    scn = plan_batch("paper-000/test-1", overrides=FAST + GAUSSIAN).scenario
+    p = paper000.simulate_passages(scn, 3, tuple(range(200)))
+    nis = p.nis[np.isfinite(p.nis)]
+    n = len(nis)
+    assert n == 200 * 120
+    lo, hi = chi2.ppf(0.005, 3 * n) / n, chi2.ppf(0.995, 3 * n) / n
+    assert lo < nis.mean() < hi, (nis.mean(), lo, hi)
+
+
 def test_recording_holds_the_runs_arrays(test1):
     scn = plan_batch("paper-000/test-1").scenario
     p = paper000.simulate_passages(scn, 0, (0,))
@@ -171,3 +187,53 @@ def test_the_shipped_ekf_equals_filterpy_on_real_passages():
                 )
             np.testing.assert_allclose(xs[i, k + 1], f.x, rtol=0, atol=1e-9)
             np.testing.assert_allclose(Ps[i, k + 1], f.P, rtol=0, atol=1e-9)
+
+SHORT_PASSAGE = ["passage.duration_s=200", "passage.closest_approach_time_s=100"]
+
+
+@pytest.mark.parametrize(
+    "no_fix",
+    [
+        "sensors.usbl.max_range_m=1e-3",
+        "passage.closest_approach_offset_m=600",
+        "passage.closest_approach_time_s=5000",
+    ],
+)
+def test_a_method_without_data_is_reported_as_such(no_fix, tmp_path):
+    """No USBL fix at all: the report completes; USBL's statistics are null with a reason; no NaN
+    reaches metrics.json or the tables, and there is no ratio to the paper's table."""
+    out = tmp_path / "run"
+    extra = [] if "time_s" in no_fix else SHORT_PASSAGE
+    run("paper-000/test-1", 6, 0, out, [*FAST, *extra, no_fix], progress=False)
+    text = (out / "metrics.json").read_text()
+    assert "NaN" not in text and "nan" not in (out / "tables.md").read_text().lower()
+    m = json.loads(text)
+    assert m["passages"]["USBL"] == {"min_m": None, "max_m": None, "mean_m": None}
+    assert m["per_run_mean_m"]["USBL"] == {"min_m": None, "max_m": None, "mean_m": None}
+    assert "no USBL fix was produced" in m["no_data"]["USBL"]
+    assert set(m["no_data"]) == {"USBL"} and m["usbl_fix_availability"] == 0.0
+    assert m["mean_ratio_to_paper"]["USBL"] is None
+    assert all(math.isfinite(m["passages"][k]["mean_m"]) for k in ("EKF", "DR"))
+    assert "USBL: no data: no USBL fix was produced" in (out / "tables.md").read_text()
+
+
+def test_only_the_papers_setting_is_compared_with_the_paper(tmp_path):
+    """The paper's table, its values and the ratio to it only when the scenario is the paper's
+    (report and runner fields aside); otherwise the report names the fields that differ."""
+    on, off = tmp_path / "on", tmp_path / "off"
+    run("paper-000/test-1", 4, 0, on, [*FAST, "runner.block_size=2"], progress=False)
+    run("paper-000/test-1", 4, 0, off, [*FAST, "passage.speed_m_s=1.5"], progress=False)
+    m_on, m_off = _metrics(on), _metrics(off)
+    assert m_on["paper_setting"] == "paper" and m_on["paper_table"] == "Table 4"
+    assert m_on["mean_ratio_to_paper"]["EKF"] == pytest.approx(
+        m_on["passages"]["EKF"]["mean_m"] / paper000.PAPER_TABLES["test-1"]["hundred"][1]["EKF"][2]
+    )
+    assert m_on["single_passages"][0]["paper_table"] == "Table 1"
+    assert m_off["paper_setting"] == "passage.speed_m_s"
+    assert m_off["paper_table"] is None and m_off["paper"] is None
+    assert set(m_off["mean_ratio_to_paper"].values()) == {None}
+    assert all(sp["paper_table"] is None for sp in m_off["single_passages"])
+    md = (off / "tables.md").read_text()
+    assert "Table 4" not in md and "Paper" not in md and "ratio" not in md
+    assert "Not the paper's setting (changed: passage.speed_m_s)" in md
+    assert "(paper: Table 4, 100 passages)" in (on / "tables.md").read_text()

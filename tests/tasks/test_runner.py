@@ -195,6 +195,12 @@ def _block_of_another_index(out, other):
     _sidecar(path)
 
 
+def _truncated_block(out, other):
+    path = out / "blocks" / "block-000001.zip"
+    path.write_bytes(path.read_bytes()[:100])
+    _sidecar(path)  # its digest recorded too: only the decoding stops it
+
+
 def _garbage_sidecar(out, other):
     (out / "blocks" / "block-000001.sha256").write_text("not a digest\n")
 
@@ -221,7 +227,7 @@ _DROP = object()
 
 def _record(text):
     def tamper(out, other):
-        (out / "run.json").write_text(text)
+        (out / "run.json").write_bytes(text if isinstance(text, bytes) else text.encode())
 
     return tamper
 
@@ -252,7 +258,9 @@ class _Touch:
         (_pickle_block, "block-000000.zip': not a bauv-sim/plain-data file"),
         (_block_of_another_seed, "header says seed = 3 but this batch has 2"),
         (_block_of_another_index, "header says block = 1 but this batch has 0"),
+        (_truncated_block, "block-000001.zip': not a bauv-sim/plain-data file"),
         (_garbage_sidecar, "block-000001.sha256': not a line"),
+        (_record(b"\xff\xfe{"), "is not valid JSON"),
         (_edit_scenario, "scenario.toml' was changed since the batch started"),
         (_scenario_with_another_layout, "block_size = 5 but the scenario's runner gives"),
         (_record("{ this is not json"), "is not valid JSON"),
@@ -322,3 +330,110 @@ def test_a_block_without_its_sha256_is_computed_again(batches, tmp_path, capsys)
     assert code == 0, err
     assert block.read_bytes() == original
     assert _bytes(out) == batches["metrics"]
+
+
+def test_one_worker_saves_each_block_as_it_finishes(reference, tmp_path, monkeypatch):
+    """``--workers 1`` (the inline executor) computes the blocks one by one in the save loop: a
+    Ctrl-C during the fourth block keeps the three finished ones, and ``--resume`` completes the
+    batch to the same bytes as a batch run straight through."""
+    from tasks.core import runner
+
+    real = runner._run_block_in_worker
+    calls = []
+
+    def interrupt_fourth(*args):
+        calls.append(args[3])
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(runner, "_run_block_in_worker", interrupt_fourth)
+    out = tmp_path / "a"
+    with pytest.raises(runner.BatchInterrupted, match="3 of 5 blocks are saved"):
+        _batch(out)
+    assert sorted(p.name for p in (out / "blocks").glob("*.sha256")) == [
+        f"block-00000{i}.sha256" for i in range(3)
+    ]
+    monkeypatch.setattr(runner, "_run_block_in_worker", real)
+    run("paper-000/test-2", seed=5, out_dir=out, resume=True, progress=False)
+    assert _bytes(out) == reference
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_run_folder_files_honour_the_umask(tmp_path, umask):
+    """Every file the runner, the report and the Parquet export write has mode 0o666 & ~umask,
+    as files made by ``open`` (atomically written files were 0o600 while the PNGs were 0o644)."""
+    import numpy as np
+
+    from tasks.core.export import Column, write_parquet
+
+    previous = os.umask(umask)
+    try:
+        _batch(tmp_path / "a")
+        write_parquet(
+            tmp_path / "a" / "data" / "x.parquet",
+            {"t_s": Column(np.arange(3.0), "s", "time")},
+            {"experiment": "x"},
+        )
+    finally:
+        os.umask(previous)
+    files = [p for p in (tmp_path / "a").rglob("*") if p.is_file()]
+    assert {"run.json", "scenario.toml", "metrics.json", "x.parquet"} <= {p.name for p in files}
+    assert any(p.suffix == ".sha256" for p in files) and any(p.suffix == ".zip" for p in files)
+    modes = {str(p.relative_to(tmp_path)): oct(p.stat().st_mode & 0o777) for p in files}
+    assert set(modes.values()) == {oct(0o666 & ~umask)}, modes
+    assert not [p for p in (tmp_path / "a").rglob(".*.tmp")]
+
+
+def _alive(procs):
+    psutil = pytest.importorskip("psutil")
+    out = []
+    for p in procs:
+        try:
+            if p.status() != psutil.STATUS_ZOMBIE:
+                out.append(p)
+        except psutil.NoSuchProcess:
+            pass
+    return out
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+def test_workers_die_with_bauv(tmp_path, sig):
+    """``bauv run --workers 2`` stopped by SIGTERM (handled: blocks kept, exit 130) or SIGKILL
+    (not handled) leaves no worker nor resource tracker running."""
+    psutil = pytest.importorskip("psutil")
+    args = ["paper-000/test-1", "--runs", "4000", "--workers", "2", "--quiet"]
+    args += ["--set=report.figures=false", "--set=report.recording=false"]
+    args += ["--set=runner.block_size=10", "--out", str(tmp_path / "out")]
+    # output to a file, not a pipe: orphaned workers would hold a pipe open
+    with (tmp_path / "stderr.txt").open("w") as err_file:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "tasks.core.cli", "run", *args],
+            stdout=subprocess.DEVNULL,
+            stderr=err_file,
+        )
+    parent = psutil.Process(proc.pid)
+    children = []
+    try:
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            children = parent.children(recursive=True)
+            if len(children) >= 3 and (tmp_path / "out" / "blocks").is_dir():
+                break  # two workers, the resource tracker, and work under way
+            time.sleep(0.1)
+        assert len(children) >= 3, children
+        os.kill(proc.pid, sig)
+        proc.wait(timeout=60)
+        deadline = time.time() + 20
+        while _alive(children) and time.time() < deadline:
+            time.sleep(0.2)
+        left = _alive(children)
+        assert not left, [p.cmdline() for p in left]
+    finally:
+        for p in _alive(children):  # a failing run must not leave them behind either
+            p.kill()
+        if proc.poll() is None:
+            proc.kill()
+    err = (tmp_path / "stderr.txt").read_text()
+    if sig == signal.SIGTERM:
+        assert proc.returncode == 130 and "--resume" in err and "Traceback" not in err, err
