@@ -188,6 +188,7 @@ def test_the_shipped_ekf_equals_filterpy_on_real_passages():
             np.testing.assert_allclose(xs[i, k + 1], f.x, rtol=0, atol=1e-9)
             np.testing.assert_allclose(Ps[i, k + 1], f.P, rtol=0, atol=1e-9)
 
+
 SHORT_PASSAGE = ["passage.duration_s=200", "passage.closest_approach_time_s=100"]
 
 
