@@ -131,6 +131,54 @@ def predict(x: Array, P: Array, fx: Array, F: Array, Q: Array) -> tuple[Array, A
     return fx, 0.5 * (P_pred + np.swapaxes(P_pred, -1, -2))
 
 
+def inverse_spd_small(S: Array) -> Array:
+    """Inverses of a stack of small symmetric positive-definite matrices (the innovation
+    covariances of an update), shape (n, m, m): written out from the adjugate for m <= 3, whose
+    cost is a few dozen array operations whatever n (numpy's batched LAPACK calls cost about a
+    microsecond per matrix), and :func:`numpy.linalg.inv` otherwise. Tested against numpy.
+
+    Raises:
+        NavInputError: if a matrix is singular (determinant <= 0).
+    """
+    m = S.shape[-1]
+    if m > 3:
+        try:
+            return np.linalg.inv(S)
+        except np.linalg.LinAlgError:
+            raise NavInputError("innovation covariance is singular") from None
+    if m == 1:
+        det = S[..., 0, 0]
+        if np.any(det <= 0):
+            raise NavInputError("innovation covariance is not positive definite")
+        return 1.0 / S
+    if m == 2:
+        a, b, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]
+        det = a * d - b * b
+        if np.any(det <= 0):
+            raise NavInputError("innovation covariance is not positive definite")
+        out = np.empty(S.shape)
+        out[..., 0, 0], out[..., 1, 1] = d / det, a / det
+        out[..., 0, 1] = out[..., 1, 0] = -b / det
+        return out
+    a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 0, 2]
+    d, e, f = S[..., 1, 1], S[..., 1, 2], S[..., 2, 2]
+    c00 = d * f - e * e
+    c01 = c * e - b * f
+    c02 = b * e - c * d
+    det = a * c00 + b * c01 + c * c02
+    if np.any(det <= 0):
+        raise NavInputError("innovation covariance is not positive definite")
+    inv_det = 1.0 / det
+    out = np.empty(S.shape)
+    out[..., 0, 0] = c00 * inv_det
+    out[..., 0, 1] = out[..., 1, 0] = c01 * inv_det
+    out[..., 0, 2] = out[..., 2, 0] = c02 * inv_det
+    out[..., 1, 1] = (a * f - c * c) * inv_det
+    out[..., 1, 2] = out[..., 2, 1] = (b * c - a * e) * inv_det
+    out[..., 2, 2] = (a * d - b * b) * inv_det
+    return out
+
+
 def update(
     x: Array,
     P: Array,
@@ -175,7 +223,8 @@ def update(
     PHt = P @ Ht
     S = H @ PHt + Rb  # eq. 20
     S = 0.5 * (S + np.swapaxes(S, -1, -2))
-    Sinv_y = np.linalg.solve(S, y[..., None])[..., 0]
+    S_inv = inverse_spd_small(S)
+    Sinv_y = (S_inv @ y[..., None])[..., 0]
     nis = np.einsum("ni,ni->n", y, Sinv_y)
     dof = act.sum(axis=1)
     rejected = np.zeros(n, dtype=bool)
@@ -183,7 +232,7 @@ def update(
         limit = np.array([gate_limit(gate_probability, int(d)) for d in np.maximum(dof, 1)])
         rejected = pres & (dof > 0) & (nis > limit)
     applied = pres & (dof > 0) & ~rejected
-    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)  # eq. 21
+    K = PHt @ S_inv  # eq. 21
     x_new = x + np.einsum("nij,nj->ni", K, y)  # eq. 22
     I_KH = np.eye(P.shape[-1]) - K @ H
     P_new = I_KH @ P @ np.swapaxes(I_KH, -1, -2) + K @ Rb @ np.swapaxes(K, -1, -2)  # eq. 23

@@ -98,12 +98,34 @@ class CourseSpeedDepthMotion:
         return G
 
     def Q(self, u: Array, dt_s: float | Array) -> Array:
-        """Process noise (eq. 16): ``G diag(sigma^2) G^T``, shape (n, 3, 3)."""
-        G = self.G(u, dt_s)
-        var = np.array(
-            [self.sigma_course_rad**2, self.sigma_speed_m_s**2, self.sigma_depth_change_m**2]
-        )
-        return np.einsum("...ij,j,...kj->...ik", G, var, G)
+        """Process noise (eq. 16): ``G diag(sigma^2) G^T``, shape (..., 3, 3), written out from
+        the five non-zero entries of G (:meth:`G`; tested equal to the matrix product)."""
+        return self.increment_and_Q(u, dt_s)[1]
+
+    def increment_and_Q(self, u: Array, dt_s: float | Array) -> tuple[Array, Array]:
+        """:meth:`increment` and :meth:`Q` of the same steps, the course's sine and cosine
+        computed once.
+
+        Args:
+            u: ``(C, S, dz)`` of each step, shape (..., 3).
+            dt_s: step duration, s.
+
+        Returns:
+            ``(displacement (..., 3) m, Q (..., 3, 3) m^2)``; Q is exactly symmetric.
+        """
+        c, s, dz = u[..., 0], u[..., 1], u[..., 2]
+        ue, un = np.sin(c), np.cos(c)
+        ds = dt_s * s
+        inc = np.empty(u.shape)
+        inc[..., 0], inc[..., 1], inc[..., 2] = ds * ue, ds * un, -dz
+        g00, g01, g10, g11 = ds * un, dt_s * ue, -ds * ue, dt_s * un
+        sc2, ss2 = self.sigma_course_rad**2, self.sigma_speed_m_s**2
+        Q = np.zeros((*u.shape[:-1], 3, 3))
+        Q[..., 0, 0] = g00 * g00 * sc2 + g01 * g01 * ss2
+        Q[..., 0, 1] = Q[..., 1, 0] = g00 * g10 * sc2 + g01 * g11 * ss2
+        Q[..., 1, 1] = g10 * g10 * sc2 + g11 * g11 * ss2
+        Q[..., 2, 2] = self.sigma_depth_change_m**2
+        return inc, Q
 
     def predict_one(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
         """One prediction of one run in closed form (eq. 17-18 with ``F = I``): ``f(x, u)`` and

@@ -393,27 +393,32 @@ def run_ekf(
     """The EKF of eq. 15-23 over the passages, batched over runs.
 
     Returns:
-        ``(x (n, T + 1, 3), P (n, T + 1, 3, 3), nis (n, k), gate_rejected (n, k))``.
+        ``(x (n, T + 1, 3), P (n, T + 1, 3, 3), nis (n, k), gate_rejected (n, k))``; ``x`` and
+        ``P`` are views of time-major arrays.
     """
     n, T, _ = inp.u.shape
     ekf = BatchEKF(inp.motion)
-    x, P = np.array(inp.x0, dtype=float), np.broadcast_to(inp.P0, (n, 3, 3)).copy()
-    xs = np.empty((n, T + 1, 3))
-    Ps = np.empty((n, T + 1, 3, 3))
-    xs[:, 0], Ps[:, 0] = x, P
     nis = np.full(inp.z_produced.shape, np.nan)
     rejected = np.zeros(inp.z_produced.shape, dtype=bool)
+    # F = I, so a prediction adds the step's displacement and process noise, computed for all
+    # steps in one pass; the arrays are time-major, so each tick's slice is contiguous
+    inc, Q = inp.motion.increment_and_Q(np.ascontiguousarray(np.swapaxes(inp.u, 0, 1)), tick_s)
+    xs = np.empty((T + 1, n, 3))
+    Ps = np.empty((T + 1, n, 3, 3))
+    xs[0], Ps[0] = inp.x0, inp.P0
     fix_at = {int(t): j for j, t in enumerate(inp.fix_tick)}
     for k in range(T):
-        x, P = ekf.predict(x, P, inp.u[:, k], tick_s)
+        np.add(xs[k], inc[k], out=xs[k + 1])  # eq. 17 with F = I
+        np.add(Ps[k], Q[k], out=Ps[k + 1])  # eq. 18 with F = I
         j = fix_at.get(k + 1)
         if j is not None:
-            x, P, info = ekf.update(
-                x, P, inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability
+            xs[k + 1], Ps[k + 1], info = ekf.update(
+                xs[k + 1], Ps[k + 1], inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability
             )
             nis[:, j] = info.nis
             rejected[:, j] = info.rejected
-        xs[:, k + 1], Ps[:, k + 1] = x, P
+    x, P = xs[T], Ps[T]
+    xs, Ps = np.swapaxes(xs, 0, 1), np.swapaxes(Ps, 0, 1)
     check_estimate(x, P, T * tick_s)
     return xs, Ps, nis, rejected
 

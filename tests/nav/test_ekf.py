@@ -237,3 +237,17 @@ def test_single_run_update_on_components_equals_the_batched_update():
                 assert np.allclose(Pb, Po, rtol=1e-12, atol=1e-12)
                 assert ib.rejected[0] == io.rejected[0] and ib.applied[0] == io.applied[0]
                 assert ib.nis[0] == pytest.approx(io.nis[0], rel=1e-12, nan_ok=True)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 4])
+def test_small_spd_inverse_equals_numpy(m):
+    from nav.ekf import inverse_spd_small
+
+    rng = np.random.default_rng(m)
+    A = rng.normal(size=(200, m, m))
+    S = A @ np.swapaxes(A, 1, 2) + 0.05 * np.eye(m)
+    np.testing.assert_allclose(inverse_spd_small(S), np.linalg.inv(S), rtol=1e-9, atol=1e-9)
+    bad = S.copy()
+    bad[3] = 0.0
+    with pytest.raises(NavInputError):
+        inverse_spd_small(bad)

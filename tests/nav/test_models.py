@@ -99,6 +99,9 @@ def test_process_noise_horizontal_block_is_seed000_eq10():
     P10 = dr_step_covariance(u[:, 0], u[:, 1], 1.0, MOTION.sigma_course_rad, MOTION.sigma_speed_m_s)
     assert np.allclose(Q[:, :2, :2], P10, rtol=1e-12, atol=1e-15)
     assert np.allclose(Q[:, 2, 2], 0.25**2) and np.allclose(Q[:, :2, 2], 0)
+    G = MOTION.G(u, 1.0)
+    var = np.diag([MOTION.sigma_course_rad**2, MOTION.sigma_speed_m_s**2, 0.25**2])
+    np.testing.assert_allclose(Q, G @ var @ np.swapaxes(G, 1, 2), rtol=1e-13, atol=1e-16)
 
 
 def test_increment_of_one_run_is_the_batched_increment():
