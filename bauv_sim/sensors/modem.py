@@ -16,10 +16,11 @@ nothing to broadcast. It reaches the receiver after the acoustic travel time (tr
 
 **The message.** Each range carries the sender's :class:`~bauv_sim.sensors.online.Broadcast`: by
 default its navigator's estimate at the time of sending (position of its reference point and of
-its transducer, velocity over ground and, with ``send_covariance``, its stated covariance); with
+its transducer, velocity over ground, its current estimate and, with ``send_covariance``, its
+stated covariance); with
 ``broadcast = "truth"`` the sender's true state, as in the paper's experiment ("the simulated
 coordinate values of the position of vehicle L sent to vehicle F are equal to their reference
-values"), without a covariance.
+values"), without a covariance, with the true current at the sender.
 
 **Sharing the channel (TDMA).** Several receivers ranged by one sender take turns: receiver
 ``slot`` of ``slots`` is ranged at
@@ -38,6 +39,7 @@ reads the sender from :attr:`~bauv_sim.sensors.online.TickContext.peers`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Literal
 
@@ -307,20 +309,14 @@ class ModemDevice:
                 p_other,
                 other.velocity_world_m_s[:2].copy(),
                 None,
+                other.current_world_m_s[:2].copy(),
             )
         else:
             payload = peer.broadcast
             if payload is None:
                 return None
             if not self.cfg.send_covariance and payload.covariance_m2 is not None:
-                payload = Broadcast(
-                    payload.sender,
-                    payload.t_s,
-                    payload.position_world_m,
-                    payload.transducer_world_m,
-                    payload.velocity_world_m_s,
-                    None,
-                )
+                payload = dataclasses.replace(payload, covariance_m2=None)
         return Measurement(
             self.name,
             ctx.t_s,

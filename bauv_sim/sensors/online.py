@@ -66,6 +66,8 @@ class Broadcast:
         velocity_world_m_s: its velocity over ground (east, north), shape (2,), m/s.
         covariance_m2: the stated horizontal covariance of ``position_world_m``, shape (2, 2),
             m^2, or ``None`` when none is sent (a true position has none).
+        current_world_m_s: the water current at the sender as it estimates it (east, north),
+            shape (2,), m/s, or ``None``.
     """
 
     sender: str
@@ -74,6 +76,7 @@ class Broadcast:
     transducer_world_m: Array
     velocity_world_m_s: Array
     covariance_m2: Array | None = None
+    current_world_m_s: Array | None = None
 
 
 @dataclass(frozen=True)
