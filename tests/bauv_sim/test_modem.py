@@ -72,6 +72,10 @@ def test_maximum_range_zero_range_outage_and_dropout():
     r = np.array([[10.0, 99.9, 100.1, 0.0, 0.3, 1e9]])
     _, ok, _ = Modem(cfg, 0, (0,)).measure(r, np.arange(6.0))
     assert ok[0].tolist() == [True, True, False, False, False, False]
+    # a zero range is no range (two transducers at one point)
+    exact = ModemConfig(range={"sigma_m": 0.0, "bias_m": 0.0})
+    _, ok, _ = Modem(exact, 0, (0,)).measure(np.array([[0.0, 1e-6]]), np.arange(2.0))
+    assert ok[0].tolist() == [False, True]
     # a bias cannot make a zero range a range
     cfg0 = ModemConfig(range={"sigma_m": 0.0, "bias_m": -0.05})
     _, ok, _ = Modem(cfg0, 0, (0,)).measure(np.array([[0.0, 0.04, 0.2]]), np.arange(3.0))
