@@ -4,13 +4,15 @@ stop, determinism, and several followers sharing the modem channel.
 
 Flights are short (one or two minutes of simulated time, few vehicles): the physics is heavy."""
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 from tasks.closed_loop.world import build_environment, fly
-from tasks.core.runner import plan_batch
+from tasks.core.recording import read_time_series
+from tasks.core.runner import plan_batch, run
 from tasks.missions.swarm import LEADER, SwarmMission, fly_run
 
 NAME = "mission/swarm"
@@ -161,3 +163,49 @@ def test_four_followers_share_the_channel_in_slots():
     assert np.all(gaps >= exchange - 1e-9)
     offsets = [t - 5.0 for t, _ in times[:4]]
     assert offsets == pytest.approx([0.0, 1.2, 2.4, 3.6])  # (slot * 25) // 4 ticks of 0.2 s
+
+
+def test_report_recording_and_warning_of_a_batch(tmp_path):
+    """The batch report: every vehicle, its estimate, a range circle per fix and the HDOP in the
+    recording (read back); the warning in the tables and metrics; no NaN in metrics.json."""
+    out = tmp_path / "swarm"
+    run(
+        NAME,
+        n_runs=1,
+        seed=2,
+        out_dir=out,
+        progress=False,
+        overrides=[
+            "timing.max_duration_s=40",
+            "followers.count=2",
+            "followers.sensors.modem.outages_s=[[12.0, 100.0]]",
+            "navigation.dr_warning_s=20",
+            'navigation.methods=["ga2","dr"]',
+        ],
+    )
+    text = (out / "metrics.json").read_text()
+    assert "NaN" not in text
+    m = json.loads(text)
+    assert [(r["follower"], r["method"]) for r in m["followers"]] == [
+        ("f1", "ga2"),
+        ("f1", "dr"),
+        ("f2", "ga2"),
+        ("f2", "dr"),
+    ]
+    assert any("f2: no accepted range for" in w for w in m["warnings"])
+    assert "Warnings" in (out / "tables.md").read_text()
+    rec = out / "recording.rrd"
+    data = json.loads(json.dumps(m["runs"][0]["metrics"]["ga2"]))
+    assert data["f1"]["fixes_accepted"] == 2  # at 5 and 10 s, then the outage
+    for v in ("leader", "f1", "f2"):
+        t, truth = read_time_series(rec, f"world/{v}/truth/position", "Points3D:positions")
+        _, est = read_time_series(rec, f"world/{v}/estimate/position", "Points3D:positions")
+        assert len(t) == 201 and truth.shape == est.shape == (201, 3)
+    t, circles = read_time_series(rec, "world/f1/range_circle", "LineStrips3D:strips")
+    assert len(t) == 2  # one circle at each of the two fixes, at its arrival
+    for c in np.asarray(circles, dtype=float):
+        r = np.hypot(*(c[:, :2] - c[:-1, :2].mean(axis=0)).T)
+        assert np.allclose(r, r[0], atol=1e-3) and 7.0 < r[0] < 14.0  # about 10 m abeam
+    th, hdop = read_time_series(rec, "hdop/f1", "Scalars:scalars")
+    assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
+    assert (out / "data" / "run-000000-ga2" / "f1.modem.parquet").is_file()
