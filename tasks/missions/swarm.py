@@ -305,7 +305,9 @@ class FollowerNavigationConfig(Config):
     dr_warning_s: float = Field(
         60.0, gt=0, description="warn when a follower goes this long without an accepted range, s"
     )
-    hdop_warning: float = Field(5.0, gt=0, description="warn when the mean HDOP at fixes exceeds")
+    hdop_warning: float = Field(
+        3.0, gt=0, description="warn when the mean HDOP at a follower's fixes exceeds this"
+    )
 
 
 class StationGuidanceConfig(Config):
