@@ -11,4 +11,90 @@ from bauv_sim.errors import BauvSimError, ConfigError
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 """Root of the source tree (holds ``models/`` and ``assets/``)."""
 
-__all__ = ["PROJECT_ROOT", "BauvSimError", "ConfigError"]
+_EXPORTS: dict[str, tuple[str, str]] = {
+    "ActuatorCommand": ("bauv_sim.autopilot", "ActuatorCommand"),
+    "Autopilot": ("bauv_sim.autopilot", "Autopilot"),
+    "AutopilotConfig": ("bauv_sim.autopilot", "AutopilotConfig"),
+    "BauvPhysics": ("bauv_sim.physics", "BauvPhysics"),
+    "BeaconSpec": ("bauv_sim.build", "BeaconSpec"),
+    "Config": ("bauv_sim.config", "Config"),
+    "CurrentField": ("bauv_sim.currents", "CurrentField"),
+    "GeometryError": ("bauv_sim.errors", "GeometryError"),
+    "GyreCurrent": ("bauv_sim.currents", "GyreCurrent"),
+    "Measured": ("bauv_sim.autopilot", "Measured"),
+    "PhysicsError": ("bauv_sim.errors", "PhysicsError"),
+    "RandomisedCurrent": ("bauv_sim.currents", "RandomisedCurrent"),
+    "SceneConfig": ("bauv_sim.build", "SceneConfig"),
+    "Sea": ("bauv_sim.sea", "Sea"),
+    "ShearCurrent": ("bauv_sim.currents", "ShearCurrent"),
+    "SumCurrent": ("bauv_sim.currents", "SumCurrent"),
+    "Truth": ("bauv_sim.truth", "Truth"),
+    "UniformCurrent": ("bauv_sim.currents", "UniformCurrent"),
+    "VehicleSpec": ("bauv_sim.build", "VehicleSpec"),
+    "VehicleTruth": ("bauv_sim.physics", "VehicleTruth"),
+    "build_physics": ("bauv_sim.build", "build_physics"),
+    "build_scene": ("bauv_sim.build", "build_scene"),
+    "export_scene": ("bauv_sim.build", "export_scene"),
+    "generator": ("bauv_sim.rng", "generator"),
+    "generators": ("bauv_sim.rng", "generators"),
+    "load_config": ("bauv_sim.config", "load_config"),
+    "make_current": ("bauv_sim.currents", "make_current"),
+    "seed_sequence": ("bauv_sim.rng", "seed_sequence"),
+    "to_plain": ("bauv_sim.config", "to_plain"),
+    "validate": ("bauv_sim.config", "validate"),
+}
+"""Public name -> (module, attribute), imported on first use."""
+
+__all__ = [
+    "PROJECT_ROOT",
+    "ActuatorCommand",
+    "Autopilot",
+    "AutopilotConfig",
+    "BauvPhysics",
+    "BauvSimError",
+    "BeaconSpec",
+    "Config",
+    "ConfigError",
+    "CurrentField",
+    "GeometryError",
+    "GyreCurrent",
+    "Measured",
+    "PhysicsError",
+    "RandomisedCurrent",
+    "SceneConfig",
+    "Sea",
+    "ShearCurrent",
+    "SumCurrent",
+    "Truth",
+    "UniformCurrent",
+    "VehicleSpec",
+    "VehicleTruth",
+    "build_physics",
+    "build_scene",
+    "export_scene",
+    "generator",
+    "generators",
+    "load_config",
+    "make_current",
+    "seed_sequence",
+    "to_plain",
+    "validate",
+]
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first use (PEP 562): importing the package stays
+    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
+    target = _EXPORTS.get(name)
+    if target is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    module, attr = target
+    value = getattr(importlib.import_module(module), attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

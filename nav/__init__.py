@@ -6,4 +6,100 @@ leading axis of Monte Carlo runs: state ``(n, dim)``, covariance ``(n, dim, dim)
 
 from nav.errors import NavError
 
-__all__ = ["NavError"]
+_EXPORTS: dict[str, tuple[str, str]] = {
+    "BatchEKF": ("nav.ekf", "BatchEKF"),
+    "CorrectedDeadReckoning": ("nav.drns", "CorrectedDeadReckoning"),
+    "CourseSpeedDepthMotion": ("nav.models", "CourseSpeedDepthMotion"),
+    "CurrentAwareMotion": ("nav.models", "CurrentAwareMotion"),
+    "CurrentResponse": ("nav.correction", "CurrentResponse"),
+    "DeadReckoning": ("nav.dead_reckoning", "DeadReckoning"),
+    "DepthMeasurement": ("nav.models", "DepthMeasurement"),
+    "Estimate": ("nav.navigator", "Estimate"),
+    "Estimator": ("nav.ekf", "Estimator"),
+    "FilterDivergedError": ("nav.errors", "FilterDivergedError"),
+    "GuidanceCommand": ("nav.guidance", "GuidanceCommand"),
+    "Histogram": ("nav.metrics", "Histogram"),
+    "HorizontalPositionMeasurement": ("nav.models", "HorizontalPositionMeasurement"),
+    "MeasurementModel": ("nav.ekf", "MeasurementModel"),
+    "MotionModel": ("nav.ekf", "MotionModel"),
+    "NavInputError": ("nav.errors", "NavInputError"),
+    "Navigator": ("nav.navigator", "Navigator"),
+    "OnlineNavigator": ("nav.navigator", "OnlineNavigator"),
+    "SeriesSum": ("nav.metrics", "SeriesSum"),
+    "SingleRunEKF": ("nav.ekf", "SingleRunEKF"),
+    "UpdateInfo": ("nav.ekf", "UpdateInfo"),
+    "UsblMeasurement": ("nav.models", "UsblMeasurement"),
+    "Waypoint": ("nav.guidance", "Waypoint"),
+    "WaypointGuidance": ("nav.guidance", "WaypointGuidance"),
+    "baseline": ("nav.correction", "baseline"),
+    "compensated_course": ("nav.correction", "compensated_course"),
+    "cp1": ("nav.correction", "cp1"),
+    "cp2": ("nav.correction", "cp2"),
+    "dead_reckon": ("nav.dead_reckoning", "dead_reckon"),
+    "direct_course": ("nav.guidance", "direct_course"),
+    "distance_3d": ("nav.metrics", "distance_3d"),
+    "gate_limit": ("nav.ekf", "gate_limit"),
+    "horizontal_distance": ("nav.metrics", "horizontal_distance"),
+    "nees": ("nav.metrics", "nees"),
+    "nees_band": ("nav.metrics", "nees_band"),
+    "series_stats": ("nav.metrics", "series_stats"),
+}
+"""Public name -> (module, attribute), imported on first use."""
+
+__all__ = [
+    "BatchEKF",
+    "CorrectedDeadReckoning",
+    "CourseSpeedDepthMotion",
+    "CurrentAwareMotion",
+    "CurrentResponse",
+    "DeadReckoning",
+    "DepthMeasurement",
+    "Estimate",
+    "Estimator",
+    "FilterDivergedError",
+    "GuidanceCommand",
+    "Histogram",
+    "HorizontalPositionMeasurement",
+    "MeasurementModel",
+    "MotionModel",
+    "NavError",
+    "NavInputError",
+    "Navigator",
+    "OnlineNavigator",
+    "SeriesSum",
+    "SingleRunEKF",
+    "UpdateInfo",
+    "UsblMeasurement",
+    "Waypoint",
+    "WaypointGuidance",
+    "baseline",
+    "compensated_course",
+    "cp1",
+    "cp2",
+    "dead_reckon",
+    "direct_course",
+    "distance_3d",
+    "gate_limit",
+    "horizontal_distance",
+    "nees",
+    "nees_band",
+    "series_stats",
+]
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first use (PEP 562): importing the package stays
+    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
+    target = _EXPORTS.get(name)
+    if target is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    module, attr = target
+    value = getattr(importlib.import_module(module), attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

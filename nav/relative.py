@@ -43,8 +43,10 @@ README.md`` lists them), each an option of :class:`GaOptions` where it is a real
   no fix (``GaFix.valid`` False, the position stays the DR one).
 * **Minimisation over phi**: a grid of ``grid`` candidates on the circle, then golden-section
   search within one grid step either side of each of the (up to four) lowest local minima of the
-  grid, keeping the lowest result (to ~1e-12 rad; GA1's criterion can have several narrow
-  basins, and the test compares with a brute-force minimisation).
+  grid, keeping the lowest result (to ``_PHI_TOL`` = 1e-9 rad, 1e-8 m on a 10 m circle; GA1's
+  criterion can have several narrow basins, and the test compares with a brute-force
+  minimisation). The criterion is evaluated fused (``_criterion_sc``: no V or A arrays built)
+  with the grid's sines computed once per adjustment: the adjustment's hot path.
 * **Stated accuracy** (beyond the paper): ``covariance = delta_0^2 (A^T P A)^-1`` with the true
   Jacobian (a covariance must use the true geometry), ``delta_0^2 = V^T P V`` at the fix (the
   redundancy is 3 - 2 = 1); ``covariance_prior = (A^T P A)^-1``, the same without the a-posteriori
@@ -79,6 +81,7 @@ FOLLOWER_METHODS: tuple[str, ...] = ("dr", "ga1", "ga2", "ekf")
 
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 _STARTS = 4  # local minima of the grid refined per run
+_PHI_TOL = 1e-9  # rad: width of the final golden-section bracket
 
 
 def dr_step(position: ArrayLike, course_rad: ArrayLike, speed_m_s: ArrayLike, dt_s: float) -> Array:
@@ -315,8 +318,44 @@ def residuals(su: _Setup, candidate: Array, method: GaMethod, jacobian: Jacobian
 
 def criterion(su: _Setup, phi: Array, method: GaMethod, jacobian: Jacobian) -> Array:
     """``V^T P V`` at candidate bearings ``phi`` (n, K), shape (n, K)."""
-    V = residuals(su, candidates(su.leader, su.radius, phi), method, jacobian)
-    return np.einsum("nki,nki,nki->nk", V, V, np.broadcast_to(su.weights, V.shape))
+    phi = np.asarray(phi, dtype=float)
+    return _criterion_sc(su, np.sin(phi), np.cos(phi), method, jacobian)
+
+
+def _criterion_sc(
+    su: _Setup, sin_phi: Array, cos_phi: Array, method: GaMethod, jacobian: Jacobian
+) -> Array:
+    """:func:`criterion` from ``sin phi``, ``cos phi`` (n, K) or (K,), fused: the numbers of
+    :func:`residuals` and :func:`design_rows` component by component, without building V or A
+    (the grid's sines are computed once per adjustment; this is the adjustment's hot path)."""
+    lead_x, lead_y = su.leader[..., 0], su.leader[..., 1]
+    cx = lead_x + su.radius * sin_phi
+    cy = lead_y + su.radius * cos_phi
+    dx = su.start[..., 0] - cx
+    dy = su.start[..., 1] - cy
+    lx, ly = lead_x - cx, lead_y - cy
+    d2 = dx * dx + dy * dy
+    d = np.sqrt(d2)
+    dl = np.sqrt(lx * lx + ly * ly)
+    w = su.weights
+    v1 = np.arctan2(dx, dy) - su.bearing  # in (-2 pi, 2 pi): wrapped by one turn (only v1^2
+    v1 = np.where(v1 > np.pi, v1 - 2 * np.pi, np.where(v1 < -np.pi, v1 + 2 * np.pi, v1))  # counts)
+    v2 = d - su.distance
+    v3 = dl - su.radius
+    if method == "ga1":
+        ux, uy = cx - su.end[..., 0], cy - su.end[..., 1]
+        inv_d2 = 1.0 / np.where(d2 > 0, d2, 1.0)
+        inv_d = 1.0 / np.where(d > 0, d, 1.0)
+        inv_dl = 1.0 / np.where(dl > 0, dl, 1.0)
+        if jacobian == "printed":  # design_rows "printed" times d
+            v1 = v1 + (dx * ux - dy * uy) * inv_d2
+            v2 = v2 - (dy * ux + dx * uy) * inv_d
+            v3 = v3 - (ly * ux + lx * uy) * inv_dl
+        else:
+            v1 = v1 + (dx * uy - dy * ux) * inv_d2
+            v2 = v2 - (dx * ux + dy * uy) * inv_d
+            v3 = v3 - (lx * ux + ly * uy) * inv_dl
+    return w[..., 0] * v1 * v1 + w[..., 1] * v2 * v2 + w[..., 2] * v3 * v3
 
 
 def hdop(start: ArrayLike, position: ArrayLike, leader: ArrayLike) -> Array:
@@ -392,7 +431,7 @@ def ga_fix(
         su = _setup(np.asarray(start, float)[idx], e[idx], lead[idx], rng[idx], cov[idx], options)
         step = 2.0 * np.pi / options.grid
         grid = np.arange(options.grid) * step
-        J = criterion(su, np.broadcast_to(grid, (idx.size, options.grid)), method, options.jacobian)
+        J = _criterion_sc(su, np.sin(grid), np.cos(grid), method, options.jacobian)
         # every local minimum of the grid is refined (up to `starts` per run, the lowest first):
         # GA1's criterion can have several narrow basins on the circle
         is_min = (J <= np.roll(J, 1, axis=1)) & (J < np.roll(J, -1, axis=1))
@@ -404,7 +443,7 @@ def ga_fix(
         d = a + _GOLDEN * (b - a)
         fc = criterion(su, c, method, options.jacobian)
         fd = criterion(su, d, method, options.jacobian)
-        for _ in range(80):  # the bracket shrinks by 0.618 a step: 2 deg -> 1e-12 rad in ~55
+        for _ in range(80):  # the bracket shrinks by 0.618 a step: 2 deg -> 1e-9 rad in ~37
             left = fc < fd
             b = np.where(left, d, b)
             a = np.where(left, a, c)
@@ -414,7 +453,7 @@ def ga_fix(
             f_new = criterion(su, new, method, options.jacobian)
             c, fc = np.where(left, new, keep), np.where(left, f_new, f_keep)
             d, fd = np.where(left, keep, new), np.where(left, f_keep, f_new)
-            if np.max(b - a) < 1e-12:
+            if np.max(b - a) < _PHI_TOL:
                 break
         mids = 0.5 * (a + b)
         f_mid = criterion(su, mids, method, options.jacobian)

@@ -14,3 +14,62 @@ Importing an experiment package registers its experiments; :mod:`tasks.core.regi
 packages named in :data:`tasks.core.registry.EXPERIMENT_PACKAGES`. Depends on :mod:`nav` and
 :mod:`bauv_sim`; nothing depends on it.
 """
+
+_EXPORTS: dict[str, tuple[str, str]] = {
+    "BatchFailed": ("tasks.core.runner", "BatchFailed"),
+    "BatchInterrupted": ("tasks.core.runner", "BatchInterrupted"),
+    "BatchPlan": ("tasks.core.runner", "BatchPlan"),
+    "Column": ("tasks.core.export", "Column"),
+    "Experiment": ("tasks.core.registry", "Experiment"),
+    "MissionRun": ("tasks.closed_loop.result", "MissionRun"),
+    "MissionScenario": ("tasks.closed_loop.scenario", "MissionScenario"),
+    "VehicleRun": ("tasks.closed_loop.result", "VehicleRun"),
+    "WaypointMission": ("tasks.closed_loop.world", "WaypointMission"),
+    "experiment_names": ("tasks.core.registry", "names"),
+    "fly": ("tasks.closed_loop.world", "fly"),
+    "get_experiment": ("tasks.core.registry", "get"),
+    "plan_batch": ("tasks.core.runner", "plan_batch"),
+    "read_parquet": ("tasks.core.export", "read_parquet"),
+    "register": ("tasks.core.registry", "register"),
+    "run": ("tasks.core.runner", "run"),
+    "write_parquet": ("tasks.core.export", "write_parquet"),
+}
+"""Public name -> (module, attribute), imported on first use."""
+
+__all__ = [
+    "BatchFailed",
+    "BatchInterrupted",
+    "BatchPlan",
+    "Column",
+    "Experiment",
+    "MissionRun",
+    "MissionScenario",
+    "VehicleRun",
+    "WaypointMission",
+    "experiment_names",
+    "fly",
+    "get_experiment",
+    "plan_batch",
+    "read_parquet",
+    "register",
+    "run",
+    "write_parquet",
+]
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first use (PEP 562): importing the package stays
+    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
+    target = _EXPORTS.get(name)
+    if target is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    module, attr = target
+    value = getattr(importlib.import_module(module), attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -10,3 +10,80 @@
 * :mod:`~tasks.closed_loop.report`: metrics, tables, figures, recording, Parquet;
 * :mod:`~tasks.closed_loop.experiment`: :class:`~tasks.closed_loop.experiment.MissionExperiment`.
 """
+
+_EXPORTS: dict[str, tuple[str, str]] = {
+    "EkfNavigation": ("tasks.closed_loop.navigation", "EkfNavigation"),
+    "FIX_COLUMNS": ("tasks.closed_loop.result", "FIX_COLUMNS"),
+    "FixRecord": ("tasks.closed_loop.navigation", "FixRecord"),
+    "GuidanceConfig": ("tasks.closed_loop.scenario", "GuidanceConfig"),
+    "MissionDesign": ("tasks.closed_loop.parts", "MissionDesign"),
+    "MissionExperiment": ("tasks.closed_loop.experiment", "MissionExperiment"),
+    "MissionParts": ("tasks.closed_loop.parts", "MissionParts"),
+    "MissionRun": ("tasks.closed_loop.result", "MissionRun"),
+    "MissionScenario": ("tasks.closed_loop.scenario", "MissionScenario"),
+    "MissionSensors": ("tasks.closed_loop.scenario", "MissionSensors"),
+    "MissionWorld": ("tasks.closed_loop.world", "MissionWorld"),
+    "NavOutput": ("tasks.closed_loop.navigation", "NavOutput"),
+    "NavigationConfig": ("tasks.closed_loop.scenario", "NavigationConfig"),
+    "Pilot": ("tasks.closed_loop.parts", "Pilot"),
+    "TICK_COLUMNS": ("tasks.closed_loop.result", "TICK_COLUMNS"),
+    "VehicleParts": ("tasks.closed_loop.parts", "VehicleParts"),
+    "VehicleRun": ("tasks.closed_loop.result", "VehicleRun"),
+    "WaypointMission": ("tasks.closed_loop.world", "WaypointMission"),
+    "WaypointSteering": ("tasks.closed_loop.parts", "WaypointSteering"),
+    "build_environment": ("tasks.closed_loop.world", "build_environment"),
+    "export_runs": ("tasks.closed_loop.report", "export_runs"),
+    "fly": ("tasks.closed_loop.world", "fly"),
+    "mission_figures": ("tasks.closed_loop.report", "mission_figures"),
+    "record_mission": ("tasks.closed_loop.report", "record_mission"),
+    "report_mission": ("tasks.closed_loop.report", "report_mission"),
+    "standard_vehicle": ("tasks.closed_loop.world", "standard_vehicle"),
+}
+"""Public name -> (module, attribute), imported on first use."""
+
+__all__ = [
+    "FIX_COLUMNS",
+    "TICK_COLUMNS",
+    "EkfNavigation",
+    "FixRecord",
+    "GuidanceConfig",
+    "MissionDesign",
+    "MissionExperiment",
+    "MissionParts",
+    "MissionRun",
+    "MissionScenario",
+    "MissionSensors",
+    "MissionWorld",
+    "NavOutput",
+    "NavigationConfig",
+    "Pilot",
+    "VehicleParts",
+    "VehicleRun",
+    "WaypointMission",
+    "WaypointSteering",
+    "build_environment",
+    "export_runs",
+    "fly",
+    "mission_figures",
+    "record_mission",
+    "report_mission",
+    "standard_vehicle",
+]
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first use (PEP 562): importing the package stays
+    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
+    target = _EXPORTS.get(name)
+    if target is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    module, attr = target
+    value = getattr(importlib.import_module(module), attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

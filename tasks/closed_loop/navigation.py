@@ -55,6 +55,8 @@ class FixRecord:
         accepted: whether the navigator applied it (not rejected by the gate or refused).
         position_m: the fix's own position of the vehicle's reference point, shape (3,), m,
             world (USBL inverted; GPS: the antenna's fix, up = 0).
+        nis: the update's normalised innovation squared ``y^T S^-1 y`` (what the gate tests),
+            NaN when the navigator refused the fix before computing it (or did not apply GPS).
     """
 
     device: str
@@ -63,6 +65,7 @@ class FixRecord:
     z: Array
     accepted: bool
     position_m: Array
+    nis: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -184,23 +187,26 @@ class EkfNavigation:
                     self.usbl_model,
                     transceiver_world_m=self.transceiver_world_m - R @ self.transponder_arm,
                 )
+                nis = float("nan")
                 try:
-                    accepted = not bool(nav.update(model, m.value, m.t_valid_s).rejected[0])
+                    info = nav.update(model, m.value, m.t_valid_s)
+                    accepted, nis = not bool(info.rejected[0]), float(info.nis[0])
                 except NavInputError:
                     accepted = False
                 new.append(
-                    FixRecord("usbl", m.t_valid_s, t, m.value, accepted, model.invert(m.value))
+                    FixRecord("usbl", m.t_valid_s, t, m.value, accepted, model.invert(m.value), nis)
                 )
             elif m.device == "gps":
                 z = m.value
                 roll, pitch, h = m.attitude_rad
                 arm_world = R_from_roll_pitch_heading(roll, pitch, h) @ self.antenna_arm
                 z_ref = z - arm_world[:2]
-                accepted = True
+                accepted, nis = True, float("nan")
                 if self.use_gps:
-                    accepted = not bool(nav.update(self.gps_model, z_ref).rejected[0])
+                    info = nav.update(self.gps_model, z_ref)
+                    accepted, nis = not bool(info.rejected[0]), float(info.nis[0])
                 new.append(
-                    FixRecord("gps", m.t_valid_s, t, z, accepted, np.array([z[0], z[1], 0.0]))
+                    FixRecord("gps", m.t_valid_s, t, z, accepted, np.array([z[0], z[1], 0.0]), nis)
                 )
                 gps_ref = z_ref
         cur = nav.current_estimate

@@ -42,6 +42,16 @@ TICK_COLUMNS: Mapping[str, tuple[str, str, tuple[str, ...]]] = {
     "meas_depth": ("m", "pressure depth (held between samples), positive down", ()),
     "meas_speed": ("m/s", "speed navigation used (log, else odometry)", ()),
     "speed_from_log": ("bool", "whether meas_speed is the log's", ()),
+    "truth_tail_angles": (
+        "rad",
+        "true tail joint angles: peduncle to hull, caudal fin to peduncle (to port +)",
+        ("peduncle", "caudal_fin"),
+    ),
+    "truth_fin_angles": (
+        "rad",
+        "true lateral fin pitch angles (leading edge up +)",
+        ("port", "starboard"),
+    ),
     "motor_power": ("W", "mechanical motor power", ()),
     "cmd_tail_beat_frequency": ("Hz", "commanded tail-beat frequency", ()),
     "cmd_tail_bias": ("rad", "commanded tail bias (positive turns to port)", ()),
@@ -61,7 +71,16 @@ TICK_COLUMNS: Mapping[str, tuple[str, str, tuple[str, ...]]] = {
 CURRENT_COLUMN = ("m/s", "EKF current estimate (east, north)", ("east", "north"))
 """The column ``ekf_current``, present when the EKF carries the current."""
 
-FIX_COLUMNS: Mapping[str, Mapping[str, tuple[str, str, tuple[str, ...]]]] = {
+NIS_COLUMN = (
+    "1",
+    "normalised innovation squared of the update (what the gate tests); null when the fix was "
+    "refused before the update or not applied",
+    (),
+    True,
+)
+"""The ``nis`` column of the fix tables (nullable: (unit, description, components, True))."""
+
+FIX_COLUMNS: Mapping[str, Mapping[str, tuple]] = {
     "usbl": {
         "t_valid": ("s", "time of validity (acoustic reply)", ()),
         "t_arrival": ("s", "time the fix reached the navigator", ()),
@@ -70,6 +89,7 @@ FIX_COLUMNS: Mapping[str, Mapping[str, tuple[str, str, tuple[str, ...]]]] = {
         "elevation": ("rad", "measured elevation, positive up", ()),
         "accepted": ("bool", "applied by the navigator (not gated out or refused)", ()),
         "position": ("m", "the fix's own position of the reference point, world ENU", ENU),
+        "nis": NIS_COLUMN,
     },
     "gps": {
         "t_valid": ("s", "time of validity", ()),
@@ -78,6 +98,7 @@ FIX_COLUMNS: Mapping[str, Mapping[str, tuple[str, str, tuple[str, ...]]]] = {
         "north": ("m", "measured antenna north", ()),
         "accepted": ("bool", "applied by the navigator (not gated out)", ()),
         "position": ("m", "the fix (antenna, up = 0), world ENU", ENU),
+        "nis": NIS_COLUMN,
     },
     "modem": {
         "t_valid": ("s", "time of validity (the range was measured)", ()),
@@ -204,6 +225,7 @@ def fix_columns(fixes) -> dict[str, dict[str, Column]]:
             "t_arrival": np.array([f.t_arrival_s for f in rows]),
             "accepted": np.array([f.accepted for f in rows], dtype=bool),
             "position": np.array([f.position_m for f in rows], dtype=float).reshape(-1, 3),
+            "nis": np.array([f.nis for f in rows], dtype=float),
         }
         for j, name in enumerate(k for k in spec if k not in values):
             values[name] = z[:, j]

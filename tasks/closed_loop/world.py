@@ -346,6 +346,8 @@ class MissionWorld(control.Task):
             "meas_depth": nav.depth_m,
             "meas_speed": nav.speed_m_s,
             "speed_from_log": nav.speed_from_log,
+            "truth_tail_angles": physics.tail_angles_rad(v.name),
+            "truth_fin_angles": physics.lateral_fin_angles_rad(v.name),
             "motor_power": physics.motor_power_w(v.name),
             "cmd_tail_beat_frequency": c["tail_beat_frequency_hz"],
             "cmd_tail_bias": c["tail_bias_rad"],

@@ -1,7 +1,8 @@
 """The ``bauv`` command line.
 
     bauv list
-    bauv show NAME [--set k=v ...]          print the resolved scenario as TOML
+    bauv show NAME [--set k=v ...] [--doc]  print the resolved scenario as TOML (--doc: every
+                                            field with its description, unit, allowed range)
     bauv run NAME [--runs N] [--seed S] [--out DIR] [--set k=v ...] [--scenario FILE ...]
                   [--workers K] [--executor local|dask] [--address tcp://host:8786] [--resume]
     bauv view RUN_DIR [--web] [--web-port P] [--grpc-port Q]
@@ -59,12 +60,22 @@ def list_cmd() -> None:
     type=click.Path(dir_okay=False),
     help="TOML file merged over the experiment's preset.",
 )
-def show_cmd(name: str, overrides: tuple[str, ...], files: tuple[str, ...]) -> None:
+@click.option(
+    "--doc", is_flag=True, help="Every field with its value, description, unit and allowed range."
+)
+def show_cmd(name: str, overrides: tuple[str, ...], files: tuple[str, ...], doc: bool) -> None:
     """Print the resolved scenario of NAME as TOML (every field, with its default)."""
     from tasks.core import registry
 
     exp = registry.get(name)
     scn = load_config(exp.scenario_type, exp.preset, files, overrides)
+    if doc:
+        from tasks.core.doc import scenario_doc
+
+        title = f"{name}: {exp.summary}\nscenario {exp.scenario_type.__name__}; set a field "
+        title += "with --set path=value (TOML value)"
+        click.echo(scenario_doc(exp.scenario_type, scn, title), nl=False)
+        return
     click.echo(tomli_w.dumps(to_plain(scn)), nl=False)
 
 

@@ -1,5 +1,9 @@
 """Rerun recordings: one world frame, one ``sim_time`` timeline, series logged in columns.
 
+Sizes of points, lines and arrows are in the viewer's UI points (rerun reads a negative radius
+as UI points), so tracks, fixes and way-points stay readable whether the view shows a whole
+mission hundreds of metres across or follows a 2 m vehicle.
+
 Per-sample ``log`` calls cost 70-100 us each in rerun 0.41; everything here sends whole columns
 (``send_columns``) and logs a finished track once as a static line strip.
 """
@@ -16,6 +20,8 @@ from numpy.typing import NDArray
 from bauv_sim.frames import quat_wxyz_from_R, quat_wxyz_to_xyzw
 
 TIMELINE = "sim_time"
+UI_LINE = -1.5
+"""Width of a track's line strip, UI points."""
 
 Color = tuple[int, int, int]
 COLORS: dict[str, Color] = {
@@ -55,7 +61,7 @@ class Recording:
         t_s: NDArray[np.float64],
         pos_world_m: NDArray[np.float64],
         color: Color,
-        radius_m: float = 0.6,
+        radius_m: float = -5.0,
         strip: bool = True,
     ) -> None:
         """A moving point over time (one row per time) and, if ``strip``, its whole path once.
@@ -64,6 +70,7 @@ class Recording:
             entity: entity path under ``world/``.
             t_s: times, shape (T,), s.
             pos_world_m: positions, shape (T, 3), m, world.
+            radius_m: the moving point's radius, m (negative: UI points).
         """
         pos = np.asarray(pos_world_m, dtype=float)
         self.rec.send_columns(
@@ -79,7 +86,7 @@ class Recording:
         if strip:
             self.rec.log(
                 f"world/{entity}/path",
-                rr.LineStrips3D([pos], colors=color, radii=0.15),
+                rr.LineStrips3D([pos], colors=color, radii=UI_LINE),
                 static=True,
             )
 
@@ -100,9 +107,9 @@ class Recording:
             columns=rr.Points3D.columns(positions=pos),
         )
         self.rec.log(
-            f"world/{entity}/latest", rr.Points3D.from_fields(radii=1.0, colors=color), static=True
+            f"world/{entity}/latest", rr.Points3D.from_fields(radii=-6.0, colors=color), static=True
         )
-        self.rec.log(f"world/{entity}/all", rr.Points3D(pos, radii=0.4, colors=color), static=True)
+        self.rec.log(f"world/{entity}/all", rr.Points3D(pos, radii=-2.5, colors=color), static=True)
 
     def ellipsoids(
         self,
@@ -163,7 +170,7 @@ class Recording:
             columns=rr.Arrows3D.columns(origins=np.asarray(origins_world_m, float), vectors=v),
         )
         self.rec.log(
-            f"world/{entity}", rr.Arrows3D.from_fields(colors=color, radii=0.2), static=True
+            f"world/{entity}", rr.Arrows3D.from_fields(colors=color, radii=-2.0), static=True
         )
 
     def scalars(
@@ -198,17 +205,69 @@ class Recording:
         """A static landmark (transceiver, beacon, way-point)."""
         self.rec.log(
             f"world/{entity}",
-            rr.Points3D([pos_world_m], radii=2.0, colors=color, labels=[label]),
+            rr.Points3D([pos_world_m], radii=-8.0, colors=color, labels=[label]),
             static=True,
         )
 
-    def blueprint(self, *plots: str) -> None:
-        """Open on the 3-D world beside one time-series view per plot root."""
+    def events(self, entity: str, t_s, texts, levels) -> None:
+        """A text log of events (way-point reached, surfacing, gate rejections), one row each.
+
+        Args:
+            entity: entity path, e.g. ``"events"``.
+            t_s: event times, shape (k,), s.
+            texts: the events in words, k strings.
+            levels: rerun log levels (``"INFO"``, ``"WARN"``...), k strings.
+        """
+        if len(texts) == 0:
+            return
+        order = np.argsort(np.asarray(t_s, dtype=float), kind="stable")
+        self.rec.send_columns(
+            entity,
+            indexes=self._time(np.asarray(t_s, dtype=float)[order]),
+            columns=rr.TextLog.columns(
+                text=[texts[i] for i in order], level=[levels[i] for i in order]
+            ),
+        )
+
+    def blueprint(
+        self,
+        *plots: str,
+        follow: str | None = None,
+        log: str | None = None,
+        world_name: str = "world",
+        eye_controls: rrb.EyeControls3D | None = None,
+    ) -> None:
+        """Open on the 3-D world beside one time-series view per plot root.
+
+        Args:
+            plots: entity roots, one time-series view each.
+            follow: an entity the 3-D camera rides with (e.g. ``"/world/vehicle"``): the view's
+                space is that entity's frame, so the vehicle stays in view at mission scale;
+                ``None``: the world frame.
+            log: a text-log entity shown under the 3-D view (the events).
+            world_name: the 3-D view's title.
+            eye_controls: the 3-D camera's first pose (in the view's space: the followed
+                entity's frame when ``follow`` is given), e.g. ``rrb.EyeControls3D(position=...,
+                look_target=...)``.
+        """
         views = [rrb.TimeSeriesView(origin=p, name=p) for p in plots]
+        if follow:
+            # the view's space is the followed entity's frame: the camera rides with the vehicle
+            # (the whole world is drawn, transformed into that frame)
+            world = rrb.Spatial3DView(
+                origin=follow, contents="/world/**", name=world_name, eye_controls=eye_controls
+            )
+        else:
+            world = rrb.Spatial3DView(origin="world", name=world_name, eye_controls=eye_controls)
+        left = (
+            rrb.Vertical(world, rrb.TextLogView(origin=log, name=log), row_shares=[4, 1])
+            if log
+            else world
+        )
         self.rec.send_blueprint(
             rrb.Blueprint(
                 rrb.Horizontal(
-                    rrb.Spatial3DView(origin="world", name="world"),
+                    left,
                     rrb.Vertical(*views) if views else rrb.Spatial3DView(origin="world"),
                     column_shares=[3, 2],
                 ),
@@ -240,6 +299,29 @@ def covariance_ellipsoids(
     V[..., :, 2] *= np.sign(det)[..., None]
     half = k_sigma * np.sqrt(np.maximum(w, 0.0))
     return half, quat_wxyz_to_xyzw(quat_wxyz_from_R(V))
+
+
+def read_text_log(path: Path, entity: str) -> list[tuple[float, str, str]]:
+    """Read a text log back from an ``.rrd`` file: ``[(t_s, level, text), ...]`` by time."""
+    import rerun.chunk as rc
+
+    want = "/" + entity.strip("/")
+    rows = []
+    for chunk in rc.RrdReader(str(path)).stream().to_chunks():
+        if chunk.entity_path != want or chunk.is_static:
+            continue
+        rb = chunk.to_record_batch()
+        names = rb.schema.names
+        tcol = next((n for n in names if n.endswith("TextLog:text")), None)
+        lcol = next((n for n in names if n.endswith("TextLog:level")), None)
+        if tcol is None or TIMELINE not in names:
+            continue
+        t = rb.column(TIMELINE).cast("int64").to_numpy() * 1e-9
+        texts = rb.column(tcol).to_pylist()
+        levels = rb.column(lcol).to_pylist() if lcol else [[""]] * len(texts)
+        for ti, tx, lv in zip(t, texts, levels, strict=True):
+            rows.append((float(ti), (lv or [""])[0], (tx or [""])[0]))
+    return sorted(rows, key=lambda r: r[0])
 
 
 def read_time_series(

@@ -32,7 +32,13 @@ from pydantic import BaseModel
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 
-EXPERIMENT_PACKAGES = ("tasks.paper000", "tasks.paper001", "tasks.missions", "tasks.vehicle")
+EXPERIMENT_PACKAGES = (
+    "tasks.paper000",
+    "tasks.paper001",
+    "tasks.paper003",
+    "tasks.missions",
+    "tasks.vehicle",
+)
 """The packages whose import registers every experiment and mission."""
 
 _REGISTRY: dict[str, Experiment] = {}

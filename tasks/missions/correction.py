@@ -571,7 +571,7 @@ def report_correction(exp: CorrectionExperiment, ctx: ReportContext) -> ReportSu
     if rec is not None:
         flight = rec.flights["compensated"]
         if scn.report.figures:
-            files.append(correction_figure(exp.name, scn, rec, ctx.out_dir))
+            files += correction_figure(exp.name, scn, rec, ctx.out_dir)
         if scn.report.recording and flight.vehicles:
             flown = run_scenario(scn, ctx.seed, rec.run)
             files += record_correction(exp.name, flown, flight, ctx.out_dir)
@@ -580,70 +580,69 @@ def report_correction(exp: CorrectionExperiment, ctx: ReportContext) -> ReportSu
     return ReportSummary(text, tuple(files))
 
 
-def correction_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResult, out) -> str:
-    """Tracks of the recorded run: truth, the DR tracks, GPS fixes, current arrows."""
-    import matplotlib
+def correction_figure(
+    name: str, scn: CorrectionScenario, rec: CorrectionRunResult, out
+) -> list[str]:
+    """Tracks of the recorded run: truth, the DR tracks, GPS fixes, numbered way-points, the true
+    and the estimated current (PNG and PDF, project style)."""
+    from tasks.core import style
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with style.context():
+        return _draw_tracks(name, scn, rec, out, style)
 
-    fig, axs = plt.subplots(1, 2, figsize=(13, 6.5))
+
+def _draw_tracks(name: str, scn: CorrectionScenario, rec: CorrectionRunResult, out, style):
+    from tasks.closed_loop.report import current_arrow
+
+    fig, axs = style.subplots("page", 4.0, 1, 2)
     for ax, law in zip(axs, ("direct", "compensated"), strict=True):
         f = rec.flights[law]
         if not f.vehicles:
             continue
         a = f.lead
-        ax.plot(a["truth_pos"][:, 0], a["truth_pos"][:, 1], "k-", lw=1.5, label="truth")
+        ax.plot(a["truth_pos"][:, 0], a["truth_pos"][:, 1], **style.line("truth", lw=1.2))
         ax.plot(
             a["dr_uncorrected"][:, 0],
             a["dr_uncorrected"][:, 1],
-            color="tab:red",
-            lw=1,
-            label="DR without CP",
+            **style.line("DR", label="DR without CP"),
         )
         ax.plot(
             a["dr_corrected"][:, 0],
             a["dr_corrected"][:, 1],
-            color="tab:purple",
-            lw=1,
-            label=f"DR after {scn.correction.procedure.upper()}",
+            **style.line(
+                scn.correction.procedure.upper(),
+                label=f"DR after {scn.correction.procedure.upper()}",
+            ),
         )
         gps = a.fixes["gps"]["position"].values if "gps" in a.fixes else np.zeros((0, 3))
         if len(gps):
-            ax.plot(gps[:, 0], gps[:, 1], "x", color="tab:orange", ms=7, label="GPS fixes")
-        for e, n, radius in rec.waypoints[law]:
+            ax.plot(gps[:, 0], gps[:, 1], **style.line("GPS", label="GPS fixes", ms=5, zorder=5))
+        wcol = style.color("waypoint")
+        for i, (e, n, radius) in enumerate(rec.waypoints[law]):
             c = circle(e, n, radius)
-            ax.plot(c[:, 0], c[:, 1], color="tab:green", lw=1)
+            ax.plot(c[:, 0], c[:, 1], color=wcol, lw=0.8, label="way-point" if i == 0 else "_")
+            ax.annotate(
+                f"WP{i}",
+                (e, n),
+                ha="center",
+                va="center",
+                color=wcol,
+                fontsize=6.5,
+                fontweight="bold",
+            )
         true_c = a["truth_current"][:, :2].mean(axis=0)
         est = a["cp_current"][~np.isnan(a["cp_current"][:, 0])]
-        x0, y0 = a["truth_pos"][0, :2]
-        k = 100.0
-        ax.annotate(
-            "",
-            xy=(x0 + k * true_c[0], y0 + k * true_c[1]),
-            xytext=(x0, y0),
-            arrowprops={"arrowstyle": "->", "color": "tab:cyan", "lw": 2},
-        )
+        current_arrow(ax, true_c, "mean true current", style.color("current"))
         if len(est):
-            e = est.mean(axis=0)
-            ax.annotate(
-                "",
-                xy=(x0 + k * e[0], y0 + k * e[1]),
-                xytext=(x0, y0),
-                arrowprops={"arrowstyle": "->", "color": "tab:blue", "lw": 2, "ls": "--"},
-            )
-        ax.plot([], [], color="tab:cyan", lw=2, label="true current (x100 s)")
-        ax.plot([], [], color="tab:blue", lw=2, ls="--", label="estimated current (x100 s)")
+            current_arrow(ax, est.mean(axis=0), "estimated current", style.color("EKF"), "--", 1)
         ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(alpha=0.3)
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        ax.set_title(f"{name} run {rec.run}: leg 3 on the {law} course")
-        ax.legend(fontsize=7, loc="best")
-    fig.tight_layout()
-    fig.savefig(out / "tracks.png", dpi=110)
-    plt.close(fig)
-    return "tracks.png"
+        ax.set_xlabel(style.label("east", "m"))
+        ax.set_ylabel(style.label("north", "m"))
+        style.title(ax, f"leg 3 on the {law} course")
+    style.panel_letters(axs)
+    fig.suptitle(f"Seed 001 on the vehicle (CP from surfacings), run {rec.run}")
+    style.figure_legend(fig, axs, ncol=4)
+    return style.save(fig, out / "tracks.png")
 
 
 def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, out) -> list[str]:

@@ -16,17 +16,13 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.patches import Ellipse as EllipsePatch
 from pydantic import BaseModel, Field
 
 from bauv_sim.config import Config
 from bauv_sim.frames import unit_vector_scalar
 from nav import accuracy as acc
+from tasks.core import style
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
 
@@ -161,87 +157,126 @@ class AccuracyExperiment(Experiment):
         return ReportSummary(text + f"wrote {len(files)} files to {out}\n", tuple(files))
 
 
+@style.styled
 def _figures(out, s: AccuracyScenario) -> list[str]:
+    """Seed 000 Figures 3-6 (PNG and PDF, project style)."""
+    from matplotlib.patches import Ellipse as EllipsePatch
+
     sa, sr = math.radians(s.sigma_azimuth_deg), s.sigma_range_m
     sc, ss = math.radians(s.sigma_course_deg), s.sigma_speed_m_s
     c, v = math.radians(s.course_deg), s.speed_m_s
     R = s.usbl_max_range_m
-    files = []
+    usbl_sig = f"$\\sigma_r$ = {sr:g} m, $\\sigma_\\alpha$ = {s.sigma_azimuth_deg:g}°"
+    dr_sig = f"$\\sigma_{{COG}}$ = {s.sigma_course_deg:g}°, $\\sigma_{{SOG}}$ = {ss:g} m/s"
+    files: list[str] = []
 
     # Figure 3: accuracy map
     g = np.arange(-R, R + s.map_step_m / 2, s.map_step_m)
     X, Y = np.meshgrid(g, g)
     r = np.hypot(X, Y)
     M = np.where(r <= R, acc.usbl_mean_error(r, sr, sa), np.nan)
-    fig, ax = plt.subplots(figsize=(6.5, 5.5))
-    im = ax.pcolormesh(X, Y, M, shading="auto", cmap="viridis")
-    cs = ax.contour(X, Y, M, levels=np.arange(5, 30, 5), colors="white", linewidths=0.8)
-    ax.clabel(cs, fmt="%g m", fontsize=8)
-    ax.plot(0, 0, "r^", ms=9, label="transceiver")
-    fig.colorbar(im, ax=ax, label="mean error M_xy (m)")
+    fig, ax = style.subplots("column", 3.0)
+    im = ax.pcolormesh(X, Y, M, shading="auto", cmap="viridis", rasterized=True)
+    cs = ax.contour(X, Y, M, levels=np.arange(5, 30, 5), colors="white", linewidths=0.6)
+    ax.clabel(cs, fmt="%g m", fontsize=6)
+    ax.plot(0, 0, "^", color="white", mec="k", ms=6, label="transceiver")
+    fig.colorbar(im, ax=ax, label=style.label("mean error $M_{xy}$", "m"), shrink=0.9)
     ax.set_aspect("equal")
-    ax.set_xlabel("east (m)")
-    ax.set_ylabel("north (m)")
-    ax.set_title(f"USBL accuracy (sigma_r {sr:g} m, sigma_alpha {s.sigma_azimuth_deg:g} deg)")
+    ax.grid(False)
+    ax.set_xlabel(style.label("east", "m"))
+    ax.set_ylabel(style.label("north", "m"))
+    style.title(ax, f"USBL accuracy ({usbl_sig})")
     ax.legend(loc="upper right")
-    fig.tight_layout()
-    fig.savefig(out / "fig3-usbl-accuracy-map.png", dpi=110)
-    plt.close(fig)
-    files.append("fig3-usbl-accuracy-map.png")
+    files += style.save(fig, out / "fig3-usbl-accuracy-map.png")
 
-    # Figure 4: ellipse parameters against distance, drawn along one bearing
+    # Figure 4: ellipse parameters against distance (log axis: b is 100 times smaller than a),
+    # and the ellipses drawn to scale around the transceiver along eight bearings
     d = np.arange(100.0, R + 1, 100.0)
     a, b = acc.usbl_ellipse(d, sr, sa)
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
-    ax1.plot(d, a, "o-", label="a (across the line of sight)")
-    ax1.plot(d, b, "s-", label="b (along the line of sight)")
-    ax1.set_xlabel("distance to the transceiver (m)")
-    ax1.set_ylabel("semi-axis (m)")
-    ax1.grid(alpha=0.3)
-    ax1.legend()
-    for di, ai, bi in zip(d, a, b, strict=True):
-        ax2.add_patch(EllipsePatch((di, 0), 2 * bi, 2 * ai, fill=False, color="tab:blue"))
-        ax2.plot(di, 0, "k.", ms=3)
-    ax2.plot(0, 0, "r^", ms=9)
-    ax2.set_xlim(-20, R + 40)
-    ax2.set_ylim(-R / 10 - 10, R / 10 + 10)
+    fig, (ax1, ax2) = style.subplots("page", 3.3, 1, 2, width_ratios=[1.0, 1.0])
+    ax1.plot(d, a, "o-", color=style.PALETTE["blue"], label="a (across the line of sight)")
+    ax1.plot(d, b, "s-", color=style.PALETTE["vermillion"], label="b (along the line of sight)")
+    ax1.set_yscale("log")
+    style.log_ticks(ax1)
+    ax1.set_xlabel(style.label("distance to the transceiver", "m"))
+    ax1.set_ylabel(style.label("semi-axis", "m"))
+    ax1.legend(loc="center right")
+    style.title(ax1, f"USBL mean error ellipse ({usbl_sig})")
+    for az in np.radians(np.arange(0.0, 360.0, 45.0)):
+        ux, uy = unit_vector_scalar(float(az))
+        for di, ai, bi in zip(d, a, b, strict=True):
+            ax2.add_patch(
+                EllipsePatch(
+                    (di * ux, di * uy),
+                    2 * bi,
+                    2 * ai,
+                    angle=90.0 - math.degrees(float(az)),
+                    fill=False,
+                    color=style.PALETTE["blue"],
+                    lw=0.8,
+                )
+            )
+    ring = np.linspace(0, 2 * np.pi, 200)
+    for di in d:
+        ax2.plot(di * np.cos(ring), di * np.sin(ring), color="0.85", lw=0.4, zorder=0)
+    ax2.plot(0, 0, "k^", ms=6)
+    ax2.set_xlim(-R * 1.08, R * 1.08)
+    ax2.set_ylim(-R * 1.08, R * 1.08)
     ax2.set_aspect("equal")
-    ax2.set_xlabel("along the line of sight (m)")
-    ax2.set_ylabel("across (m)")
-    ax2.set_title("USBL mean error ellipses every 100 m")
-    fig.tight_layout()
-    fig.savefig(out / "fig4-usbl-ellipses.png", dpi=110)
-    plt.close(fig)
-    files.append("fig4-usbl-ellipses.png")
+    ax2.set_xlabel(style.label("east", "m"))
+    ax2.set_ylabel(style.label("north", "m"))
+    style.title(ax2, "the ellipses to scale, every 100 m, 8 bearings")
+    style.panel_letters((ax1, ax2))
+    files += style.save(fig, out / "fig4-usbl-ellipses.png")
 
     # Figure 5: DR mean error against distance
     dist = np.linspace(0, s.distance_max_m, 201)
     t = dist / v
     m1 = acc.mean_error(acc.dr_covariance_single_step(t, c, v, sc, ss))
     m2 = acc.mean_error(acc.dr_covariance_random_walk(t, c, v, sc, ss))
-    fig, ax = plt.subplots(figsize=(7, 4))
-    ax.plot(dist, m1, label="single step dt = t (paper's Figure 5)")
-    ax.plot(dist, m2, label="random walk of 1 s steps")
-    ax.set_xlabel("distance travelled (m)")
-    ax.set_ylabel("mean error M_xy (m)")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    ax.set_title(f"DR accuracy (sigma_COG {s.sigma_course_deg:g} deg, sigma_SOG {ss:g} m/s)")
-    fig.tight_layout()
-    fig.savefig(out / "fig5-dr-accuracy.png", dpi=110)
-    plt.close(fig)
-    files.append("fig5-dr-accuracy.png")
+    fig, ax = style.subplots("column", 2.4)
+    ax.plot(dist, m1, color=style.PALETTE["vermillion"], label="single step dt = t (paper)")
+    ax.plot(dist, m2, color=style.PALETTE["blue"], ls="--", label="random walk of 1 s steps")
+    ax.set_xlabel(style.label("distance travelled", "m"))
+    ax.set_ylabel(style.label("mean error $M_{xy}$", "m"))
+    ax.legend(loc="upper left")
+    style.title(ax, f"DR accuracy ({dr_sig})")
+    files += style.save(fig, out / "fig5-dr-accuracy.png")
 
-    # Figure 6: DR ellipses after the chosen distances
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-    for ax, form, fn, scale in [
-        (axes[0], "single step", acc.dr_covariance_single_step, 1.0),
-        (axes[1], "random walk", acc.dr_covariance_random_walk, 10.0),
-    ]:
-        lim, pad = 0.0, 10.0
-        for dd in s.ellipse_distances_m:
-            e = acc.ellipse_parameters(fn(dd / v, c, v, sc, ss))
-            cx, cy = (dd * u for u in unit_vector_scalar(c))
+    # Figure 6: DR ellipses after the chosen distances, one panel per form, each as tall as its
+    # data (equal scales), with the values written beside each ellipse
+    forms = [
+        ("single step", acc.dr_covariance_single_step, 1.0),
+        ("random walk", acc.dr_covariance_random_walk, 10.0),
+    ]
+    u = np.array(unit_vector_scalar(c))
+    panels = []
+    for form, fn, scale in forms:
+        ells = [
+            (dd, acc.ellipse_parameters(fn(dd / v, c, v, sc, ss))) for dd in s.ellipse_distances_m
+        ]
+        ends = np.array([[0.0, 0.0], max(s.ellipse_distances_m) * u])
+        lo, hi = ends.min(axis=0), ends.max(axis=0)
+        for dd, e in ells:
+            A, B, tau = scale * float(e.a), scale * float(e.b), float(e.tau)
+            half = np.array(
+                [
+                    math.hypot(A * math.cos(tau), B * math.sin(tau)),
+                    math.hypot(A * math.sin(tau), B * math.cos(tau)),
+                ]
+            )
+            lo = np.minimum(lo, dd * u - half)
+            hi = np.maximum(hi, dd * u + half)
+        span = hi - lo
+        lo, hi = lo - 0.04 * span.max(), hi + np.array([0.04, 0.1]) * span.max()
+        panels.append((form, scale, ells, ends, lo, hi))
+    ratios = [float((hi[1] - lo[1]) / (hi[0] - lo[0])) for *_, lo, hi in panels]
+    width = style.PAGE_IN
+    height = min(9.0, 0.9 * width * sum(ratios) + 0.75 * len(panels))
+    fig, axes = style.subplots("page", height, len(panels), 1, height_ratios=ratios)
+    for ax, (form, scale, ells, ends, lo, hi) in zip(np.ravel(axes), panels, strict=True):
+        for dd, e in ells:
+            cx, cy = dd * u
             ax.add_patch(
                 EllipsePatch(
                     (cx, cy),
@@ -249,27 +284,38 @@ def _figures(out, s: AccuracyScenario) -> list[str]:
                     2 * scale * float(e.b),
                     angle=float(np.degrees(e.tau)),
                     fill=False,
-                    label=f"after {dd:g} m: a {float(e.a):.1f} m, b {float(e.b):.1f} m",
+                    color=style.color("DR"),
+                    lw=1.0,
                 )
             )
-            ax.plot(cx, cy, "k.")
-            lim = max(lim, dd)
-            pad = max(pad, 1.2 * scale * float(e.a))
-        ends = np.array([[0.0, 0.0], [lim * u for u in unit_vector_scalar(c)]])
-        ax.plot(ends[:, 0], ends[:, 1], "k--", lw=0.8)
-        ax.set_xlim(ends[:, 0].min() - pad, ends[:, 0].max() + pad)
-        ax.set_ylim(ends[:, 1].min() - pad, ends[:, 1].max() + pad)
+            ax.plot(cx, cy, "k.", ms=3)
+            ax.annotate(
+                f"after {dd:g} m:\na = {float(e.a):.1f} m, b = {float(e.b):.1f} m",
+                (
+                    cx,
+                    cy
+                    + math.hypot(
+                        scale * float(e.a) * math.sin(float(e.tau)),
+                        scale * float(e.b) * math.cos(float(e.tau)),
+                    ),
+                ),
+                textcoords="offset points",
+                xytext=(0, 2),
+                ha="center",
+                va="bottom",
+                fontsize=6.5,
+            )
+        ax.plot(ends[:, 0], ends[:, 1], "k--", lw=0.6)
+        ax.plot(0, 0, "ko", ms=3)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
         ax.set_aspect("equal", adjustable="box")
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="lower left")
-        drawn = "" if scale == 1.0 else f", drawn {scale:g}x"
-        ax.set_title(f"DR mean error ellipses ({form}{drawn})")
-    fig.tight_layout()
-    fig.savefig(out / "fig6-dr-ellipses.png", dpi=110)
-    plt.close(fig)
-    files.append("fig6-dr-ellipses.png")
+        ax.set_xlabel(style.label("east", "m"))
+        ax.set_ylabel(style.label("north", "m"))
+        drawn = "" if scale == 1.0 else f", ellipses drawn {scale:g}x"
+        style.title(ax, f"DR mean error ellipses: {form}{drawn} ({dr_sig})")
+    style.panel_letters(axes)
+    files += style.save(fig, out / "fig6-dr-ellipses.png")
     return files
 
 

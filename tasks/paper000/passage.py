@@ -475,6 +475,8 @@ class Paper000Block:
         fixes_produced: number of USBL fixes produced.
         fixes_expected: number of USBL fixes scheduled.
         gate_rejected: number of fixes the gate rejected.
+        ekf_sigma_h: sum over runs of the EKF's own horizontal standard deviation
+            ``sqrt(P_ee + P_nn)`` at each tick, m (its 1-sigma radius, for the figures).
     """
 
     runs: tuple[int, ...]
@@ -488,6 +490,12 @@ class Paper000Block:
     fixes_produced: int = 0
     fixes_expected: int = 0
     gate_rejected: int = 0
+    ekf_sigma_h: SeriesSum | None = None
+
+
+def _ekf_sigma_h(P: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The horizontal 1-sigma radius ``sqrt(P_ee + P_nn)`` of covariances (..., 3, 3), m."""
+    return np.sqrt(np.maximum(P[..., 0, 0] + P[..., 1, 1], 0.0))
 
 
 def _edges(cfg: ReportConfig) -> NDArray[np.float64]:
@@ -524,6 +532,7 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
         fixes_produced=int(prod.sum()),
         fixes_expected=int(prod.size),
         gate_rejected=int(p.gate_rejected.sum()),
+        ekf_sigma_h=SeriesSum.of(_ekf_sigma_h(p.ekf_P)),
     )
     for i, run in enumerate(p.runs):
         if run < scn.report.routes_max:
@@ -537,6 +546,7 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
                 "EKF": d["EKF"][i],
                 "DR": d["DR"][i],
                 "USBL": np.where(prod[i], d["USBL"][i], np.nan),
+                "EKF_sigma_h": _ekf_sigma_h(p.ekf_P[i]),
             }
     return block
 
@@ -692,6 +702,9 @@ def _merge_blocks(ctx: ReportContext) -> Paper000Block:
             fixes_produced=total.fixes_produced + b.fixes_produced,
             fixes_expected=total.fixes_expected + b.fixes_expected,
             gate_rejected=total.gate_rejected + b.gate_rejected,
+            ekf_sigma_h=None
+            if total.ekf_sigma_h is None or b.ekf_sigma_h is None
+            else total.ekf_sigma_h.merge(b.ekf_sigma_h),
         )
     if total is None:
         raise ValueError("no blocks to report")
@@ -874,15 +887,26 @@ def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> Repor
     return ReportSummary(text, tuple(files))
 
 
+def _test_words(exp: StraightPassageExperiment) -> str:
+    """The test's name in words: ``"Seed 000 Test 1 (USBL fix every 5 s)"``."""
+    n = exp.test.split("-")[-1]
+    return f"Seed 000 Test {n}"
+
+
 def _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, band) -> list[str]:
+    """The test's figures (PNG and PDF), for any valid batch: one run, no route kept."""
     out = ctx.out_dir
     t = truth.t_s
     ref = truth.pos_world_m[0]
     tx = scn.transceiver.position_world_m()
-    files = []
+    words = f"{_test_words(exp)}, USBL fix every {scn.sensors.usbl.period_s:g} s"
+    n = ctx.n_runs
+    passages = f"{n} passage{'s' * (n != 1)}"
+    k = 2.0
+    files: list[str] = []
     runs = sorted(tot.routes)
-    files.append(
-        figures.routes(
+    if runs:
+        files += figures.routes(
             out / "routes.png",
             ref,
             {
@@ -891,70 +915,150 @@ def _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, band) -> list
             },
             {"USBL": [tot.routes[r]["USBL"] for r in runs]},
             {"transceiver": tx},
-            title=f"{exp.name}: determined routes ({len(runs)} passages)",
+            title=f"{words}: routes of {len(runs)} passage{'s' * (len(runs) != 1)}",
         )
-    )
-    files.append(
-        figures.distances(
-            out / "distance.png",
-            {
-                "EKF": (t[1:], zeta["EKF"][1:]),
-                "DR": (t[1:], zeta["DR"][1:]),
-                "USBL": (t[fix_tick], zeta["USBL"]),
-            },
-            title=f"{exp.name}: mean distance to the reference over {ctx.n_runs} passages",
-        )
+    bounds = {}
+    if tot.ekf_sigma_h is not None:
+        bounds["EKF"] = (t[1:], k * tot.ekf_sigma_h.mean()[1:], f"EKF {k:g}$\\sigma$ radius")
+    files += figures.distances(
+        out / "distance.png",
+        {
+            "EKF": (t[1:], zeta["EKF"][1:]),
+            "DR": (t[1:], zeta["DR"][1:]),
+            "USBL": (t[fix_tick], zeta["USBL"]),
+        },
+        title=f"{words}: mean distance to the reference over {passages}",
+        bounds=bounds,
     )
     for run in sorted(tot.single):
         d = tot.single[run]
-        files.append(
-            figures.distances(
-                out / f"distance-passage-{run + 1}.png",
-                {
-                    "EKF": (t[1:], d["EKF"][1:]),
-                    "DR": (t[1:], d["DR"][1:]),
-                    "USBL": (t[fix_tick], d["USBL"]),
-                },
-                title=f"{exp.name}: passage {run + 1}",
-            )
+        sb = {}
+        if "EKF_sigma_h" in d:
+            sb["EKF"] = (t[1:], k * d["EKF_sigma_h"][1:], f"EKF {k:g}$\\sigma$ radius")
+        files += figures.distances(
+            out / f"distance-passage-{run + 1}.png",
+            {
+                "EKF": (t[1:], d["EKF"][1:]),
+                "DR": (t[1:], d["DR"][1:]),
+                "USBL": (t[fix_tick], d["USBL"]),
+            },
+            title=f"{words}: passage {run + 1}",
+            bounds=sb,
         )
-    files.append(
-        figures.histograms(
-            out / "histogram.png", tot.hist, title=f"{exp.name}: {ctx.n_runs} passages"
-        )
+    files += figures.histograms(
+        out / "histogram.png",
+        tot.hist,
+        title=f"{words}: distance to the reference, {passages}",
     )
-    files.append(
-        figures.consistency(
-            out / "nees.png",
-            t[1:],
-            mean_nees[1:],
-            band,
-            3,
-            ctx.n_runs,
-            title=f"{exp.name}: EKF consistency",
-        )
+    files += figures.consistency(
+        out / "nees.png",
+        t[1:],
+        mean_nees[1:],
+        band,
+        3,
+        n,
+        title=f"{words}: EKF consistency (position NEES)",
+        probability=scn.report.consistency_probability,
     )
     return files
 
 
 def record_passage(exp: Experiment, scn: Paper000Scenario, seed: int, run: int, out_dir) -> str:
-    """Write ``recording.rrd`` for one passage (re-simulated: identical to its batch numbers)."""
+    """Write ``recording.rrd`` for one passage (re-simulated: identical to its batch numbers).
+
+    The recording holds the reference, DR and EKF tracks (the EKF's covariance ellipsoids), the
+    USBL fixes split into those the filter applied and those its gate rejected, the distances,
+    the EKF's NEES against the chi-square band of one run and the NIS of each fix, an event log
+    (fixes rejected, fixes not produced, the closest approach) and a 3-D view that rides with
+    the vehicle (the hull drawn on the reference, heading along the course).
+    """
+    import rerun as rr
+    import rerun.blueprint as rrb
+    from scipy.stats import chi2
+
+    from bauv_sim.frames import R_from_roll_pitch_heading, quat_wxyz_from_R, quat_wxyz_to_xyzw
+    from bauv_sim.hull import MODEL_DIR
+
     p = simulate_passages(scn, seed, (run,))
     t = p.truth.t_s
     rec = Recording(out_dir / "recording.rrd", exp.name, f"{exp.name}/seed{seed}/run{run}")
-    rec.point("transceiver", scn.transceiver.position_world_m(), (0, 0, 0), "USBL transceiver")
+    tx = scn.transceiver.position_world_m()
+    rec.point("transceiver", tx, (0, 0, 0), "USBL transceiver")
     rec.track("truth", t, p.reference_m, COLORS["truth"])
     rec.track("dr", t, p.dr_m[0], COLORS["dr"])
     rec.track("ekf", t, p.ekf_m[0], COLORS["ekf"])
     rec.ellipsoids("ekf", t, p.ekf_m[0], p.ekf_P[0], COLORS["ekf"])
+    heading = np.broadcast_to(p.truth.heading_rad, (1, len(t)))[0]
+    R = np.stack([R_from_roll_pitch_heading(0.0, 0.0, float(h)) for h in heading])
+    rec.rec.send_columns(
+        "world/vehicle",
+        indexes=[rr.TimeColumn("sim_time", duration=t)],
+        columns=rr.Transform3D.columns(
+            translation=p.reference_m, quaternion=quat_wxyz_to_xyzw(quat_wxyz_from_R(R))
+        ),
+    )
+    rec.rec.log(
+        "world/vehicle/hull", rr.Asset3D(path=MODEL_DIR / "assets" / "hull.obj"), static=True
+    )
     ok = p.usbl_produced[0]
-    rec.fixes("usbl", p.t_fix_s[ok], p.usbl_m[0][ok], COLORS["usbl"])
+    rej = p.gate_rejected[0] & ok
+    applied = ok & ~rej
+    rec.fixes("usbl/accepted", p.t_fix_s[applied], p.usbl_m[0][applied], COLORS["usbl"])
+    rec.fixes("usbl/rejected", p.t_fix_s[rej], p.usbl_m[0][rej], (230, 0, 0))
+    rec.scalars(
+        "fixes/usbl_accepted",
+        p.t_fix_s[ok],
+        applied[ok].astype(float),
+        COLORS["usbl"],
+        "USBL fix applied (1) or rejected by the gate (0)",
+    )
     d = p.distances()
-    rec.scalars("distance/ekf", t, d["EKF"][0], COLORS["ekf"], "EKF (horizontal)")
-    rec.scalars("distance/dr", t, d["DR"][0], COLORS["dr"], "DR (horizontal)")
-    rec.scalars("distance/usbl", p.t_fix_s[ok], d["USBL"][0][ok], COLORS["usbl"], "USBL (3-D)")
-    rec.scalars("consistency/nees_ekf", t, p.ekf_nees()[0], COLORS["ekf"], "EKF NEES (dim 3)")
-    rec.blueprint("distance", "consistency")
+    rec.scalars("distance/ekf", t, d["EKF"][0], COLORS["ekf"], "EKF (horizontal, m)")
+    rec.scalars("distance/dr", t, d["DR"][0], COLORS["dr"], "DR (horizontal, m)")
+    rec.scalars("distance/usbl", p.t_fix_s[ok], d["USBL"][0][ok], COLORS["usbl"], "USBL (3-D, m)")
+    rec.scalars("consistency/nees_ekf", t, p.ekf_nees()[0], COLORS["ekf"], "EKF NEES (dof 3)")
+    q = scn.report.consistency_probability
+    lo, hi = chi2.ppf([(1 - q) / 2, (1 + q) / 2], 3)
+    for name, val in (("low", lo), ("high", hi)):
+        rec.scalars(
+            f"consistency/nees_band_{name}",
+            t[[0, -1]],
+            np.full(2, val),
+            (0, 158, 115),
+            f"{100 * q:g} % chi-square band, one run ({val:.2f})",
+        )
+    nis = p.nis[0]
+    rec.scalars("consistency/nis_usbl", p.t_fix_s, nis, COLORS["usbl"], "USBL NIS (dof 3)")
+    times, texts, levels = [float(t[0])], ["start of the passage"], ["INFO"]
+    for k in range(len(p.t_fix_s)):
+        if not ok[k]:
+            times.append(float(p.t_fix_s[k]))
+            texts.append("no USBL fix (range, field of view or dropout)")
+            levels.append("WARN")
+        elif rej[k]:
+            n = f" (NIS {nis[k]:.1f})" if np.isfinite(nis[k]) else ""
+            times.append(float(p.t_fix_s[k]))
+            texts.append(f"USBL fix rejected by the gate{n}")
+            levels.append("WARN")
+    kc = int(np.argmin(np.linalg.norm(p.reference_m[:, :2] - tx[:2], axis=1)))
+    times.append(float(t[kc]))
+    texts.append("closest approach to the transceiver")
+    levels.append("INFO")
+    times.append(float(t[-1]))
+    texts.append("end of the passage")
+    levels.append("INFO")
+    rec.events("events", times, texts, levels)
+    rec.blueprint(
+        "distance",
+        "consistency",
+        "fixes",
+        follow="/world/vehicle",
+        eye_controls=rrb.EyeControls3D(
+            position=[-60.0, 30.0, 40.0], look_target=[0.0, 0.0, 0.0], eye_up=[0.0, 0.0, 1.0]
+        ),
+        log="events",
+        world_name="world (camera rides with the vehicle)",
+    )
     rec.close()
     return "recording.rrd"
 

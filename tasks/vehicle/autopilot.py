@@ -330,21 +330,24 @@ class AutopilotTrials(Experiment):
             ),
         ]
         files += write_tables(ctx.out_dir, tables, heading=f"{self.name}: {self.summary}")
-        files.append(_figure(ctx.out_dir, tr, s, n))
+        files += _figure(ctx.out_dir, tr, s, n)
         text = "".join(t.to_text() + "\n" for t in tables)
         return ReportSummary(text + f"wrote {len(files)} files to {ctx.out_dir}\n", tuple(files))
 
 
-def _figure(out, tr, s: AutopilotTrialsScenario, n: int) -> str:
-    import matplotlib
+def _figure(out, tr, s: AutopilotTrialsScenario, n: int) -> list[str]:
+    """The four trials (PNG and PDF, project style)."""
+    from tasks.core import style
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with style.context():
+        return _draw(out, tr, s, n, style)
 
-    fig, axs = plt.subplots(2, 2, figsize=(11, 7))
+
+def _draw(out, tr, s: AutopilotTrialsScenario, n: int, style) -> list[str]:
+    fig, axs = style.subplots("page", 4.6, 2, 2)
     h = tr["heading"]
     axs[0, 0].plot(
-        h["t"], np.degrees(np.unwrap(wrap_pi(h["heading"]))), color="0.7", lw=0.6, label="heading"
+        h["t"], np.degrees(np.unwrap(wrap_pi(h["heading"]))), color="0.7", lw=0.5, label="heading"
     )
     axs[0, 0].plot(
         h["t"],
@@ -352,33 +355,45 @@ def _figure(out, tr, s: AutopilotTrialsScenario, n: int) -> str:
         "k",
         label="tail-beat average",
     )
-    axs[0, 0].axhline(s.heading_step_deg, ls="--", color="tab:purple", label="set-point")
+    axs[0, 0].axhline(s.heading_step_deg, ls="--", color=style.color("command"), label="set-point")
     axs[0, 0].set_ylabel("heading (deg)")
     d = tr["depth"]
-    axs[0, 1].plot(d["t"], d["depth"], color="0.7", lw=0.6)
+    axs[0, 1].plot(d["t"], d["depth"], color="0.7", lw=0.5)
     axs[0, 1].plot(d["t"], beat_average(d["depth"], n), "k")
-    axs[0, 1].axhline(s.depth_m + s.depth_step_m, ls="--", color="tab:purple")
+    axs[0, 1].axhline(s.depth_m + s.depth_step_m, ls="--", color=style.color("command"))
     axs[0, 1].invert_yaxis()
     axs[0, 1].set_ylabel("depth (m)")
     v = tr["speed"]
-    axs[1, 0].plot(v["t"], v["speed"], color="0.7", lw=0.6)
+    axs[1, 0].plot(v["t"], v["speed"], color="0.7", lw=0.5)
     axs[1, 0].plot(v["t"], beat_average(v["speed"], n), "k")
-    axs[1, 0].axhline(s.speed_to_m_s, ls="--", color="tab:purple")
+    axs[1, 0].axhline(s.speed_to_m_s, ls="--", color=style.color("command"))
     axs[1, 0].set_ylabel("speed through water (m/s)")
     c = tr["current"]
     e = np.degrees(wrap_pi(c["heading"] - math.pi / 2))
-    axs[1, 1].plot(c["t"], e, color="0.7", lw=0.6)
+    axs[1, 1].plot(c["t"], e, color="0.7", lw=0.5)
     axs[1, 1].plot(c["t"], beat_average(e, n), "k")
-    axs[1, 1].axhspan(-s.hold_limit_deg, s.hold_limit_deg, color="tab:green", alpha=0.15)
-    axs[1, 1].set_ylabel(f"heading error in {s.current_speed_m_s:g} m/s cross current (deg)")
-    for ax in axs.ravel():
-        ax.set_xlabel("time (s)")
-        ax.grid(alpha=0.3)
-    axs[0, 0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "steps.png", dpi=110)
-    plt.close(fig)
-    return "steps.png"
+    axs[1, 1].axhspan(
+        -s.hold_limit_deg,
+        s.hold_limit_deg,
+        color=style.PALETTE["bluish_green"],
+        alpha=0.15,
+        label=f"$\\pm${s.hold_limit_deg:g}° limit",
+    )
+    axs[1, 1].set_ylabel(style.label("heading error", "deg"))
+    titles = [
+        f"heading step to {s.heading_step_deg:g}°",
+        f"depth step of {s.depth_step_m:g} m",
+        f"speed step to {s.speed_to_m_s:g} m/s",
+        f"heading hold in a {s.current_speed_m_s:g} m/s cross current",
+    ]
+    for ax, text in zip(axs.ravel(), titles, strict=True):
+        ax.set_xlabel(style.label("time", "s"))
+        style.title(ax, text)
+    axs[0, 0].legend(loc="lower right")
+    axs[1, 1].legend(loc="lower right")
+    style.panel_letters(axs)
+    fig.suptitle("Autopilot step responses of the vehicle (grey: per tick; black: tail-beat mean)")
+    return style.save(fig, out / "steps.png")
 
 
 register(

@@ -549,6 +549,12 @@ def test_paper001_block():
     same(roundtrip(block).value, block)
 
 
+def test_paper003_block():
+    block = _block("paper-003/test-1", (0, 1), "report.readings=all", "report.routes_max=1")
+    assert block.routes and block.single and len(block.labels) == 16
+    same(roundtrip(block).value, block)
+
+
 def test_accuracy_block():
     assert _block("paper-000/accuracy", (0,)) is None
     assert roundtrip(None).value is None
@@ -581,5 +587,6 @@ def test_every_experiment_class_has_a_block_test_above():
         "MissionExperiment",
         "CorrectionExperiment",
         "SwarmExperiment",
+        "SquareExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested

@@ -1,0 +1,81 @@
+"""Figures: every valid batch draws its figures (issue 12, defect 2) in the project style."""
+
+import json
+
+import pytest
+
+from tasks.core import figures, style
+from tasks.core.runner import run
+
+NO_RECORDING = ["report.recording=false"]
+
+
+@pytest.mark.parametrize(
+    ("n_runs", "overrides"),
+    [
+        (1, []),  # one passage: one route, one single-passage figure
+        (2, []),  # two passages: the route opacity was 3/2 = 1.5 (matplotlib: alpha outside 0-1)
+        (3, ["report.routes_max=0"]),  # no route kept: 3 / 0 raised ZeroDivisionError
+    ],
+)
+def test_small_batches_draw_every_figure(n_runs, overrides, tmp_path):
+    out = tmp_path / "run"
+    run(
+        "paper-000/test-1",
+        n_runs=n_runs,
+        seed=0,
+        out_dir=out,
+        overrides=NO_RECORDING + overrides,
+        progress=False,
+    )
+    assert json.loads((out / "run.json").read_text())["state"] == "complete"
+    names = ["distance", "histogram", "nees"] + [
+        f"distance-passage-{i + 1}" for i in range(min(n_runs, 3))
+    ]
+    if "report.routes_max=0" not in overrides:
+        names.append("routes")
+    else:
+        assert not (out / "routes.png").exists()  # nothing to draw: no empty figure
+    for name in names:
+        for suffix in (".png", ".pdf"):
+            f = out / f"{name}{suffix}"
+            assert f.is_file() and f.stat().st_size > 1000, f
+    assert (out / "nees.pdf").read_bytes().startswith(b"%PDF")
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 7, 100, 10**6])
+def test_route_opacity_is_a_valid_alpha_for_any_count(n):
+    a = figures.route_alpha(n)
+    assert 0.25 <= a <= 0.9
+    assert figures.route_alpha(1) == 0.9 and figures.route_alpha(10**6) == 0.25
+
+
+def test_method_colours_are_fixed_and_distinct():
+    # the methods that share a figure never share a colour (DR/EKF/USBL/GPS/truth; CP1/CP2)
+    together = [
+        ("truth", "DR", "EKF", "USBL", "GPS", "waypoint", "current", "command"),
+        ("truth", "DR", "CP1", "CP2", "GPS", "baseline", "waypoint", "current"),
+    ]
+    for group in together:
+        cols = [style.color(m) for m in group]
+        assert len(set(cols)) == len(cols), group
+    assert style.line("EKF")["color"] == style.PALETTE["blue"]
+    assert style.color("no such method") == style.PALETTE["grey"]
+
+
+def test_styled_restores_the_callers_settings(tmp_path):
+    import matplotlib
+
+    before = matplotlib.rcParams["font.size"]
+
+    @style.styled
+    def draw():
+        assert matplotlib.rcParams["font.size"] == style.RC["font.size"]
+        fig, ax = style.subplots("column")
+        ax.plot([0, 1], [0, 1], **style.line("DR"))
+        return style.save(fig, tmp_path / "x.png")
+
+    assert draw() == ["x.png", "x.pdf"]
+    assert matplotlib.rcParams["font.size"] == before
+    w = (tmp_path / "x.pdf").read_bytes()
+    assert w.startswith(b"%PDF")
