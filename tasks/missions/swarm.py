@@ -1138,7 +1138,7 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
         flight = rec.flights[methods[0]]
         if flight.vehicles and len(flight.vehicles[LEADER]["t"]) > 1:
             if scn.report.figures:
-                files.append(swarm_figure(exp.name, scn, rec, methods, ctx.out_dir))
+                files += swarm_figure(exp.name, scn, rec, methods, ctx.out_dir)
             if scn.report.recording:
                 files.append(record_swarm(exp.name, scn, flight, methods[0], ctx.out_dir))
     text = "".join(t.to_text() + "\n" for t in tables)
@@ -1146,47 +1146,49 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
     return ReportSummary(text, tuple(files))
 
 
-COLORS_V = [(40, 40, 40), (31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189)]
+COLORS_V = [(0, 0, 0), (0, 114, 178), (213, 94, 0), (0, 158, 115), (230, 159, 0)]
+"""Recording colours of the leader and f1 .. f4 (the figure style's Okabe-Ito colours)."""
 
 
-def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out) -> str:
-    """Tracks of the recorded run (every vehicle's truth and estimate) and, per method, each
-    follower's station error over time."""
-    import matplotlib
+def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out) -> list[str]:
+    """Tracks of the recorded run (every vehicle's truth and estimate, first method) and each
+    follower's true distance to its station over time, per method (PNG and PDF, project
+    style)."""
+    from tasks.core import style
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with style.context():
+        return _draw_swarm(name, scn, rec, methods, out, style)
 
-    fig, axs = plt.subplots(1, 2, figsize=(14, 6.5))
+
+def _draw_swarm(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out, style):
+    pal = style.PALETTE
+    vehicle_colors = [pal[k] for k in ("black", "blue", "vermillion", "bluish_green", "orange")]
+    method_names = {"ga1": "GA1", "ga2": "GA2", "ekf": "EKF", "dr": "DR"}
+    fig, axs = style.subplots("page", 3.8, 1, 2)
     flight = rec.flights[methods[0]]
     ax = axs[0]
-    for (vn, v), color in zip(flight.vehicles.items(), COLORS_V, strict=False):
-        c = np.array(color) / 255
-        ax.plot(v["truth_pos"][:, 0], v["truth_pos"][:, 1], "-", color=c, lw=1.2, label=vn)
-        ax.plot(v["ekf_pos"][:, 0], v["ekf_pos"][:, 1], ":", color=c, lw=1, label=f"{vn} estimate")
+    for (vn, v), c in zip(flight.vehicles.items(), vehicle_colors, strict=False):
+        ax.plot(v["truth_pos"][:, 0], v["truth_pos"][:, 1], "-", color=c, lw=1.0, label=vn)
+        ax.plot(v["ekf_pos"][:, 0], v["ekf_pos"][:, 1], ":", color=c, lw=0.8, label="_")
+    ax.plot([], [], "k:", lw=0.8, label="estimates")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.grid(alpha=0.3)
-    ax.set_xlabel("east (m)")
-    ax.set_ylabel("north (m)")
-    ax.set_title(f"{name} run {rec.run} ({methods[0].upper()}): truth and estimates")
-    ax.legend(fontsize=7, loc="best")
+    ax.set_xlabel(style.label("east", "m"))
+    ax.set_ylabel(style.label("north", "m"))
+    style.title(ax, f"Truth and estimates ({method_names.get(methods[0], methods[0])})")
+    ax.legend(loc="best")
     ax = axs[1]
-    stations = station_offsets(scn)
-    styles = {"ga1": "-", "ga2": "--", "ekf": "-.", "dr": ":"}
+    tick = scn.timing.control_tick_s
+    dashes = ["-", "--", "-.", ":"]
     for m in methods:
         f = rec.flights[m]
         if LEADER not in f.vehicles:
             continue
-        tick = scn.timing.control_tick_s
-        course = leader_course_true(
-            f.vehicles[LEADER], max(1, round(scn.leader.velocity_window_s / tick))
-        )
-        for (vn, st), color in zip(
-            zip(FOLLOWERS, stations, strict=False), COLORS_V[1:], strict=False
-        ):
+        lead = f.vehicles[LEADER]
+        course = leader_course_true(lead, max(1, round(scn.leader.velocity_window_s / tick)))
+        for j, (vn, st) in enumerate(zip(FOLLOWERS, station_offsets(scn), strict=False)):
             if vn not in f.vehicles:
                 continue
-            v, lead = f.vehicles[vn], f.vehicles[LEADER]
+            v = f.vehicles[vn]
             n = min(len(v["t"]), len(lead["t"]))
             b = math.radians(st.relative_bearing_deg)
             sp = lead["truth_pos"][:n, :2] + st.distance_m * np.column_stack(
@@ -1194,22 +1196,19 @@ def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, ou
             )
             ax.plot(
                 v["t"][:n],
-                np.hypot(*(v["truth_pos"][:n, :2] - sp).T),
-                styles.get(m, "-"),
-                color=np.array(color) / 255,
-                lw=1,
-                label=f"{vn} {m.upper()}",
+                np.maximum(np.hypot(*(v["truth_pos"][:n, :2] - sp).T), 1e-2),
+                dashes[j % 4],
+                color=style.color(method_names.get(m, m)),
+                lw=0.8,
+                label=f"{vn} {method_names.get(m, m)}",
             )
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("true distance to the station (m)")
     ax.set_yscale("log")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    ax.set_title("station-keeping error")
-    fig.tight_layout()
-    fig.savefig(out / "swarm.png", dpi=110)
-    plt.close(fig)
-    return "swarm.png"
+    style.log_ticks(ax)
+    ax.set_xlabel(style.label("time", "s"))
+    ax.set_ylabel(style.label("true distance to the station", "m"))
+    style.title(ax, "Station-keeping error")
+    ax.legend(ncol=2, loc="best")
+    return style.save(fig, out / "swarm.png")
 
 
 def record_swarm(name: str, scn: SwarmScenario, run: MissionRun, method: str, out) -> str:
