@@ -12,6 +12,7 @@ from bauv_sim.sensors.errors import (
 )
 from bauv_sim.sensors.gps import Gps, GpsConfig
 from bauv_sim.sensors.log import Log, LogConfig
+from bauv_sim.sensors.modem import Modem, ModemConfig
 from bauv_sim.sensors.odometry import Odometry, OdometryConfig
 from bauv_sim.sensors.pressure import Pressure, PressureConfig
 from bauv_sim.sensors.usbl import Usbl, UsblConfig
@@ -27,6 +28,8 @@ __all__ = [
     "LengthErrorConfig",
     "Log",
     "LogConfig",
+    "Modem",
+    "ModemConfig",
     "Odometry",
     "OdometryConfig",
     "Pressure",

@@ -1,7 +1,13 @@
 """Online devices: what a device of a vehicle's sensor rig is (:class:`Device`), what it gets to
 build itself (:class:`DeviceBuild`) and at each tick (:class:`TickContext`), what it hands over
 (:class:`Measurement`), and the registry of device classes (:data:`DEVICE_TYPES`) that each device
-module adds itself to with :func:`register_device` (see :mod:`bauv_sim.sensors.rig`)."""
+module adds itself to with :func:`register_device` (see :mod:`bauv_sim.sensors.rig`).
+
+Devices that measure between vehicles (the acoustic modem, :mod:`bauv_sim.sensors.modem`) read
+the other vehicles of the scene from :attr:`TickContext.peers`: each peer's true state at this
+tick and what it broadcasts (:class:`Broadcast`, its navigator's view of itself), which the world
+hands to every rig (:class:`Peer`). A measurement may carry what its sender attached
+(:attr:`Measurement.payload`)."""
 
 from __future__ import annotations
 
@@ -34,6 +40,8 @@ class Measurement:
         attitude_rad: the vehicle's own measured (roll, pitch, heading) at ``t_valid_s``, shape
             (3,), rad (INS roll and pitch, compass heading), for lever-arm corrections; ``None``
             for held devices.
+        payload: what the sender attached to an acoustic message (the modem's
+            :class:`Broadcast`), else ``None``.
     """
 
     device: str
@@ -41,6 +49,48 @@ class Measurement:
     t_arrival_s: float
     value: Array
     attitude_rad: Array | None = None
+    payload: Any = None
+
+
+@dataclass(frozen=True)
+class Broadcast:
+    """What a vehicle states about itself in an acoustic message (seed 003: the leader sends its
+    position with each range).
+
+    Attributes:
+        sender: the sending vehicle's name in the scene.
+        t_s: time the statement refers to, s.
+        position_world_m: the sender's position of its reference point, shape (3,), m, world ENU
+            (its navigator's estimate, or the truth when the modem is set to send it).
+        transducer_world_m: the same for its modem transducer, shape (3,), m, world ENU.
+        velocity_world_m_s: its velocity over ground (east, north), shape (2,), m/s.
+        covariance_m2: the stated horizontal covariance of ``position_world_m``, shape (2, 2),
+            m^2, or ``None`` when none is sent (a true position has none).
+        current_world_m_s: the water current at the sender as it estimates it (east, north),
+            shape (2,), m/s, or ``None``.
+    """
+
+    sender: str
+    t_s: float
+    position_world_m: Array
+    transducer_world_m: Array
+    velocity_world_m_s: Array
+    covariance_m2: Array | None = None
+    current_world_m_s: Array | None = None
+
+
+@dataclass(frozen=True)
+class Peer:
+    """Another vehicle of the scene as a device may see it at a tick.
+
+    Attributes:
+        truth: its true state at this tick.
+        broadcast: its latest broadcast (``None`` if it sends none): of this tick for vehicles
+            earlier in the scene's order, of the previous tick for later ones.
+    """
+
+    truth: VehicleTruth
+    broadcast: Broadcast | None = None
 
 
 class TickContext:
@@ -52,12 +102,13 @@ class TickContext:
         truth: the vehicle's true state.
         commands: the actuator settings in force (``tail_beat_frequency_hz`` ...), by name.
         held: the rig's held values (the held devices are sampled before the event devices).
+        peers: the other vehicles of the scene, by name (empty for a vehicle alone).
 
     Attributes:
         tt: the time as a sample grid, shape (1,), s.
     """
 
-    __slots__ = ("_held", "_record", "commands", "k", "t_s", "truth", "tt")
+    __slots__ = ("_held", "_record", "commands", "k", "peers", "t_s", "truth", "tt")
 
     def __init__(
         self,
@@ -66,8 +117,10 @@ class TickContext:
         truth: VehicleTruth,
         commands: Mapping[str, float],
         held: Mapping[str, Array | None],
+        peers: Mapping[str, Peer] | None = None,
     ):
         self.k, self.t_s, self.truth, self.commands = k, t_s, truth, commands
+        self.peers: Mapping[str, Peer] = peers if peers is not None else {}
         self.tt = np.array([t_s])
         self._held = held
         self._record: Truth | None = None
@@ -164,6 +217,15 @@ def register_device(cfg_type: type[Config]) -> Callable[[type], type]:
         return cls
 
     return add
+
+
+def lever_arm_from_site(
+    physics: BauvPhysics, site: str, vehicle: str
+) -> tuple[float, float, float]:
+    """A site's position relative to the vehicle's reference point, body FLU, m."""
+    R = physics.R_world_from_body(vehicle)
+    rel = physics.site_position_world(site, vehicle) - physics.position_world(vehicle)
+    return tuple(float(c) for c in R.T @ rel)
 
 
 def truth_record(vt: VehicleTruth) -> Truth:

@@ -8,11 +8,13 @@ time of arrival), the way the vehicle's computer would receive them:
   ``period_s`` (a whole number of ticks) and their latest value is held in between; a device that
   produces nothing at a sampling tick (the log below its minimum speed) holds nothing until its
   next good sample;
-* **event** devices (USBL, GPS; later acoustic modems, DOA) deliver measurements that are valid at
-  one instant and reach the vehicle later (acoustic travel time and modem delay): the rig queues
-  them and hands each one over at the first tick at or after its arrival, with its time of
-  validity and the vehicle's own measured attitude at that time (for the lever arm of the
-  transponder or antenna). Event devices are silent on the initial tick.
+* **event** devices (USBL, GPS, the acoustic modem; later DOA) deliver measurements that are
+  valid at one instant and reach the vehicle later (acoustic travel time and modem delay): the
+  rig queues them and hands each one over at the first tick at or after its arrival, with its
+  time of validity and the vehicle's own measured attitude at that time (for the lever arm of the
+  transponder or antenna). Event devices are silent on the initial tick. Devices that measure
+  between vehicles (the modem) read the other vehicles from the ``peers`` the world passes to
+  :meth:`SensorRig.sense`.
 
 Devices are built from their configurations through the registry
 :data:`~bauv_sim.sensors.online.DEVICE_TYPES` (configuration type -> online device class, each
@@ -40,15 +42,27 @@ from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 
 # the rig's registry of device types: each device module adds its online class to DEVICE_TYPES
-from bauv_sim.sensors import compass, gps, ins, log, odometry, pressure, usbl  # noqa: F401
-from bauv_sim.sensors.online import DEVICE_TYPES, Device, DeviceBuild, Measurement, TickContext
+from bauv_sim.sensors import compass, gps, ins, log, modem, odometry, pressure, usbl  # noqa: F401
+from bauv_sim.sensors.online import (
+    DEVICE_TYPES,
+    Device,
+    DeviceBuild,
+    Measurement,
+    Peer,
+    TickContext,
+    lever_arm_from_site,
+)
 
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics, VehicleTruth
 
 Array = NDArray[np.float64]
 
-LEVER_ARM_SITES: Mapping[str, str] = {"usbl": "usbl_transponder", "gps": "gps_antenna"}
+LEVER_ARM_SITES: Mapping[str, str] = {
+    "usbl": "usbl_transponder",
+    "gps": "gps_antenna",
+    "modem": "modem",
+}
 """Device name -> the vehicle model's site of its transponder or antenna."""
 
 
@@ -72,15 +86,6 @@ class RigTick:
         """The held scalar of a device, or ``None``."""
         v = self.held.get(device)
         return None if v is None else float(v[0])
-
-
-def lever_arm_from_site(
-    physics: BauvPhysics, site: str, vehicle: str
-) -> tuple[float, float, float]:
-    """A site's position relative to the vehicle's reference point, body FLU, m."""
-    R = physics.R_world_from_body(vehicle)
-    rel = physics.site_position_world(site, vehicle) - physics.position_world(vehicle)
-    return tuple(float(c) for c in R.T @ rel)
 
 
 class SensorRig:
@@ -145,7 +150,12 @@ class SensorRig:
         self._pending: list[Measurement] = []
 
     def sense(
-        self, k: int, truth: VehicleTruth, commands: Mapping[str, float], initial: bool = False
+        self,
+        k: int,
+        truth: VehicleTruth,
+        commands: Mapping[str, float],
+        initial: bool = False,
+        peers: Mapping[str, Peer] | None = None,
     ) -> RigTick:
         """Sample the devices due at tick ``k`` and hand over what arrives now.
 
@@ -154,13 +164,15 @@ class SensorRig:
             truth: the vehicle's true state at the tick.
             commands: actuator settings in force, by name.
             initial: the initial tick (event devices stay silent).
+            peers: the other vehicles of the scene (their truth and broadcasts), for devices
+                that measure between vehicles (:attr:`TickContext.peers`).
 
         Returns:
             The tick's records.
         """
         t = truth.t_s
         held = self._held
-        ctx = TickContext(k, t, truth, commands, held)
+        ctx = TickContext(k, t, truth, commands, held, peers)
         sampled = []
         for dev in self._held_devices:
             if k % dev.every == 0:

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim.frames import R_from_roll_pitch_heading
+from bauv_sim.sensors.online import Broadcast
 from bauv_sim.sensors.rig import RigTick
 from nav.errors import NavInputError
 from nav.models import (
@@ -87,6 +88,9 @@ class NavOutput:
         gps_reference_m: that fix with the antenna's lever arm removed (the reference point's
             east, north), shape (2,), m, or ``None``.
         extra: what a wrapping part adds (e.g. seed 001's corrected position).
+        broadcast: what the vehicle sends about itself over the acoustic modem (its position,
+            velocity and covariance as its navigator states them), or ``None``; the world hands
+            it to the other vehicles' rigs (:class:`~bauv_sim.sensors.online.Peer`).
     """
 
     t_s: float
@@ -103,6 +107,7 @@ class NavOutput:
     gps_fix: bool
     gps_reference_m: Array | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    broadcast: Broadcast | None = None
 
 
 class EkfNavigation:

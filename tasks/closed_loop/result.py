@@ -100,6 +100,19 @@ FIX_COLUMNS: Mapping[str, Mapping[str, tuple]] = {
         "position": ("m", "the fix (antenna, up = 0), world ENU", ENU),
         "nis": NIS_COLUMN,
     },
+    "modem": {
+        "t_valid": ("s", "time of validity (the range was measured)", ()),
+        "t_arrival": ("s", "time the range and the leader's message reached the navigator", ()),
+        "range": ("m", "measured slant range between the modem transducers", ()),
+        "horizontal_range": ("m", "the range made horizontal with the depths (0: refused)", ()),
+        "centre_east": ("m", "east of the range circle's centre used (leader side)", ()),
+        "centre_north": ("m", "north of the range circle's centre used", ()),
+        "hdop": ("1", "HDOP of the fix (seed 003 eq. 7-8; 0 if not computed, capped at 100)", ()),
+        "criterion": ("1", "V^T P V of the adjustment (GA) or the NIS (EKF); 0 otherwise", ()),
+        "refusal": ("enum", "0 accepted; why not (tasks.missions.swarm.REFUSAL_CODES)", ()),
+        "accepted": ("bool", "the range corrected the estimate", ()),
+        "position": ("m", "the estimate after the range, world ENU (up = -depth)", ENU),
+    },
 }
 """Columns of the fix tables, by device."""
 

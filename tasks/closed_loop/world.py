@@ -41,6 +41,7 @@ from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import BauvSimError, PhysicsError
 from bauv_sim.frames import unit_vector_scalar
 from bauv_sim.sea import Sea
+from bauv_sim.sensors.online import Peer
 from bauv_sim.sensors.rig import SensorRig
 from nav.errors import NavError
 from nav.guidance import Waypoint, WaypointGuidance
@@ -233,8 +234,7 @@ class MissionWorld(control.Task):
         self._fixes: dict[str, list] = {v: [] for v in self.names}
         self._nav: dict[str, NavOutput] = {}
         self._cmd: dict[str, Any] = {}
-        for v in self.parts.vehicles:
-            self._tick(physics, v, initial=True)
+        self._tick_all(physics, initial=True)
 
     def before_step(self, action, physics) -> None:
         a = np.asarray(action, dtype=float)
@@ -258,8 +258,7 @@ class MissionWorld(control.Task):
 
     def after_step(self, physics) -> None:
         self.k += 1
-        for v in self.parts.vehicles:
-            self._tick(physics, v)
+        self._tick_all(physics)
 
     def get_observation(self, physics) -> collections.OrderedDict:
         obs = collections.OrderedDict()
@@ -294,12 +293,36 @@ class MissionWorld(control.Task):
 
     # -- the loop of one vehicle ---------------------------------------------------------------
 
-    def _tick(self, physics, v: P.VehicleParts, initial: bool = False) -> None:
-        """Rig, navigation, guidance and the log of one vehicle at this tick."""
-        vt = physics.truth(v.name)
+    def _tick_all(self, physics, initial: bool = False) -> None:
+        """Every vehicle's tick, in the scene's order. With several vehicles, each rig sees the
+        others (:class:`~bauv_sim.sensors.online.Peer`): their truth now and their latest
+        broadcast (this tick's for vehicles earlier in the order, else the previous tick's)."""
+        if len(self.names) == 1:
+            v = self.parts.vehicles[0]
+            self._tick(physics, v, physics.truth(v.name), None, initial)
+            return
+        truths = {name: physics.truth(name) for name in self.names}
+        for v in self.parts.vehicles:
+            peers = {}
+            for name, vt in truths.items():
+                if name != v.name:
+                    nav = self._nav.get(name)
+                    peers[name] = Peer(vt, None if nav is None else nav.broadcast)
+            self._tick(physics, v, truths[v.name], peers, initial)
+
+    def _tick(
+        self,
+        physics,
+        v: P.VehicleParts,
+        vt,
+        peers: dict[str, Peer] | None,
+        initial: bool = False,
+    ) -> None:
+        """Rig, navigation, guidance and the log of one vehicle at this tick (``vt``: its
+        truth now; ``peers``: the other vehicles, see :meth:`_tick_all`)."""
         a = self._actions[v.name]
         commands = {"tail_beat_frequency_hz": float(a[0])}
-        tick = v.rig.sense(self.k, vt, commands, initial)
+        tick = v.rig.sense(self.k, vt, commands, initial, peers)
         nav = v.navigation.step(tick, initial)
         cmd = v.guidance.step(vt.t_s, nav)
         self._nav[v.name], self._cmd[v.name] = nav, cmd

@@ -569,10 +569,10 @@ def test_autopilot_block():
     same(roundtrip(block).value, block)
 
 
-@pytest.mark.parametrize("name", ["mission/short", "mission/correction"])
+@pytest.mark.parametrize("name", ["mission/short", "mission/correction", "mission/swarm"])
 def test_mission_blocks(name):
     block = _block(name, (0,), "timing.max_duration_s=10")
-    flights = block[0].flights.values() if name == "mission/correction" else block
+    flights = block[0].flights.values() if name != "mission/short" else block
     assert all(f.vehicles and f.lead.ticks and f.lead.summary for f in flights)
     got = roundtrip(block).value
     same(got, block)
@@ -586,6 +586,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "AutopilotTrials",
         "MissionExperiment",
         "CorrectionExperiment",
+        "SwarmExperiment",
         "SquareExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested

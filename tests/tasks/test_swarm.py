@@ -1,0 +1,211 @@
+"""``mission/swarm`` (seed 003 on the physical BAUVs): station keeping from one acoustic range
+every 5 s, the methods against dead reckoning on the same draws, degradation to DR when ranges
+stop, determinism, and several followers sharing the modem channel.
+
+Flights are short (one or two minutes of simulated time, few vehicles): the physics is heavy."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from tasks.closed_loop.world import build_environment, fly
+from tasks.core.recording import read_time_series
+from tasks.core.runner import plan_batch, run
+from tasks.missions.swarm import LEADER, SwarmMission, fly_run
+
+NAME = "mission/swarm"
+
+
+def scenario(*overrides):
+    return plan_batch(NAME, overrides=list(overrides)).scenario
+
+
+@pytest.fixture(scope="module")
+def compared():
+    """One follower abeam at 10 m for 100 s in the 0.2 m/s cross current; the leader sends its
+    true position (as the paper's experiment), so that the follower's own navigation is judged;
+    GA1, GA2, the range EKF and DR on the same draws."""
+    scn = scenario(
+        "timing.max_duration_s=100",
+        "followers.sensors.modem.broadcast='truth'",
+        'navigation.methods=["ga1","ga2","ekf","dr"]',
+    )
+    return scn, fly_run(scn, 4, 0)
+
+
+def _true_station_error(flight, distance_m=10.0, bearing_rad=math.pi / 2):
+    """The follower's true distance to its station: the leader's true position plus the offset
+    at the relative bearing from the leader's true course (its ground velocity averaged over
+    the last 2 s, ten ticks: the hull swings with the tail beat)."""
+    lead, v = flight.vehicles[LEADER], flight.vehicles["f1"]
+    vel = lead["truth_vel"][:, :2]
+    mean = np.column_stack([np.convolve(vel[:, i], np.ones(10) / 10)[: len(vel)] for i in (0, 1)])
+    course = np.arctan2(mean[:, 0], mean[:, 1])
+    station = lead["truth_pos"][:, :2] + distance_m * np.column_stack(
+        [np.sin(course + bearing_rad), np.cos(course + bearing_rad)]
+    )
+    return v["t"], np.hypot(*(v["truth_pos"][:, :2] - station).T)
+
+
+def test_station_keeping_holds_the_follower_near_its_station(compared):
+    """Bound, after the first 30 s: the navigation error (GA2 here, at most ~1.5 m: between two
+    ranges the DR error grows by the compass and log errors, +-2 deg x 5 m and +-0.3 m/s over 25
+    ticks, a few decimetres, and the current error; each range resets the radial error to
+    +-0.125 m), plus the station's swing when the leader changes course (it steers +-15 deg
+    between way-points in the cross current: 10 m x sin 15 deg = 2.6 m), which the guidance
+    follows with a 1 / 0.08 = 12.5 s time constant, plus the 0.2 / 0.08 = 2.5 m lag of the
+    proportional part before the integral takes the current up: 1.5 + 2.6 + 2.5 ~ 6.6 m; the
+    mean stays well below (3 m). Dead reckoning on the same draws breaks both bounds."""
+    _, res = compared
+    assert res.failed is None
+    assert res.metrics["ga2"]["f1"]["fixes_accepted"] >= 18  # one every 5 s from t = 5 s
+    t, err = _true_station_error(res.flights["ga2"])
+    late = t > 30.0
+    assert err[late].max() < 6.6 + 1.0, err[late].max()
+    assert err[late].mean() < 3.0, err[late].mean()
+    assert res.metrics["ga2"]["f1"]["station_mean_error_m"] == pytest.approx(err.mean(), rel=0.05)
+    t, err_dr = _true_station_error(res.flights["dr"])
+    assert err_dr[late].max() > 7.6 and err_dr[late].mean() > 3.0
+
+
+def test_ranges_beat_dead_reckoning_on_the_same_draws(compared):
+    _, res = compared
+    dr = res.metrics["dr"]["f1"]
+    # same draws: the pure DR track of each flight starts from the same estimate
+    for k in ("ga1", "ga2", "ekf"):
+        assert np.array_equal(
+            res.flights[k].vehicles["f1"]["dr_pos"][0],
+            res.flights["dr"].vehicles["f1"]["dr_pos"][0],
+        )
+    # DR drifts with the current it cannot see (0.2 m/s: about 10 m by 100 s, 20 at the end)
+    assert dr["est_mean_error_m"] > 5.0 and dr["est_max_error_m"] > 15.0
+    for k in ("ga1", "ga2", "ekf"):
+        m = res.metrics[k]["f1"]
+        assert m["est_mean_error_m"] < 0.4 * dr["est_mean_error_m"], k
+        assert m["est_max_error_m"] < 0.5 * dr["est_max_error_m"], k
+        assert m["station_mean_error_m"] < 0.5 * dr["station_mean_error_m"], k
+        assert m["fixes_refused"] == 0
+    assert dr["fixes_accepted"] == 0
+
+
+def test_missing_ranges_degrade_to_dead_reckoning_with_a_warning():
+    scn = scenario(
+        "timing.max_duration_s=120",
+        "followers.sensors.modem.outages_s=[[22.0, 200.0]]",
+        "navigation.dr_warning_s=60",
+    )
+    res = fly_run(scn, 1, 0)
+    f = res.flights["ga1"].vehicles["f1"]
+    assert res.failed is None
+    for key, col in f.ticks.items():
+        if col.values.dtype.kind == "f":
+            assert np.all(np.isfinite(col.values)), key
+    fixes = f.fixes["modem"]
+    assert fixes["t_valid"].values.max() < 22.0  # nothing after the outage began
+    # on dead reckoning once the last range is in: the estimate moves as the compass + log
+    # track plus the last current the leader sent (held)
+    t = f["t"]
+    after = np.flatnonzero(t > fixes["t_arrival"].values.max() + 0.2)
+    cur = f["current_est"][after]
+    assert np.all(cur == cur[0]) and 0.05 < np.hypot(*cur[0]) < 0.5  # the EKF's, converging
+    moved = f["ekf_pos"][after, :2] - f["ekf_pos"][after[0], :2]
+    dr = f["dr_pos"][after, :2] - f["dr_pos"][after[0], :2]
+    assert np.allclose(moved, dr + (t[after] - t[after[0]])[:, None] * cur[0], atol=1e-6)
+    assert any("f1: no accepted range for" in w and "dead reckoning" in w for w in res.warnings)
+    assert res.metrics["ga1"]["f1"]["longest_dr_gap_s"] >= 60.0
+
+
+def test_leader_out_of_modem_range_gives_no_range_and_a_warning():
+    res = fly_run(
+        scenario(
+            "timing.max_duration_s=70",
+            "followers.sensors.modem.max_range_m=5",
+            "followers.sensors.modem.processing_delay_s=0.1",
+        ),
+        1,
+        0,
+    )
+    f = res.flights["ga1"].vehicles["f1"]
+    assert "modem" not in f.fixes and res.metrics["ga1"]["f1"]["fixes_accepted"] == 0
+    assert np.array_equal(f["ekf_pos"], f["dr_pos"])  # pure DR
+    assert any("no accepted range for 70 s" in w for w in res.warnings), res.warnings
+
+
+def test_flights_are_deterministic():
+    scn = scenario("timing.max_duration_s=20", "followers.count=2")
+    a = fly(SwarmMission("ekf"), scn, 3, 0)
+    b = fly(SwarmMission("ekf"), scn, 3, 0)
+    c = fly(SwarmMission("ekf"), scn, 4, 0)
+    for name in ("leader", "f1", "f2"):
+        for key in ("truth_pos", "ekf_pos", "dr_pos", "meas_heading", "hdop"):
+            if key in a.vehicles[name].ticks:
+                assert np.array_equal(a.vehicles[name][key], b.vehicles[name][key]), key
+    assert not np.array_equal(a.vehicles["f1"]["meas_heading"], c.vehicles["f1"]["meas_heading"])
+
+
+def test_four_followers_share_the_channel_in_slots():
+    scn = scenario("timing.max_duration_s=15", "followers.count=4")
+    env = build_environment(SwarmMission("ga2"), scn, 0, 0)
+    names = ("leader", "f1", "f2", "f3", "f4")
+    assert next(iter(env.observation_spec())).startswith("leader/")  # specs before reset
+    assert env.action_spec().shape == (5 * len(names),)
+    res = fly(SwarmMission("ga2"), scn, 0, 0)
+    assert res.failed is None and tuple(res.vehicles) == names
+    exchange = 300.0 / 1500.0 + 0.5
+    times = sorted(
+        (float(t), n) for n in names[1:] for t in res.vehicles[n].fixes["modem"]["t_valid"].values
+    )
+    assert len(times) == 8  # two periods of four slots (5 s, 10 s + slot offsets)
+    assert [n for _, n in times] == ["f1", "f2", "f3", "f4"] * 2
+    gaps = np.diff([t for t, _ in times])
+    assert np.all(gaps >= exchange - 1e-9)
+    offsets = [t - 5.0 for t, _ in times[:4]]
+    assert offsets == pytest.approx([0.0, 1.2, 2.4, 3.6])  # (slot * 25) // 4 ticks of 0.2 s
+
+
+def test_report_recording_and_warning_of_a_batch(tmp_path):
+    """The batch report: every vehicle, its estimate, a range circle per fix and the HDOP in the
+    recording (read back); the warning in the tables and metrics; no NaN in metrics.json."""
+    out = tmp_path / "swarm"
+    run(
+        NAME,
+        n_runs=1,
+        seed=2,
+        out_dir=out,
+        progress=False,
+        overrides=[
+            "timing.max_duration_s=40",
+            "followers.count=2",
+            "followers.sensors.modem.outages_s=[[12.0, 100.0]]",
+            "navigation.dr_warning_s=20",
+            'navigation.methods=["ga2","dr"]',
+        ],
+    )
+    text = (out / "metrics.json").read_text()
+    assert "NaN" not in text
+    m = json.loads(text)
+    assert [(r["follower"], r["method"]) for r in m["followers"]] == [
+        ("f1", "ga2"),
+        ("f1", "dr"),
+        ("f2", "ga2"),
+        ("f2", "dr"),
+    ]
+    assert any("f2: no accepted range for" in w for w in m["warnings"])
+    assert "Warnings" in (out / "tables.md").read_text()
+    rec = out / "recording.rrd"
+    data = json.loads(json.dumps(m["runs"][0]["metrics"]["ga2"]))
+    assert data["f1"]["fixes_accepted"] == 2  # at 5 and 10 s, then the outage
+    for v in ("leader", "f1", "f2"):
+        t, truth = read_time_series(rec, f"world/{v}/truth/position", "Points3D:positions")
+        _, est = read_time_series(rec, f"world/{v}/estimate/position", "Points3D:positions")
+        assert len(t) == 201 and truth.shape == est.shape == (201, 3)
+    t, circles = read_time_series(rec, "world/f1/range_circle", "LineStrips3D:strips")
+    assert len(t) == 2  # one circle at each of the two fixes, at its arrival
+    for c in np.asarray(circles, dtype=float):
+        r = np.hypot(*(c[:, :2] - c[:-1, :2].mean(axis=0)).T)
+        assert np.allclose(r, r[0], atol=1e-3) and 7.0 < r[0] < 14.0  # about 10 m abeam
+    th, hdop = read_time_series(rec, "hdop/f1", "Scalars:scalars")
+    assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
+    assert (out / "data" / "run-000000-ga2" / "f1.modem.parquet").is_file()
