@@ -96,13 +96,17 @@ def measure(
     return out
 
 
-def command(argv: Sequence[str], env: Mapping[str, str] | None = None) -> Callable[[], None]:
-    """A variant that runs a whole command (a fresh process each call) and checks its status."""
+def command(
+    argv: Sequence[str], env: Mapping[str, str] | None = None, cwd: str | os.PathLike | None = None
+) -> Callable[[], None]:
+    """A variant that runs a whole command (a fresh process each call, in ``cwd``) and checks its
+    status."""
 
     def run() -> None:
         subprocess.run(
             list(argv),
             check=True,
+            cwd=cwd,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             env=None if env is None else {**os.environ, **env},

@@ -30,7 +30,6 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import chi2
 
 from nav.errors import FilterDivergedError, NavInputError
 
@@ -111,6 +110,8 @@ class Estimator(Protocol):
 @functools.lru_cache(maxsize=256)
 def gate_limit(probability: float, dof: int) -> float:
     """Chi-square quantile of ``probability`` with ``dof`` degrees of freedom (cached)."""
+    from scipy.stats import chi2  # on first use: scipy.stats costs ~0.4 s to import
+
     return float(chi2.ppf(probability, dof))
 
 

@@ -45,12 +45,12 @@ def cli() -> None:
 @cli.command("list")
 def list_cmd() -> None:
     """List the registered experiments and missions."""
-    from tasks.core import registry
+    from tasks.core import catalog
 
-    exps = registry.all_experiments()
-    width = max(len(e.name) for e in exps)
-    for e in exps:
-        click.echo(f"{e.name.ljust(width)}  {e.summary}")
+    entries = catalog.load()  # no experiment package imported (tests keep it equal)
+    width = max(len(name) for name, _ in entries)
+    for name, summary in entries:
+        click.echo(f"{name.ljust(width)}  {summary}")
 
 
 @cli.command("show")

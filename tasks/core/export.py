@@ -31,12 +31,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.parquet as pq
 
 from bauv_sim.errors import BauvSimError
 from tasks.core import store
 from tasks.core.files import create_beside
+from tasks.core.lazy import LazyModule
+
+pa = LazyModule("pyarrow")  # imported when run data is written or read
+pq = LazyModule("pyarrow.parquet", after=(pa,))
 
 FORMAT_KEY = "bauv-sim.export"
 """Key of the table metadata marking a file written by :func:`write_parquet`."""

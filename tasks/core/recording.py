@@ -13,11 +13,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import rerun as rr
-import rerun.blueprint as rrb
 from numpy.typing import NDArray
 
 from bauv_sim.frames import quat_wxyz_from_R, quat_wxyz_to_xyzw
+from tasks.core.lazy import LazyModule
+
+rr = LazyModule("rerun")  # imported when a recording is written or read, not before
+rrb = LazyModule("rerun.blueprint", after=(rr,))
 
 TIMELINE = "sim_time"
 UI_LINE = -1.5

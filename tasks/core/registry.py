@@ -1,12 +1,15 @@
 """The registry of experiments and missions, loaded by name.
 
-Experiments live in experiment packages (``tasks.paper000``, ``tasks.paper001``, ``tasks.missions``,
-``tasks.vehicle``; the list is :data:`EXPERIMENT_PACKAGES`). A module builds :class:`Experiment`
-instances and passes them to :func:`register` at import time, the way dm_control's suite domains add
-themselves with ``@SUITE.add``; its package's ``__init__`` imports it, so importing the package
-registers all of its experiments. :func:`get` and :func:`names` import every package the first time
-they are called. Registration is explicit: a module that its package does not import is not
-registered, whatever its file name.
+Experiments live in experiment packages, one per family of names (:data:`FAMILIES`:
+``paper-000/...`` in ``tasks.paper000``, ``mission/...`` in ``tasks.missions``, ...). A module
+builds :class:`Experiment` instances and passes them to :func:`register` at import time, the way
+dm_control's suite domains add themselves with ``@SUITE.add``; its package's ``__init__`` imports
+it, so importing the package registers all of its experiments. :func:`get` imports only the package
+of the name's family (a kinematic run never imports MuJoCo for the missions); :func:`names` and
+:func:`all_experiments` import every package. Registration is explicit: a module that its package
+does not import is not registered, whatever its file name. :data:`tasks.core.catalog.CATALOG`
+holds every name with its summary for ``bauv list`` without importing any experiment (a test keeps
+it equal to the registry).
 
 An experiment is split in two pure parts so that the runner can distribute it:
 
@@ -32,13 +35,16 @@ from pydantic import BaseModel
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 
-EXPERIMENT_PACKAGES = (
-    "tasks.paper000",
-    "tasks.paper001",
-    "tasks.paper003",
-    "tasks.missions",
-    "tasks.vehicle",
-)
+FAMILIES: dict[str, str] = {
+    "paper-000": "tasks.paper000",
+    "paper-001": "tasks.paper001",
+    "paper-003": "tasks.paper003",
+    "mission": "tasks.missions",
+    "vehicle": "tasks.vehicle",
+}
+"""Family of names (the part before ``/``) -> the package whose import registers them."""
+
+EXPERIMENT_PACKAGES = tuple(FAMILIES.values())
 """The packages whose import registers every experiment and mission."""
 
 _REGISTRY: dict[str, Experiment] = {}
@@ -149,8 +155,15 @@ def register(experiment: Experiment) -> Experiment:
     """Add an experiment to the registry.
 
     Raises:
-        ValueError: if the name is taken by another experiment.
+        ValueError: if the name is taken by another experiment, or its family (the part before
+            ``/``) is not one of :data:`FAMILIES`.
     """
+    family = experiment.name.split("/", 1)[0]
+    if family not in FAMILIES:
+        raise ValueError(
+            f"experiment name {experiment.name!r}: family {family!r} is not in FAMILIES "
+            f"({', '.join(FAMILIES)})"
+        )
     if experiment.name in _REGISTRY and _REGISTRY[experiment.name] is not experiment:
         raise ValueError(f"experiment name {experiment.name!r} is registered twice")
     _REGISTRY[experiment.name] = experiment
@@ -175,10 +188,18 @@ def names() -> list[str]:
 def get(name: str) -> Experiment:
     """The experiment registered under ``name``.
 
+    Only the package of the name's family is imported (all of them for an unknown name, to list
+    the known ones).
+
     Raises:
         ConfigError: naming the unknown name and listing the known ones.
     """
-    _load_all()
+    if name not in _REGISTRY:
+        package = FAMILIES.get(name.split("/", 1)[0])
+        if package is not None:
+            importlib.import_module(package)
+    if name not in _REGISTRY:
+        _load_all()
     try:
         return _REGISTRY[name]
     except KeyError:

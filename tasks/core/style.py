@@ -29,12 +29,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal, ParamSpec, TypeVar
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib import ticker
+from cycler import cycler
+
+from tasks.core.lazy import LazyModule
+
+# matplotlib is imported when the first figure is drawn, not when an experiment is imported
+matplotlib = LazyModule("matplotlib", lambda mpl: mpl.use("Agg"))
+plt = LazyModule("matplotlib.pyplot", after=(matplotlib,))
+ticker = LazyModule("matplotlib.ticker", after=(matplotlib,))
 
 __all__ = [
     "COLUMN_IN",
@@ -120,7 +123,7 @@ RC: dict[str, Any] = {
     "grid.linewidth": 0.5,
     "xtick.major.width": 0.6,
     "ytick.major.width": 0.6,
-    "axes.prop_cycle": matplotlib.cycler(
+    "axes.prop_cycle": cycler(
         color=[_P[k] for k in ("blue", "vermillion", "bluish_green", "orange", "reddish_purple")]
     ),
     "figure.dpi": 100,

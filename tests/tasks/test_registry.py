@@ -38,3 +38,34 @@ def test_every_registering_module_is_imported_by_its_package():
         for info in pkgutil.walk_packages(pkg.__path__, f"{package}."):
             importlib.import_module(info.name)
     assert set(registry.names()) == before
+
+
+def test_the_catalog_of_bauv_list_is_the_registry():
+    from tasks.core import catalog
+
+    assert catalog.load() == catalog.from_registry(), (
+        "tasks/core/catalog.json is stale: run python -m tasks.core.catalog"
+    )
+
+
+@pytest.mark.parametrize("family", sorted(registry.FAMILIES))
+def test_each_family_is_registered_by_its_own_package_alone(family):
+    """get() imports only the name's family package: that package alone must register every
+    name of the family (checked in a fresh interpreter, where nothing else is imported)."""
+    import subprocess
+    import sys
+
+    package = registry.FAMILIES[family]
+    code = (
+        "import importlib, json; from tasks.core import registry;"
+        f"importlib.import_module({package!r});"
+        "print(json.dumps(sorted(registry._REGISTRY)))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    alone = set(json.loads(out.stdout))
+    assert alone == {n for n in NAMES if n.split("/", 1)[0] == family}
+
+
+def test_a_name_outside_the_families_is_refused():
+    with pytest.raises(ValueError, match="family"):
+        registry.register(registry.Experiment(name="nofamily/x", summary="x"))
