@@ -16,6 +16,9 @@ from numpy.typing import NDArray
 
 from nav.metrics import Histogram
 from tasks.core import style
+from tasks.core.lazy import LazyModule
+
+collections = LazyModule("matplotlib.collections", after=(style.matplotlib,))
 
 __all__ = ["consistency", "distances", "field_map", "histograms", "route_alpha", "routes"]
 
@@ -101,6 +104,20 @@ def routes(
                 )
         for name, trs in tracks.items():
             alpha = route_alpha(len(trs))
+            if len(trs) > 8:  # many runs: one collection (one draw call) instead of a line each
+                look = style.line(name, lw=0.8, alpha=alpha, zorder=3)
+                lines = collections.LineCollection(
+                    [xy(np.asarray(tr, dtype=float)) for tr in trs],
+                    colors=look["color"],
+                    linestyles="-" if look.get("ls") in (None, "none") else look["ls"],
+                    linewidths=0.8,
+                    alpha=alpha,
+                    zorder=3,
+                )
+                ax.add_collection(lines)
+                ax.autoscale_view()
+                ax.plot([], [], **style.line(name, lw=0.8))  # the legend entry, opaque
+                continue
             for i, tr in enumerate(trs):
                 q = xy(np.asarray(tr, dtype=float))
                 ax.plot(
