@@ -1029,6 +1029,17 @@ ROW_KEYS = (
 )
 
 
+COUNT_KEYS = frozenset({"fixes_accepted", "fixes_refused", "usbl_fixes"})
+"""Row keys that count events: printed as whole numbers when the mean over runs is one."""
+
+
+def _cell(key: str, value: float | None) -> float | int | None:
+    """A table cell: a count that is a whole number as an ``int`` (119, not 119.00)."""
+    if key in COUNT_KEYS and value is not None and float(value).is_integer():
+        return int(value)
+    return value
+
+
 def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
     """The table per follower and method, the leader's navigation, warnings, figures, the
     recording of one run and the run data."""
@@ -1100,7 +1111,7 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
                 row.follower,
                 f"{row.relative_bearing_deg:g} deg / {row.distance_m:g} m",
                 row.method.upper(),
-                *(row.values.get(k) for k, _ in ROW_KEYS),
+                *(_cell(k, row.values.get(k)) for k, _ in ROW_KEYS),
             ]
             for row in rows
         ],
@@ -1122,7 +1133,7 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
                 m.upper(),
                 leader[m].get("ekf_mean_error_m"),
                 leader[m].get("ekf_max_error_m"),
-                leader[m].get("usbl_fixes"),
+                _cell("usbl_fixes", leader[m].get("usbl_fixes")),
             ]
             for m in methods
         ],
