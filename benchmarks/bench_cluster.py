@@ -57,19 +57,20 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, nargs="+", default=[500, 2000, 10000])
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--block-size", type=int, default=1000)
+    ap.add_argument("--blocks", type=int, default=8, help="blocks per batch (work to share)")
     a = ap.parse_args()
     print(machine())
     with tempfile.TemporaryDirectory() as tmp_s:
         tmp = Path(tmp_s)
         address, procs = _cluster(tmp)
         try:
+            counter = iter(range(10**6))
             for n in a.runs:
+                size = max(1, -(-n // a.blocks))
                 base = [sys.executable, "-m", "tasks.core.cli", "run", "paper-000/test-1"]
                 base += ["--runs", str(n), "--quiet", "--set", "report.figures=false"]
                 base += ["--set", "report.recording=false"]
-                base += ["--set", f"runner.block_size={min(a.block_size, n)}"]
-                counter = iter(range(10**6))
+                base += ["--set", f"runner.block_size={size}"]
 
                 def run(extra: list[str], b: list[str] = base, k=counter) -> None:
                     command([*b, *extra, "--out", str(tmp / f"r{next(k)}")])()
@@ -82,7 +83,7 @@ def main() -> None:
                     ),
                 }
                 res = measure(variants, repeats=a.repeats, warmup=1)
-                print(f"\n{n:,} runs (blocks of {min(a.block_size, n)}), wall time per batch:")
+                print(f"\n{n:,} runs (blocks of {size}), wall time per batch:")
                 print(table(res, reference="1 local worker", unit="s"))
         finally:
             for p in procs[::-1]:
