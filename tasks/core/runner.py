@@ -30,6 +30,7 @@ indices, scenario sha256) that agrees with the batch. No file of a run folder is
 
 from __future__ import annotations
 
+import collections
 import concurrent.futures as cf
 import contextlib
 import datetime as _dt
@@ -576,9 +577,11 @@ def _completed(futures: dict[cf.Future, int]) -> Iterator[cf.Future]:
     """The futures as they finish: in submission order for lazy (inline) futures, which run when
     asked for, else in completion order (:func:`concurrent.futures.as_completed`)."""
     if all(isinstance(f, _LazyFuture) for f in futures):
-        yield from futures
+        pending = collections.deque(futures)
+        while pending:  # held here only until handed out, so a saved block can be freed
+            yield pending.popleft()
     else:
-        yield from cf.as_completed(futures)
+        yield from cf.as_completed(futures)  # which drops its references as it yields
 
 
 PARENT_POLL_S = 0.5
@@ -798,7 +801,9 @@ def execute(
                 }
                 try:
                     for fut in _completed(futures):
-                        i = futures[fut]
+                        # forget the future once its block is handled: its result (the block)
+                        # is then freed, so memory does not grow with the batch
+                        i = futures.pop(fut)
                         try:
                             payload = fut.result()
                         except Exception as exc:
