@@ -26,6 +26,7 @@ Reading of the paper where it is silent (documented in the scenario fields):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Literal
@@ -798,17 +799,24 @@ def _per_run_stats(values: NDArray[np.float64]) -> MethodStats:
 
 
 def _merge_blocks(ctx: ReportContext) -> Paper000Block:
+    """The blocks summed in block order (so the sums are the same whatever the block layout of a
+    resume). Linear in the number of blocks: the per-run arrays are gathered and concatenated
+    once, the accumulators of fixed size are summed pairwise."""
     total: Paper000Block | None = None
+    runs: list[tuple[int, ...]] = []
+    per_run: list[NDArray[np.float64]] = []
     for b in ctx.blocks:
+        runs.append(b.runs)
+        per_run.append(b.per_run)
         if total is None:
             total = b
             continue
         total = Paper000Block(
-            runs=total.runs + b.runs,
+            runs=(),
             zeta={k: total.zeta[k].merge(b.zeta[k]) for k in METHODS},
             nees_ekf=total.nees_ekf.merge(b.nees_ekf),
             nis=total.nis.merge(b.nis),
-            per_run=np.concatenate([total.per_run, b.per_run]),
+            per_run=per_run[0],
             hist={k: total.hist[k].merge(b.hist[k]) for k in METHODS},
             routes={**total.routes, **b.routes},
             single={**total.single, **b.single},
@@ -821,7 +829,11 @@ def _merge_blocks(ctx: ReportContext) -> Paper000Block:
         )
     if total is None:
         raise ValueError("no blocks to report")
-    return total
+    return dataclasses.replace(
+        total,
+        runs=tuple(r for block in runs for r in block),
+        per_run=np.concatenate(per_run) if len(per_run) > 1 else per_run[0],
+    )
 
 
 def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> ReportSummary:
