@@ -6,7 +6,9 @@ measurements. Navigation lives in the separate package :mod:`nav`, which never i
 
 from pathlib import Path
 
-from bauv_sim.errors import BauvSimError, ConfigError
+from bauv_sim.errors import BauvSimError as BauvSimError
+from bauv_sim.errors import ConfigError as ConfigError
+from nav._exports import lazy_exports
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 """Root of the source tree (holds ``models/`` and ``assets/``)."""
@@ -45,56 +47,6 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__ = [
-    "PROJECT_ROOT",
-    "ActuatorCommand",
-    "Autopilot",
-    "AutopilotConfig",
-    "BauvPhysics",
-    "BauvSimError",
-    "BeaconSpec",
-    "Config",
-    "ConfigError",
-    "CurrentField",
-    "GeometryError",
-    "GyreCurrent",
-    "Measured",
-    "PhysicsError",
-    "RandomisedCurrent",
-    "SceneConfig",
-    "Sea",
-    "ShearCurrent",
-    "SumCurrent",
-    "Truth",
-    "UniformCurrent",
-    "VehicleSpec",
-    "VehicleTruth",
-    "build_physics",
-    "build_scene",
-    "export_scene",
-    "generator",
-    "generators",
-    "load_config",
-    "make_current",
-    "seed_sequence",
-    "to_plain",
-    "validate",
-]
-
-
-def __getattr__(name: str):
-    """Import a public name from its module on first use (PEP 562): importing the package stays
-    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
-    target = _EXPORTS.get(name)
-    if target is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    module, attr = target
-    value = getattr(importlib.import_module(module), attr)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__all__, __getattr__, __dir__ = lazy_exports(
+    globals(), _EXPORTS, eager=("BauvSimError", "ConfigError", "PROJECT_ROOT")
+)

@@ -4,7 +4,8 @@ Knows nothing of MuJoCo or of :mod:`bauv_sim`: it sees measurements, never truth
 leading axis of Monte Carlo runs: state ``(n, dim)``, covariance ``(n, dim, dim)``.
 """
 
-from nav.errors import NavError
+from nav._exports import lazy_exports
+from nav.errors import NavError as NavError
 
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchEKF": ("nav.ekf", "BatchEKF"),
@@ -46,60 +47,4 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__ = [
-    "BatchEKF",
-    "CorrectedDeadReckoning",
-    "CourseSpeedDepthMotion",
-    "CurrentAwareMotion",
-    "CurrentResponse",
-    "DeadReckoning",
-    "DepthMeasurement",
-    "Estimate",
-    "Estimator",
-    "FilterDivergedError",
-    "GuidanceCommand",
-    "Histogram",
-    "HorizontalPositionMeasurement",
-    "MeasurementModel",
-    "MotionModel",
-    "NavError",
-    "NavInputError",
-    "Navigator",
-    "OnlineNavigator",
-    "SeriesSum",
-    "SingleRunEKF",
-    "UpdateInfo",
-    "UsblMeasurement",
-    "Waypoint",
-    "WaypointGuidance",
-    "baseline",
-    "compensated_course",
-    "cp1",
-    "cp2",
-    "dead_reckon",
-    "direct_course",
-    "distance_3d",
-    "gate_limit",
-    "horizontal_distance",
-    "nees",
-    "nees_band",
-    "series_stats",
-]
-
-
-def __getattr__(name: str):
-    """Import a public name from its module on first use (PEP 562): importing the package stays
-    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
-    target = _EXPORTS.get(name)
-    if target is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    module, attr = target
-    value = getattr(importlib.import_module(module), attr)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__all__, __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS, eager=("NavError",))

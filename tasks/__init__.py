@@ -15,6 +15,8 @@ packages named in :data:`tasks.core.registry.EXPERIMENT_PACKAGES`. Depends on :m
 :mod:`bauv_sim`; nothing depends on it.
 """
 
+from nav._exports import lazy_exports
+
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchFailed": ("tasks.core.runner", "BatchFailed"),
     "BatchInterrupted": ("tasks.core.runner", "BatchInterrupted"),
@@ -36,40 +38,4 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__ = [
-    "BatchFailed",
-    "BatchInterrupted",
-    "BatchPlan",
-    "Column",
-    "Experiment",
-    "MissionRun",
-    "MissionScenario",
-    "VehicleRun",
-    "WaypointMission",
-    "experiment_names",
-    "fly",
-    "get_experiment",
-    "plan_batch",
-    "read_parquet",
-    "register",
-    "run",
-    "write_parquet",
-]
-
-
-def __getattr__(name: str):
-    """Import a public name from its module on first use (PEP 562): importing the package stays
-    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
-    target = _EXPORTS.get(name)
-    if target is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    module, attr = target
-    value = getattr(importlib.import_module(module), attr)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__all__, __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)

@@ -11,6 +11,8 @@
 * :mod:`~tasks.closed_loop.experiment`: :class:`~tasks.closed_loop.experiment.MissionExperiment`.
 """
 
+from nav._exports import lazy_exports
+
 _EXPORTS: dict[str, tuple[str, str]] = {
     "EkfNavigation": ("tasks.closed_loop.navigation", "EkfNavigation"),
     "FIX_COLUMNS": ("tasks.closed_loop.result", "FIX_COLUMNS"),
@@ -41,49 +43,4 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__ = [
-    "FIX_COLUMNS",
-    "TICK_COLUMNS",
-    "EkfNavigation",
-    "FixRecord",
-    "GuidanceConfig",
-    "MissionDesign",
-    "MissionExperiment",
-    "MissionParts",
-    "MissionRun",
-    "MissionScenario",
-    "MissionSensors",
-    "MissionWorld",
-    "NavOutput",
-    "NavigationConfig",
-    "Pilot",
-    "VehicleParts",
-    "VehicleRun",
-    "WaypointMission",
-    "WaypointSteering",
-    "build_environment",
-    "export_runs",
-    "fly",
-    "mission_figures",
-    "record_mission",
-    "report_mission",
-    "standard_vehicle",
-]
-
-
-def __getattr__(name: str):
-    """Import a public name from its module on first use (PEP 562): importing the package stays
-    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
-    target = _EXPORTS.get(name)
-    if target is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    module, attr = target
-    value = getattr(importlib.import_module(module), attr)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__all__, __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)

@@ -2,6 +2,8 @@
 
 Nothing here knows a particular experiment or mission."""
 
+from nav._exports import lazy_exports
+
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchFailed": ("tasks.core.runner", "BatchFailed"),
     "BatchInterrupted": ("tasks.core.runner", "BatchInterrupted"),
@@ -29,46 +31,4 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__ = [
-    "BatchFailed",
-    "BatchInterrupted",
-    "BatchPlan",
-    "Column",
-    "Experiment",
-    "ExportError",
-    "Recording",
-    "ReportContext",
-    "ReportSummary",
-    "Table",
-    "all_experiments",
-    "get",
-    "names",
-    "plan_batch",
-    "read_parquet",
-    "read_text_log",
-    "read_time_series",
-    "register",
-    "run",
-    "scenario_doc",
-    "write_metrics",
-    "write_parquet",
-    "write_tables",
-]
-
-
-def __getattr__(name: str):
-    """Import a public name from its module on first use (PEP 562): importing the package stays
-    cheap (no MuJoCo, no matplotlib) and every name of ``__all__`` resolves."""
-    target = _EXPORTS.get(name)
-    if target is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    module, attr = target
-    value = getattr(importlib.import_module(module), attr)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__all__, __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
