@@ -60,7 +60,7 @@ from bauv_sim.sensors import (
     periodic_indices,
 )
 from bauv_sim.truth import Truth
-from nav.dead_reckoning import dead_reckon
+from nav.dead_reckoning import track
 from nav.ekf import gate_limit
 from nav.metrics import (
     Histogram,
@@ -434,15 +434,26 @@ def measure_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) ->
     )
 
 
-def run_ekf(inp: PassageInputs, tick_s: float, gate_probability: float | None = None) -> Tracks:
+def run_ekf(
+    inp: PassageInputs,
+    tick_s: float,
+    gate_probability: float | None = None,
+    steps: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> Tracks:
     """The EKF of eq. 15-23 over the passages, batched over runs
     (:func:`nav.track_ekf.ekf_tracks`: F = I, so a prediction adds the step's displacement and
     process noise, computed for all steps in one pass).
 
+    Args:
+        inp: the passages' inputs.
+        tick_s: step duration, s.
+        gate_probability: the chi-square gate, or None.
+        steps: ``inp.motion.increment_and_packed_Q(inp.u, tick_s)`` if already computed.
+
     Returns:
         The tracks: states (T + 1, 3, n) and packed covariances (T + 1, 6, n), time-major.
     """
-    inc, Q = inp.motion.increment_and_packed_Q(inp.u, tick_s)
+    inc, Q = inp.motion.increment_and_packed_Q(inp.u, tick_s) if steps is None else steps
     limits = None
     if gate_probability is not None:
         limits = np.array([np.inf, *(gate_limit(gate_probability, d) for d in (1, 2, 3))])
@@ -462,8 +473,10 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
     """
     inp = measure_passages(scn, seed, runs)
     tick = scn.passage.tick_s
-    dr, _ = dead_reckon(inp.x0, inp.u, tick, inp.motion)
-    tracks = run_ekf(inp, tick, scn.filter.gate_probability)
+    # DR and the EKF's predictions add the same displacements (eq. 8 and 17), computed once
+    steps = inp.motion.increment_and_packed_Q(inp.u, tick)
+    dr = track(inp.x0, np.swapaxes(steps[0], 0, 1))
+    tracks = run_ekf(inp, tick, scn.filter.gate_probability, steps)
     truth = inp.truth
     return Passages(
         runs,
