@@ -236,7 +236,7 @@ def block_passages(scn: Paper000Scenario) -> int:
     """Passages per block: ``runner.block_size``, or by work (:data:`BLOCK_PASSAGE_TICKS`)."""
     if scn.runner.block_size is not None:
         return scn.runner.block_size
-    return max(1, min(100_000, BLOCK_PASSAGE_TICKS // scn.passage.n_ticks))
+    return max(1, min(100_000, BLOCK_PASSAGE_TICKS // max(1, scn.passage.n_ticks - 1)))
 
 
 class RunnerConfig(Config):
