@@ -122,7 +122,8 @@ def ekf_tracks(
     Args:
         x0: initial states, shape (n, 3), m, world.
         P0: initial covariance, shape (3, 3) or (n, 3, 3), m^2.
-        inc: each tick's displacement ``f(x, u) - x``, shape (T, n, 3), m (time-major).
+        inc: each tick's displacement ``f(x, u) - x``, shape (T, 3, n), m (time-major, the
+            layout of the states).
         Q: each tick's process noise packed, shape (T, 6, n), m^2 (order :data:`SYM`).
         fix_tick: tick at which each measurement is applied (after that tick's prediction),
             shape (k,), each in 1..T.
@@ -139,7 +140,7 @@ def ekf_tracks(
         NavInputError: if R is not diagonal with positive variances.
         FilterDivergedError: if a final state or covariance is not finite.
     """
-    T, n, _ = inc.shape
+    T, _, n = inc.shape
     R = np.asarray(model.R(), dtype=float)
     r_diag = np.diagonal(R)
     if np.any(R != np.diag(r_diag)) or np.any(r_diag <= 0):
@@ -148,13 +149,12 @@ def ekf_tracks(
     Ps = np.empty((T + 1, 6, n))
     xs[0] = np.asarray(x0, dtype=float).T
     Ps[0] = pack(np.broadcast_to(P0, (n, 3, 3)))
-    inc_t = np.ascontiguousarray(np.swapaxes(inc, 1, 2))  # (T, 3, n)
     k_fix = len(fix_tick)
     nis = np.full((n, k_fix), np.nan)
     rejected = np.zeros((n, k_fix), dtype=bool)
     fix_at = {int(t): j for j, t in enumerate(fix_tick)}
     for k in range(T):
-        np.add(xs[k], inc_t[k], out=xs[k + 1])  # eq. 17 with F = I
+        np.add(xs[k], inc[k], out=xs[k + 1])  # eq. 17 with F = I
         np.add(Ps[k], Q[k], out=Ps[k + 1])  # eq. 18 with F = I
         j = fix_at.get(k + 1)
         if j is not None:

@@ -60,7 +60,6 @@ from bauv_sim.sensors import (
     periodic_indices,
 )
 from bauv_sim.truth import Truth
-from nav.dead_reckoning import track
 from nav.ekf import gate_limit
 from nav.metrics import (
     Histogram,
@@ -72,7 +71,7 @@ from nav.metrics import (
     nees_band,
     series_stats,
 )
-from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+from nav.models import TIME_CHUNK, CourseSpeedDepthMotion, UsblMeasurement
 from nav.track_ekf import Tracks, ekf_tracks, nees_packed, unpack
 from tasks.core import figures, store
 from tasks.core.recording import COLORS, Recording
@@ -345,8 +344,13 @@ class Passages:
 
     def ekf_nees(self) -> NDArray[np.float64]:
         """NEES of the EKF (3-D state), shape (n, T + 1)."""
-        err = self.ekf_m.transpose(2, 1, 0) - self.reference_m.T[:, :, None]  # (3, T + 1, n)
-        return nees_packed(err, np.moveaxis(self.ekf_Pp, 1, 0)).T
+        xs, Pp, ref = self.ekf_m.transpose(1, 2, 0), self.ekf_Pp, self.reference_m  # time-major
+        out = np.empty(xs.shape[::2])
+        for a in range(0, len(out), TIME_CHUNK):  # a few dozen ticks at a time: in the cache
+            b = a + TIME_CHUNK
+            err = np.moveaxis(xs[a:b] - ref[a:b, :, None], 1, 0)  # (3, ticks, n)
+            out[a:b] = nees_packed(err, np.moveaxis(Pp[a:b], 1, 0))
+        return out.T
 
 
 def _hold_last(values: NDArray[np.float64], produced: NDArray[np.bool_], what: str):
@@ -475,7 +479,10 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
     tick = scn.passage.tick_s
     # DR and the EKF's predictions add the same displacements (eq. 8 and 17), computed once
     steps = inp.motion.increment_and_packed_Q(inp.u, tick)
-    dr = track(inp.x0, np.swapaxes(steps[0], 0, 1))
+    dr = np.empty((steps[0].shape[0] + 1, 3, len(runs)))  # time-major, as the EKF's states
+    dr[0] = inp.x0.T
+    np.cumsum(steps[0], axis=0, out=dr[1:])
+    dr[1:] += dr[0]
     tracks = run_ekf(inp, tick, scn.filter.gate_probability, steps)
     truth = inp.truth
     return Passages(
@@ -485,7 +492,7 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
         inp.fix_tick,
         tracks.positions(),
         tracks.Ps,
-        dr,
+        dr.transpose(2, 0, 1),
         inp.usbl.invert(inp.z),
         inp.z_produced,
         tracks.nis,

@@ -75,7 +75,7 @@ def test_packed_process_noise_is_the_full_one():
     u, *_ = _case(n=20, T=30)
     inc, Q = MOTION.increment_and_Q(u, 0.5)
     inc_t, Qp = MOTION.increment_and_packed_Q(u, 0.5)
-    np.testing.assert_array_equal(inc_t, np.swapaxes(inc, 0, 1))
+    np.testing.assert_array_equal(inc_t, np.moveaxis(inc, 0, 2))  # (T, 3, n) from (n, T, 3)
     np.testing.assert_array_equal(track_ekf.unpack(Qp), Q)
 
 
