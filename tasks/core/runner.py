@@ -616,6 +616,22 @@ def _pool_context(preload: Sequence[str]) -> multiprocessing.context.BaseContext
     return multiprocessing.get_context("spawn")
 
 
+def _start_fork_server(name: str) -> None:
+    """Start the local workers' fork server now, with the package of ``name``'s family
+    preloaded, so that it imports the project on another core while this process plans the
+    batch (otherwise both happen one after the other). Nothing happens for an unknown family
+    (the plan reports it) or where there is no fork server.
+    """
+    package = registry.FAMILIES.get(name.split("/", 1)[0])
+    if package is None or "forkserver" not in multiprocessing.get_all_start_methods():
+        return
+    from multiprocessing import forkserver
+
+    _pool_context((package,))
+    with contextlib.suppress(OSError):
+        forkserver.ensure_running()
+
+
 def _die_with_parent(parent_pid: int) -> None:
     """Initializer of a local worker process: exit when the process that started it is gone.
 
@@ -931,6 +947,8 @@ def run(
         BatchFailed: if a block raised.
     """
     check_executor(executor, workers, address)
+    if executor == "local" and workers > 1:
+        _start_fork_server(name)
     if resume:
         if out_dir is None:
             raise ConfigError("--resume needs --out: the folder of the batch to complete")
