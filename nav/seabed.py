@@ -43,6 +43,10 @@ image is taken at the next attitude and eq. 10 accounts for the turn (linearised
 has an echo in both images. A shift with fewer usable beams than the fit needs is not produced
 (``ok = False``; the shift is zero and the covariance ``fallback_var_m2 * I``, never NaN).
 
+**Conditioning.** Eq. 15 is solved by SVD; singular values of A below ``rcond`` (relative) or
+:data:`SINGULAR_FLOOR` (absolute) count as zero: the shift has no component along them and
+the covariance states them unobserved, and ``rank`` says how many directions were observed.
+
 **Error covariance.** Eq. 15 comes with no covariance. :func:`shift_estimate` offers
 ``"residual"``: the least-squares covariance ``s^2 (A^T A)^-1`` with ``s^2`` the residual variance
 of eq. 13 (``RSS / (m - 3)``), floored by the range-noise propagation; and ``"range_noise"``: the
@@ -75,8 +79,9 @@ CovarianceKind = Literal["residual", "range_noise"]
 """How :func:`shift_estimate` states its error covariance (module docstring)."""
 
 SINGULAR_FLOOR = 1e-9
-"""Relative singular-value floor of the shift's least squares (eq. 15): singular values of A
-below ``SINGULAR_FLOOR * sqrt(m)`` (``m`` beams, each row of A of order 1) count as zero."""
+"""Absolute singular-value floor of the shift's least squares (eq. 15): singular values of A
+below ``SINGULAR_FLOOR * sqrt(m)`` (``m`` beams, each row of A of order 1: its z component is 1)
+count as zero, whatever ``rcond``."""
 
 
 @dataclass(frozen=True)
@@ -354,6 +359,7 @@ def shift_estimate(
     covariance: CovarianceKind = "residual",
     sigma_range_m: float = 0.1,
     fallback_var_m2: float = 1e6,
+    rcond: float = 1e-4,
 ) -> ShiftEstimate:
     """Position shift from two consecutive acoustic images (seed 004, eq. 8-15, Appendix A).
 
@@ -382,6 +388,9 @@ def shift_estimate(
         sigma_range_m: range noise standard deviation, m (seed 004: 0.1), for the covariance.
         fallback_var_m2: variance stated along unobserved directions and for shifts not
             produced, m^2.
+        rcond: singular values of A below ``rcond`` times the largest count as zero (an
+            ill-conditioned slope field, e.g. a quadratic fit of a faceted seabed, would
+            otherwise give a shift of kilometres); the direction is then unobserved.
 
     Returns:
         The :class:`ShiftEstimate`.
@@ -445,7 +454,7 @@ def shift_estimate(
     ok = fit_ok & (beams >= 3)
     # step 5: eq. 15 by SVD with an absolute floor (rank-deficient A: minimum-norm shift)
     U, s, Vt = np.linalg.svd(A, full_matrices=False)  # (P,m,3), (P,3), (P,3,3)
-    floor = SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1))[:, None]
+    floor = np.maximum(SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1)), rcond * s[:, 0])[:, None]
     keep = s > floor
     rank = keep.sum(axis=1)
     s_inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
@@ -495,6 +504,7 @@ def seabed_track(
     reading: BeamAttitude = "one_attitude",
     basis: SlopeBasis | None = None,
     delta_e: Literal["linear", "exact"] = "linear",
+    slopes: Array | None = None,
 ) -> tuple[Array, BoolArray]:
     """Dead reckoning on seabed shifts, ``X-hat_{k+1} = X-hat_k + dX-hat_{k+1}`` (seed 004,
     eq. 16), over N steps.
@@ -512,6 +522,8 @@ def seabed_track(
         reading: :data:`BeamAttitude`.
         basis: Appendix A's basis.
         delta_e: eq. 10 or the exact change.
+        slopes: known ``grad psi`` at the feet of ``ranges_m``, shape (P, N, Mi, Mj, 3), instead
+            of the Appendix A estimate.
 
     Returns:
         ``(track, ok)``: positions shape (P, N + 1, 3), m; ``ok`` shape (P, N): the step's shift
@@ -539,6 +551,7 @@ def seabed_track(
             basis=basis,
             position_m=track[:, k],
             delta_e=delta_e,
+            slopes=None if slopes is None else np.asarray(slopes)[:, k],
         )
         track[:, k + 1] = track[:, k] + est.shift_m  # eq. 16
         oks[:, k] = est.ok
