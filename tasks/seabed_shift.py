@@ -204,18 +204,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--estimate-sigma-m", type=float, default=0.0)
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
-    for name, value, ok in (
-        ("--paths", a.paths, a.paths >= 1),
-        ("--steps", a.steps, a.steps >= 1),
-        ("--seed", a.seed, a.seed >= 0),
+    checks = (
+        ("--paths", a.paths, a.paths >= 1, "an integer >= 1"),
+        ("--steps", a.steps, a.steps >= 1, "an integer >= 1"),
+        ("--seed", a.seed, a.seed >= 0, "an integer >= 0"),
         (
             "--estimate-sigma-m",
             a.estimate_sigma_m,
-            np.isfinite(a.estimate_sigma_m) and a.estimate_sigma_m >= 0,
+            bool(np.isfinite(a.estimate_sigma_m) and a.estimate_sigma_m >= 0),
+            "a finite number >= 0",
         ),
-    ):
+    )
+    for name, value, ok, allowed in checks:
         if not ok:
-            print(f"{name} = {value}: must be >= 0 (paths and steps >= 1), finite", file=sys.stderr)
+            print(f"{name} = {value}: must be {allowed}", file=sys.stderr)
             return 2
     res = measure_shift_error(a.paths, a.seed, a.steps, a.estimate_sigma_m)
     table = {r: e.summary() for r, e in res.items()}
