@@ -40,8 +40,9 @@ image is taken at the next attitude and eq. 10 accounts for the turn (linearised
 ``delta_e="exact"``).
 
 **Beams without echo** (no seabed within the sonar's range) are masked: a beam is used when it
-has an echo in both images. A shift with fewer usable beams than the fit needs is not produced
-(``ok = False``; the shift is zero and the covariance ``fallback_var_m2 * I``, never NaN).
+has an echo in both images (the slope fit uses every echo of image k). A shift with fewer usable
+beams than the fit needs is not produced (``ok = False``; the shift is zero, or the commanded
+displacement when given, and the covariance ``fallback_var_m2 * I``, never NaN).
 
 **Conditioning.** Eq. 15 is solved by SVD; singular values of A below ``rcond`` (relative) or
 :data:`SINGULAR_FLOOR` (absolute) count as zero: the shift has no component along them and
@@ -317,7 +318,8 @@ class ShiftEstimate:
     """The position shift between two acoustic images (seed 004, eq. 15), per path.
 
     Attributes:
-        shift_m: ``dX-hat_{k+1}``, shape (P, 3), m, world (zero where not ``ok``).
+        shift_m: ``dX-hat_{k+1}``, shape (P, 3), m, world (where not ``ok``: zero, or the
+            commanded displacement when one is given).
         covariance_m2: its error covariance, shape (P, 3, 3), m^2 (module docstring;
             ``fallback_var_m2 * I`` where not ``ok``).
         beams: beams used (echo in both images), shape (P,).
@@ -360,6 +362,7 @@ def shift_estimate(
     sigma_range_m: float = 0.1,
     fallback_var_m2: float = 1e6,
     rcond: float = 1e-4,
+    commanded_shift_m: Array | None = None,
 ) -> ShiftEstimate:
     """Position shift from two consecutive acoustic images (seed 004, eq. 8-15, Appendix A).
 
@@ -391,6 +394,8 @@ def shift_estimate(
         rcond: singular values of A below ``rcond`` times the largest count as zero (an
             ill-conditioned slope field, e.g. a quadratic fit of a faceted seabed, would
             otherwise give a shift of kilometres); the direction is then unobserved.
+        commanded_shift_m: the commanded displacement ``V(u_k) dt``, shape (P, 3), m: the shift
+            stated where none is produced (default zero), with ``fallback_var_m2 * I``.
 
     Returns:
         The :class:`ShiftEstimate`.
@@ -426,8 +431,9 @@ def shift_estimate(
         raise NavInputError(f"delta_e = {delta_e!r}: use 'linear' or 'exact'")
     if covariance not in ("residual", "range_noise"):
         raise NavInputError(f"covariance = {covariance!r}: use 'residual' or 'range_noise'")
-    use = w0.astype(bool) & w1.astype(bool)
-    if not (np.all(np.isfinite(L0[use])) and np.all(np.isfinite(L1[use]))):
+    w0, w1 = w0.astype(bool), w1.astype(bool)
+    use = w0 & w1
+    if not (np.all(np.isfinite(L0[w0])) and np.all(np.isfinite(L1[w1]))):
         raise NavInputError("ranges_m / next_ranges_m: non-finite range on a beam with an echo")
     m = geometry.shape[0] * geometry.shape[1]
     L0f = np.where(use, L0, 0.0).reshape(P, m)
@@ -438,11 +444,13 @@ def shift_estimate(
     else:
         de = np.zeros_like(e)
     usef = use.reshape(P, m)
-    if slopes is None:  # step 3: Appendix A on image k's feet
+    if slopes is None:  # step 3: Appendix A on every foot of image k
         origin = np.zeros((P, 3)) if position_m is None else np.asarray(position_m, dtype=float)
         _check_images("position_m", origin, (P, 3))
-        feet = origin[:, None, :] + L0f[..., None] * e  # eq. 8
-        grad, fit_ok = fit_slopes(feet, usef, basis or SlopeBasis.seed004())
+        w0f = w0.reshape(P, m)
+        feet = origin[:, None, :] + np.where(w0f, L0.reshape(P, m), 0.0)[..., None] * e  # eq. 8
+        grad, fit_ok = fit_slopes(feet, w0f, basis or SlopeBasis.seed004())
+        grad = np.where(usef[..., None], grad, 0.0)
     else:
         grad = _check_images("slopes", np.asarray(slopes, dtype=float), (*L0.shape, 3))
         grad = np.where(usef[..., None], grad.reshape(P, m, 3), 0.0)
@@ -486,7 +494,11 @@ def shift_estimate(
     unobserved = np.where(keep, 0.0, fallback_var_m2)
     cov = cov + np.einsum("pcd,pc,pce->pde", Vt, unobserved, Vt)
     eye = np.broadcast_to(np.eye(3) * fallback_var_m2, (P, 3, 3))
-    shift = np.where(ok[:, None], shift, 0.0)
+    if commanded_shift_m is None:
+        shift = np.where(ok[:, None], shift, 0.0)
+    else:
+        cmd = _check_images("commanded_shift_m", np.asarray(commanded_shift_m, dtype=float), (P, 3))
+        shift = np.where(ok[:, None], shift, cmd)
     cov = np.where(ok[:, None, None], cov, eye)
     rms = np.where(ok, np.sqrt(rss / np.maximum(beams, 1)), 0.0)
     return ShiftEstimate(shift, cov, beams, np.where(ok, rank, 0), ok, rms)

@@ -19,7 +19,8 @@ paths, seabeds and range noise:
   second one aimed from ``u_{k+1}`` (eq. 10).
 
 Run: ``python -m tasks.seabed_shift --paths 500 --seed 1`` (prints the table; ``--json`` for
-machine-readable output).
+machine-readable output, ``--delta-e exact`` for the exact beam change of the turning reading,
+``--estimate-sigma-m`` for a control on a noisy position).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import argparse
 import json
 import sys
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -119,6 +121,7 @@ def measure_shift_error(
     estimate_sigma_m: float = 0.0,
     sonar: MultibeamConfig | None = None,
     basis: SlopeBasis | None = None,
+    delta_e: Literal["linear", "exact"] = "linear",
 ) -> dict[str, ShiftErrors]:
     """The shift estimate's error on seed 004's setting for both readings (module docstring).
 
@@ -129,6 +132,7 @@ def measure_shift_error(
         estimate_sigma_m: noise of the position the control uses, m (0: full information).
         sonar: the multibeam (default: seed 004's).
         basis: Appendix A's basis (default: eq. 24's harmonics).
+        delta_e: the turning reading's beam change: eq. 10 (``"linear"``) or exact.
 
     Returns:
         Reading -> :class:`ShiftErrors`.
@@ -186,6 +190,7 @@ def measure_shift_error(
                 basis=basis,
                 position_m=x,
                 sigma_range_m=cfg.range.sigma_m,
+                delta_e=delta_e,
             )
             err, ok, var = out[reading]
             err[:, k] = np.where(est.ok[:, None], est.shift_m - (x1 - x), 0.0)
@@ -202,6 +207,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--estimate-sigma-m", type=float, default=0.0)
+    ap.add_argument("--delta-e", choices=("linear", "exact"), default="linear")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     checks = (
@@ -219,14 +225,14 @@ def main(argv: list[str] | None = None) -> int:
         if not ok:
             print(f"{name} = {value}: must be {allowed}", file=sys.stderr)
             return 2
-    res = measure_shift_error(a.paths, a.seed, a.steps, a.estimate_sigma_m)
+    res = measure_shift_error(a.paths, a.seed, a.steps, a.estimate_sigma_m, delta_e=a.delta_e)
     table = {r: e.summary() for r, e in res.items()}
     if a.json:
         print(json.dumps(table, indent=2))
         return 0
     print(
         f"seed 004 shift error, {a.paths} paths x {a.steps} steps, seed {a.seed}, "
-        f"control position noise {a.estimate_sigma_m:g} m"
+        f"control position noise {a.estimate_sigma_m:g} m, turning de {a.delta_e}"
     )
     print(
         "reading       | median m | p90 m | bias x, y, z m        | rms x, y, z m         | "

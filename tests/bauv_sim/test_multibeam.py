@@ -230,3 +230,20 @@ def test_harmonic_seabed_refuses_mismatched_rays():
     bed = HarmonicSeabed.draw(1, (0, 1))
     with pytest.raises(ConfigError, match="seabeds"):
         bed.ray_ranges(np.zeros((3, 1, 3)), np.array([[[0.0, 0.0, -1.0]]] * 3), 10.0)
+
+
+def test_online_multibeam_follows_the_moving_hull():
+    """After the physics has stepped (the vehicle swimming, pitching and rolling a little) the
+    beams start at the sonar site where MuJoCo puts it and are aimed from the hull's attitude."""
+    phys = build_physics(SceneConfig(seabed=FLAT, beacons=(), vehicles=(VehicleSpec(depth_m=4.0),)))
+    cfg = MultibeamConfig(range=LengthErrorConfig(sigma_m=0.0))
+    rig = SensorRig({"multibeam": cfg}, phys, "bauv", seed=1, run=0)
+    phys.set_tail_beat_frequency_hz(1.5)
+    phys.advance(2.0)
+    vt = phys.truth()
+    (m,) = rig.sense(20, vt, phys.commands()).arrived
+    sonar = phys.site_position_world("sonar")
+    assert np.linalg.norm(sonar - [0.0, 0.0, -4.0]) > 0.05  # it did move
+    _r, pitch, heading = vt.roll_pitch_heading_rad
+    e = beam_directions(cfg, np.array([pitch, np.pi / 2 - heading])).reshape(-1, 3)
+    np.testing.assert_allclose(m.value, (-20.0 - sonar[2]) / e[:, 2], atol=1e-6)

@@ -225,6 +225,9 @@ def test_too_few_echoes_give_no_shift_and_no_nan():
     assert not est.ok.any()
     assert np.all(est.shift_m == 0) and np.all(np.isfinite(est.covariance_m2))
     np.testing.assert_allclose(est.covariance_m2, np.broadcast_to(1e4 * np.eye(3), (2, 3, 3)))
+    cmd = np.array([[2.0, 0.1, 0.0], [1.9, -0.3, 0.05]])
+    est = shift_estimate(L, L, GEO, np.zeros((2, 2)), echo=echo, commanded_shift_m=cmd)
+    assert not est.ok.any() and np.array_equal(est.shift_m, cmd)
 
 
 def test_bad_input_is_refused_in_words():
