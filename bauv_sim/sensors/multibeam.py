@@ -242,7 +242,8 @@ class HarmonicSeabed:
 
         Args:
             origin_m: ray origins, shape (P, ..., 3), m, world.
-            directions: unit ray directions, shape (P, ..., 3) (same shape).
+            directions: ray directions, shape (P, ..., 3) (broadcast with the origins;
+                normalised here).
             max_range_m: no echo beyond this distance, m.
             min_step_m: smallest march step, m.
             tol_m: bracket width at which the root is taken, m.
@@ -253,7 +254,8 @@ class HarmonicSeabed:
             seabed within ``max_range_m``, or an origin at or below the seabed).
 
         Raises:
-            ConfigError: if the march does not finish in ``max_iterations`` steps.
+            ConfigError: for rays of another number of paths, a zero or non-finite direction,
+                or a march that does not finish in ``max_iterations`` steps.
         """
         o, e = np.broadcast_arrays(np.asarray(origin_m, float), np.asarray(directions, float))
         shape = o.shape[:-1]
@@ -263,6 +265,10 @@ class HarmonicSeabed:
             np.arange(self.paths).reshape(-1, *([1] * (len(shape) - 1))), shape
         ).ravel()
         o, e = o.reshape(-1, 3), e.reshape(-1, 3)
+        norm = np.linalg.norm(e, axis=1)
+        if not np.all(np.isfinite(norm) & (norm > 0)) or not np.all(np.isfinite(o)):
+            raise ConfigError("ray_ranges: origins must be finite, directions finite and non-zero")
+        e = e / norm[:, None]
         gx, gy = self.slope_bound()
         lip = np.abs(e[:, 2]) + np.abs(e[:, 0]) * gx[path] + np.abs(e[:, 1]) * gy[path]
         lo = np.zeros(path.size)
