@@ -43,3 +43,10 @@ def test_bad_arguments_exit_2_with_one_line(capsys):
     assert ss.main(["--paths", "0"]) == 2
     err = capsys.readouterr()
     assert err.out == "" and err.err.count("\n") == 1 and "--paths = 0" in err.err
+
+
+def test_a_path_draws_the_same_numbers_whatever_the_batch():
+    two = ss.measure_shift_error(paths=2, seed=3, steps=3)
+    three = ss.measure_shift_error(paths=3, seed=3, steps=3)
+    for r in two:
+        assert np.array_equal(two[r].error_m, three[r].error_m[:2])
