@@ -227,7 +227,7 @@ class Doa:
             for b in range(self.beacons_world_m.shape[0])
         ]
         self._drop = (
-            rng_mod.generators(seed, runs, *base, "set_dropout")
+            rng_mod.RunStreams(seed, runs, *base, "set_dropout")
             if cfg.dropout_probability > 0
             else None
         )
@@ -285,7 +285,7 @@ class Doa:
             meas_t[..., b, 0], meas_t[..., b, 1] = tp, tl
             meas_a[..., b, 0], meas_a[..., b, 1] = ap, al
         if self._drop is not None:
-            lost = np.stack([g.random(k) for g in self._drop]) < cfg.dropout_probability
+            lost = self._drop.draw("random", k) < cfg.dropout_probability
             produced &= ~lost[..., None]
         tangent_ok = produced & (np.abs(t_phi) <= cfg.max_tangent)
         tangent_ok &= np.abs(t_lam) <= cfg.max_tangent
