@@ -90,16 +90,23 @@ class ShiftErrors:
         error_m: ``dX-hat - dX``, shape (P, N, 3), m (zero where no shift was produced).
         ok: the shift was produced, shape (P, N).
         predicted_var_m2: trace of the stated covariance, shape (P, N), m^2.
+        rank: observed directions of the shift (3: all), shape (P, N).
+        beams: beams with an echo in both images, shape (P, N).
     """
 
     error_m: Array
     ok: NDArray[np.bool_]
     predicted_var_m2: Array
+    rank: NDArray[np.int_]
+    beams: NDArray[np.int_]
 
     def summary(self) -> dict[str, float | list[float] | int]:
         """Median and 90th percentile of the error norm, bias (mean error per component), RMS
-        per component, the stated RMS (root of the mean trace), the samples (produced / all)."""
+        per component over the produced shifts; the stated RMS (root of the mean trace) over the
+        fully observed ones (a direction not observed is stated with the fallback variance);
+        the samples (all, produced, and produced with rank < 3)."""
         e = self.error_m[self.ok]
+        full = self.ok & (self.rank == 3)
         if e.size == 0:
             return {"samples": 0, "produced": 0, "no_data": 1}
         norm = np.linalg.norm(e, axis=1)
@@ -110,7 +117,11 @@ class ShiftErrors:
             "p90_m": float(np.percentile(norm, 90)),
             "bias_m": [float(v) for v in e.mean(axis=0)],
             "rms_m": [float(v) for v in np.sqrt((e**2).mean(axis=0))],
-            "stated_rms_m": float(np.sqrt(self.predicted_var_m2[self.ok].mean())),
+            "stated_rms_m": float(np.sqrt(self.predicted_var_m2[full].mean()))
+            if full.any()
+            else 0.0,
+            "rank_deficient": int((self.ok & (self.rank < 3)).sum()),
+            "mean_beams": float(self.beams.mean()),
         }
 
 
@@ -153,7 +164,13 @@ def measure_shift_error(
     att, step_m = control_attitude(np.broadcast_to(nominal[1], x.shape), x + est_noise[:, 0])
     img = new.sample_harmonic(seabed, x[:, None], att[:, None], np.zeros(1))
     out = {
-        r: (np.zeros((paths, steps, 3)), np.zeros((paths, steps), bool), np.zeros((paths, steps)))
+        r: (
+            np.zeros((paths, steps, 3)),
+            np.zeros((paths, steps), bool),
+            np.zeros((paths, steps)),
+            np.zeros((paths, steps), int),
+            np.zeros((paths, steps), int),
+        )
         for r in READINGS
     }
     for k in range(steps):
@@ -192,10 +209,12 @@ def measure_shift_error(
                 sigma_range_m=cfg.range.sigma_m,
                 delta_e=delta_e,
             )
-            err, ok, var = out[reading]
+            err, ok, var, rank, beams = out[reading]
             err[:, k] = np.where(est.ok[:, None], est.shift_m - (x1 - x), 0.0)
             ok[:, k] = est.ok
             var[:, k] = np.trace(est.covariance_m2, axis1=1, axis2=2)
+            rank[:, k] = est.rank
+            beams[:, k] = est.beams
         x, att, step_m, img = x1, att1, step1, img_new
     return {r: ShiftErrors(*out[r]) for r in READINGS}
 
@@ -236,7 +255,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(
         "reading       | median m | p90 m | bias x, y, z m        | rms x, y, z m         | "
-        "stated rms m"
+        "stated rms m | rank < 3 | beams"
     )
     for r, s in table.items():
         if s.get("no_data"):
@@ -246,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"{r:13s} | {s['median_m']:8.3f} | {s['p90_m']:5.2f} | "
             f"{b[0]:6.3f} {b[1]:6.3f} {b[2]:6.3f}  | {q[0]:6.3f} {q[1]:6.3f} {q[2]:6.3f}  | "
-            f"{s['stated_rms_m']:.3f}"
+            f"{s['stated_rms_m']:12.3f} | {s['rank_deficient']:8d} | {s['mean_beams']:.1f}"
         )
     return 0
 
