@@ -9,6 +9,7 @@ from nav.errors import NavError as NavError
 
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchEKF": ("nav.ekf", "BatchEKF"),
+    "BeamGeometry": ("nav.seabed", "BeamGeometry"),
     "CorrectedDeadReckoning": ("nav.drns", "CorrectedDeadReckoning"),
     "CourseSpeedDepthMotion": ("nav.models", "CourseSpeedDepthMotion"),
     "CurrentAwareMotion": ("nav.models", "CurrentAwareMotion"),
@@ -27,7 +28,9 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "Navigator": ("nav.navigator", "Navigator"),
     "OnlineNavigator": ("nav.navigator", "OnlineNavigator"),
     "SeriesSum": ("nav.metrics", "SeriesSum"),
+    "ShiftEstimate": ("nav.seabed", "ShiftEstimate"),
     "SingleRunEKF": ("nav.ekf", "SingleRunEKF"),
+    "SlopeBasis": ("nav.seabed", "SlopeBasis"),
     "UpdateInfo": ("nav.ekf", "UpdateInfo"),
     "UsblMeasurement": ("nav.models", "UsblMeasurement"),
     "Waypoint": ("nav.guidance", "Waypoint"),
@@ -43,7 +46,9 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "horizontal_distance": ("nav.metrics", "horizontal_distance"),
     "nees": ("nav.metrics", "nees"),
     "nees_band": ("nav.metrics", "nees_band"),
+    "seabed_track": ("nav.seabed", "seabed_track"),
     "series_stats": ("nav.metrics", "series_stats"),
+    "shift_estimate": ("nav.seabed", "shift_estimate"),
 }
 """Public name -> (module, attribute), imported on first use."""
 
