@@ -92,9 +92,10 @@ def _bin_counts(v: Array, edges: Array) -> NDArray[np.int64]:
         return np.zeros(max(nb, 0), dtype=np.int64)
     width = (edges[-1] - edges[0]) / nb
     idx = np.clip(((v - edges[0]) / width).astype(np.intp), 0, nb - 1)
-    for _ in range(2):  # a guess is off by at most one bin for edges of nearly equal width
-        idx -= v < edges[idx]
-        idx += (v >= edges[idx + 1]) & (idx < nb - 1)
+    # a guess is off by at most one bin for edges of nearly equal width: one correction, then
+    # a check (numpy's sorting path if the edges are far from uniform)
+    idx -= v < edges[idx]
+    idx += (v >= edges[idx + 1]) & (idx < nb - 1)
     if np.any(v < edges[idx]) or np.any((v >= edges[idx + 1]) & (idx < nb - 1)):
         counts, _ = np.histogram(v, bins=edges)  # edges far from uniform
         return counts.astype(np.int64)

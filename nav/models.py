@@ -250,12 +250,24 @@ class UsblMeasurement:
 
     def h(self, x: Array) -> Array:
         """Predicted measurement, shape (n, 3): m, rad in [0, 2 pi), rad."""
-        d, _, horiz, r, _ = self._d(x)
+        return self._h(self._d(x))
+
+    def _h(self, geo: tuple[Array, ...]) -> Array:
+        d, _, horiz, r, _ = geo
         return np.stack([r, course_of(d), elevation_angle(d[..., 2], horiz)], axis=-1)
+
+    def linearise(self, x: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
+        """:meth:`h`, :meth:`H` and :meth:`active` at once, the geometry computed once (the
+        same numbers)."""
+        geo = self._d(x)
+        return self._h(geo), self._H(geo, np.shape(x)[-1]), self._active(geo)
 
     def H(self, x: Array) -> Array:
         """Jacobian ``dh/dx``, shape (n, 3, d); rows of inactive components are zero."""
-        d, l2, horiz, r, l3 = self._d(x)
+        return self._H(self._d(x), np.shape(x)[-1])
+
+    def _H(self, geo: tuple[Array, ...], dim: int) -> Array:
+        d, l2, horiz, r, l3 = geo
         dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
         safe_r = np.maximum(r, 1e-9)
         far = horiz >= self.min_horizontal_m
@@ -264,7 +276,7 @@ class UsblMeasurement:
         safe_h = np.where(horiz > 0, horiz, 1.0)
         ux, uy = np.where(horiz > 0, dx / safe_h, 0.0), np.where(horiz > 0, dy / safe_h, 0.0)
         safe_l3 = np.maximum(l3, 1e-18)
-        H = np.zeros((*d.shape[:-1], 3, np.shape(x)[-1]))
+        H = np.zeros((*d.shape[:-1], 3, dim))
         H[..., 0, 0], H[..., 0, 1], H[..., 0, 2] = dx / safe_r, dy / safe_r, dz / safe_r
         H[..., 1, 0] = np.where(far, dy / safe_l2, 0.0)
         H[..., 1, 1] = np.where(far, -dx / safe_l2, 0.0)
@@ -275,7 +287,10 @@ class UsblMeasurement:
 
     def active(self, x: Array) -> NDArray[np.bool_]:
         """Which components take part in the update, shape (n, 3)."""
-        _, _, horiz, _, _ = self._d(x)
+        return self._active(self._d(x))
+
+    def _active(self, geo: tuple[Array, ...]) -> NDArray[np.bool_]:
+        horiz = geo[2]
         act = np.ones((*horiz.shape, 3), dtype=bool)
         act[..., 1] = horiz >= self.min_horizontal_m
         return act

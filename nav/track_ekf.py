@@ -191,10 +191,12 @@ def _update(
         ``(nis (n,), rejected (n,))``; NIS NaN where nothing was measured.
     """
     xt = x.T
-    hx = model.h(xt)
-    act = model.active(xt) & present[:, None]
+    if hasattr(model, "linearise"):  # h, H and active from one evaluation of the geometry
+        hx, Hm, act = model.linearise(xt)
+    else:
+        hx, Hm, act = model.h(xt), model.H(xt), model.active(xt)
+    act = act & present[:, None]
     y_all = model.residual(np.where(present[:, None], z, hx), hx)
-    Hm = model.H(xt)
     # inactive components leave the update exactly: their H rows and innovations are zero (R is
     # diagonal, so no cross term remains), as nav.ekf.update does
     H = [[np.where(act[:, a], Hm[:, a, c], 0.0) for c in range(3)] for a in range(3)]

@@ -67,7 +67,6 @@ from nav.metrics import (
     batch_stats,
     chi2_ppf,
     distance_3d,
-    horizontal_distance,
     nees_band,
     series_stats,
 )
@@ -292,6 +291,30 @@ class Paper000Scenario(Config):
 # Simulation of a set of passages
 
 
+def _track_distance(pos: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Horizontal distance of tracks to the reference, ``sqrt(de^2 + dn^2)``, shape (n, T + 1), m.
+
+    Args:
+        pos: positions, shape (n, T + 1, 3), m: a view of time-major (T + 1, 3, n) tracks.
+        ref: the reference, shape (T + 1, 3), m.
+
+    A few dozen ticks at a time on the time-major layout, so the temporaries stay in cache (the
+    numbers of :func:`nav.metrics.horizontal_distance` to rounding: a square root of the sum of
+    squares rather than ``hypot``, 5x faster).
+    """
+    tm = pos.transpose(1, 2, 0)  # (T + 1, 3, n)
+    out = np.empty(tm.shape[::2])
+    for a in range(0, len(out), TIME_CHUNK):
+        b = a + TIME_CHUNK
+        de = tm[a:b, 0] - ref[a:b, 0, None]
+        dn = tm[a:b, 1] - ref[a:b, 1, None]
+        de *= de
+        dn *= dn
+        de += dn
+        np.sqrt(de, out=out[a:b])
+    return out.T
+
+
 @dataclass(frozen=True)
 class Passages:
     """Everything about some passages (runs) of a batch.
@@ -332,8 +355,8 @@ class Passages:
         """Distance to the reference: EKF and DR horizontal (n, T + 1), USBL 3-D (n, k)."""
         ref = self.reference_m
         return {
-            "EKF": horizontal_distance(self.ekf_m, ref),
-            "DR": horizontal_distance(self.dr_m, ref),
+            "EKF": _track_distance(self.ekf_m, ref),
+            "DR": _track_distance(self.dr_m, ref),
             "USBL": distance_3d(self.usbl_m, ref[self.fix_tick]),
         }
 

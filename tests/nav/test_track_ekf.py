@@ -99,3 +99,12 @@ def test_a_non_diagonal_measurement_noise_is_refused():
     bad = Correlated(np.zeros(3), 1.0, 0.1, 0.1)
     with pytest.raises(NavInputError, match="diagonal R"):
         track_ekf.ekf_tracks(x0, P0, inc, Q, fix_tick, z, present, bad)
+
+
+def test_usbl_linearisation_at_once_is_h_H_and_active():
+    g = np.random.default_rng(8)
+    x = g.normal(0.0, 20.0, (200, 3))
+    x[:3, :2] = 0.2  # within min_horizontal_m: azimuth inactive
+    h, H, act = USBL.linearise(x)
+    assert np.array_equal(h, USBL.h(x)) and np.array_equal(H, USBL.H(x))
+    assert np.array_equal(act, USBL.active(x)) and not act[:3, 1].any()
