@@ -1,0 +1,267 @@
+"""Seed 004's closed loop on the kinematic world: EKF, UPMF and CMNF steering eq. 7 on their own
+estimate, batched over paths, reduced to per-step sums (no path is kept but a few).
+
+Each filter flies its own copy of every path (the control depends on the estimate) with the same
+draws. Per filter and step the block keeps: the number of paths that are still finite, the sums of
+``||X°_k - X_k||^2`` (eq. 4), of the error ``X_k - X^_k`` and of its square per axis, of the CMNF's
+and the Kalman filters' stated error variance, of the Fisher information of the bearings at the
+true positions (for the PCRB, :mod:`nav.pcrb`), the count of absent bearing pairs, and the
+sample paths of the first runs. A filter whose estimate or covariance stops being finite on a path
+is *diverged* there: the path leaves the sums from that step on and is counted.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bauv_sim.kinematic.seed004 import (
+    NominalPathConfig,
+    PathNoise,
+    Seed004Noise,
+    Seed004World,
+    TrainingNoise,
+)
+from nav.bearings import SystemPrediction, ekf_update, predict, upmf_update
+from nav.cmnf import CmnfGains, beta, train
+from nav.local_control import ControlLimits, limited_control, optimal_control
+from nav.pcrb import bearing_information
+
+Array = NDArray[np.float64]
+
+FILTERS = ("CMNF", "UPMF", "EKF")
+
+
+@dataclass(frozen=True)
+class LoopSetting:
+    """What one closed loop needs (taken from a scenario by the experiments).
+
+    Attributes:
+        path: the nominal path.
+        noise: truth's disturbances and bearing noise.
+        beacons: ``(B, 3)`` m.
+        filter_noise: what the filters assume (default: the truth's).
+        filter_s0: the filters' initial covariance ``(3, 3)`` m^2 (default: the truth's S_0).
+        limits: box limits of the control (None: unbounded, as in the paper).
+        correction: the CMNF's basic correction (``"residual"`` or ``"pseudo"``).
+        floor: the CMNF's singular-value floor.
+        train_paths: CMNF training paths.
+    """
+
+    path: NominalPathConfig
+    noise: Seed004Noise
+    beacons: tuple[tuple[float, float, float], ...]
+    filter_noise: Seed004Noise | None = None
+    filter_s0: tuple[float, float, float] | None = None
+    limits: ControlLimits | None = None
+    correction: str = "residual"
+    floor: float = 1e-9
+    train_paths: int = 100_000
+
+    @property
+    def b(self) -> Array:
+        return np.asarray(self.beacons, dtype=float)
+
+    @property
+    def fnoise(self) -> Seed004Noise:
+        return self.filter_noise or self.noise
+
+    @property
+    def s0_filter(self) -> Array:
+        if self.filter_s0 is None:
+            return self.noise.s_0
+        return np.diag(np.square(self.filter_s0))
+
+    def key(self) -> str:
+        """A stable text key of the setting (for the gains cache)."""
+        d = {
+            "path": self.path.model_dump(mode="json"),
+            "noise": self.noise.model_dump(mode="json"),
+            "fnoise": self.fnoise.model_dump(mode="json"),
+            "beacons": self.beacons,
+            "s0": self.filter_s0,
+            "limits": None if self.limits is None else self.limits.__dict__,
+            "correction": self.correction,
+            "floor": self.floor,
+            "train": self.train_paths,
+        }
+        return json.dumps(d, sort_keys=True)
+
+
+class Controller:
+    """The control law of a setting: eq. 7 (unbounded) or its box-limited form."""
+
+    def __init__(self, s: LoopSetting, n: int):
+        self.xn = s.path.path()
+        self.vn = s.path.velocities()
+        self.dt = s.path.dt_s
+        self.limits = s.limits
+        self.prev = np.broadcast_to(s.path.controls()[0], (n, 3)).copy()
+
+    def __call__(self, k: int, x_hat: Array) -> Array:
+        if self.limits is None:
+            u = optimal_control(x_hat, self.xn[k], self.vn[k], self.dt)
+        else:
+            u = limited_control(x_hat, self.xn[k], self.vn[k], self.dt, self.prev, self.limits)
+        self.prev = u
+        return u
+
+
+def train_gains(s: LoopSetting, seed: int) -> tuple[CmnfGains, object]:
+    """Fit the CMNF gains of a setting on ``s.train_paths`` training paths (CMNF in the loop)."""
+    draws = TrainingNoise(s.noise, len(s.beacons), seed, s.train_paths)
+    world = Seed004World(s.path, s.noise, s.b, draws)
+    pred = SystemPrediction(s.path.dt_s, s.fnoise.s_w)
+    return train(
+        world,
+        np.asarray(s.path.start_m),
+        s.path.n_steps,
+        Controller(s, s.train_paths),
+        pred,
+        s.b,
+        correction=s.correction,
+        floor=s.floor,
+        nominal=s.path.path(),
+        info={"seed": seed, "prediction": "system"},
+    )
+
+
+@functools.lru_cache(maxsize=4)
+def _cached_gains(key: str, seed: int, s: LoopSetting) -> CmnfGains:
+    return train_gains(s, seed)[0]
+
+
+def gains_for(s: LoopSetting, seed: int) -> CmnfGains:
+    """The setting's gains, trained once per process (deterministic in ``(setting, seed)``)."""
+    return _cached_gains(s.key(), seed, s)
+
+
+@dataclass
+class LoopSums:
+    """Per-step sums of one block (shapes: F filters, N + 1 steps).
+
+    Attributes:
+        count: finite paths, ``(F, N + 1)``.
+        j: sum of ``||X°_k - X_k||^2``, ``(F, N + 1)`` m^2.
+        err: sum of ``X_k - X^_k``, ``(F, N + 1, 3)`` m.
+        err2: sum of its square, ``(F, N + 1, 3)`` m^2.
+        stated: sum of the filter's stated error variance per axis, ``(F, N + 1, 3)`` m^2 (the
+            CMNF's is the same for every path).
+        info: sum of the bearing information at the true positions, ``(F, N + 1, 3, 3)`` 1/m^2.
+        absent: absent bearing pairs, ``(F, N + 1)``.
+        diverged: paths that became non-finite, ``(F,)``.
+        samples: run -> filter -> ``(N + 1, 6)`` true and estimated positions (float32).
+    """
+
+    count: Array
+    j: Array
+    err: Array
+    err2: Array
+    stated: Array
+    info: Array
+    absent: Array
+    diverged: Array
+    samples: dict = field(default_factory=dict)
+
+
+@dataclass
+class _Recorder:
+    """Adds one step of one filter to the block's sums."""
+
+    out: LoopSums
+    fi: int
+    beacons: Array
+    s_eps: Array
+    xn: Array
+    keep: list
+    track: Array
+
+    def __call__(self, k, a, x, x_hat, var, present) -> None:
+        o, fi = self.out, self.fi
+        e = x - x_hat
+        o.count[fi, k] = a.sum()
+        o.j[fi, k] = np.sum(((x - self.xn[k]) ** 2).sum(1)[a])
+        o.err[fi, k] = e[a].sum(0)
+        o.err2[fi, k] = (e[a] ** 2).sum(0)
+        o.stated[fi, k] = var[a].sum(0)
+        o.info[fi, k] = bearing_information(x[a], self.beacons, self.s_eps, present[a]).sum(0)
+        o.absent[fi, k] = (~present[a]).sum()
+        if self.keep:
+            self.track[:, k, :3], self.track[:, k, 3:] = x[self.keep], x_hat[self.keep]
+
+
+def fly(
+    s: LoopSetting,
+    seed: int,
+    runs: tuple[int, ...],
+    gains: CmnfGains | None,
+    filters: tuple[str, ...] = FILTERS,
+    sample_runs: int = 3,
+) -> LoopSums:
+    """Fly the test paths of ``runs`` with each filter in the loop and reduce them (module doc)."""
+    n, N = len(runs), s.path.n_steps
+    draws = PathNoise(s.noise, N, len(s.beacons), seed, runs)
+    b = s.b
+    fn = s.fnoise
+    pred = SystemPrediction(s.path.dt_s, fn.s_w)
+    xn = s.path.path()
+    F = len(filters)
+    out = LoopSums(
+        count=np.zeros((F, N + 1)),
+        j=np.zeros((F, N + 1)),
+        err=np.zeros((F, N + 1, 3)),
+        err2=np.zeros((F, N + 1, 3)),
+        stated=np.zeros((F, N + 1, 3)),
+        info=np.zeros((F, N + 1, 3, 3)),
+        absent=np.zeros((F, N + 1)),
+        diverged=np.zeros(F),
+    )
+    keep = [i for i, r in enumerate(runs) if r < sample_runs]
+    for fi, name in enumerate(filters):
+        world = Seed004World(s.path, s.noise, b, draws)
+        ctl = Controller(s, n)
+        x = world.start()
+        x_hat = np.broadcast_to(xn[0], (n, 3)).copy()
+        P = np.broadcast_to(s.s0_filter, (n, 3, 3)).copy()
+        alive = np.ones(n, dtype=bool)
+        track = np.zeros((len(keep), N + 1, 6))
+
+        rec = _Recorder(out, fi, b, s.noise.s_eps, xn, keep, track)
+        rec(0, alive, x, x_hat, np.diagonal(P, axis1=1, axis2=2), np.ones((n, len(b)), bool))
+        for k in range(N):
+            u = ctl(k, x_hat)
+            shift = pred(k, x_hat, u)
+            x = world.advance(k, x, u)
+            y, present = world.observe(k + 1, x)
+            if name == "CMNF":
+                alpha = x_hat + shift.displacement_m
+                i = k
+                x_t = alpha @ gains.F[i].T + gains.f[i]
+                bb = beta(s.correction, x_t, y, present, b)
+                x_hat = x_t + bb @ gains.H[i].T + gains.h[i]
+                var = np.broadcast_to(np.diag(gains.p_hat[i]), (n, 3))
+            else:
+                x_t, P_t = predict(x_hat, P, shift)
+                upd = ekf_update if name == "EKF" else upmf_update
+                x_hat, P = upd(x_t, P_t, y, present, b, fn.s_eps)
+                var = np.diagonal(P, axis1=1, axis2=2)
+            bad = alive & ~(np.isfinite(x_hat).all(1) & np.isfinite(var).all(1))
+            if name != "CMNF":
+                bad |= alive & ~np.isfinite(P).all((1, 2))
+            if bad.any():
+                out.diverged[fi] += bad.sum()
+                alive &= ~bad
+                # keep the arithmetic finite on paths that left the statistics
+                x_hat = np.where(alive[:, None], x_hat, xn[k + 1])
+                if name != "CMNF":
+                    P = np.where(alive[:, None, None], P, np.eye(3))
+                var = np.where(alive[:, None], var, 0.0)
+            x = np.where(alive[:, None], x, xn[k + 1])
+            rec(k + 1, alive, x, x_hat, var, present)
+        for j, i in enumerate(keep):
+            out.samples.setdefault(runs[i], {})[name] = track[j].astype(np.float32)
+    return out
