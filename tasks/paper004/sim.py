@@ -48,6 +48,7 @@ class LoopSetting:
         filter_s0: the filters' initial covariance ``(3, 3)`` m^2 (default: the truth's S_0).
         limits: box limits of the control (None: unbounded, as in the paper).
         correction: the CMNF's basic correction (``"residual"`` or ``"pseudo"``).
+        upmf_form: ``"unbiased"`` or ``"printed"`` (:func:`nav.bearings.upmf_update`).
         floor: the CMNF's singular-value floor.
         train_paths: CMNF training paths.
     """
@@ -59,6 +60,7 @@ class LoopSetting:
     filter_s0: tuple[float, float, float] | None = None
     limits: ControlLimits | None = None
     correction: str = "residual"
+    upmf_form: str = "unbiased"
     floor: float = 1e-9
     train_paths: int = 100_000
 
@@ -86,6 +88,7 @@ class LoopSetting:
             "s0": self.filter_s0,
             "limits": None if self.limits is None else self.limits.__dict__,
             "correction": self.correction,
+            "upmf_form": self.upmf_form,
             "floor": self.floor,
             "train": self.train_paths,
         }
@@ -246,8 +249,10 @@ def fly(
                 var = np.broadcast_to(np.diag(gains.p_hat[i]), (n, 3))
             else:
                 x_t, P_t = predict(x_hat, P, shift)
-                upd = ekf_update if name == "EKF" else upmf_update
-                x_hat, P = upd(x_t, P_t, y, present, b, fn.s_eps)
+                if name == "EKF":
+                    x_hat, P = ekf_update(x_t, P_t, y, present, b, fn.s_eps)
+                else:
+                    x_hat, P = upmf_update(x_t, P_t, y, present, b, fn.s_eps, form=s.upmf_form)
                 var = np.diagonal(P, axis1=1, axis2=2)
             bad = alive & ~(np.isfinite(x_hat).all(1) & np.isfinite(var).all(1))
             if name != "CMNF":

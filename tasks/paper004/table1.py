@@ -85,6 +85,11 @@ class FilterConfig(Config):
         "residual",
         description="CMNF basic correction: residual (eq. 24) or pseudo (eq. 20's residual)",
     )
+    upmf_form: Literal["unbiased", "printed"] = Field(
+        "unbiased",
+        description="UPMF gain at the predicted bearings with the noise mean removed (unbiased) "
+        "or at the measured ones as eq. 21 prints (biased ~0.02 m in x)",
+    )
     floor: float = Field(
         1e-9, ge=0, le=1e-3, description="CMNF pseudo-inverses' absolute singular-value floor"
     )
@@ -226,6 +231,7 @@ def setting(scn: Paper004Scenario, case: Case) -> LoopSetting:
         filter_noise=fnoise,
         limits=scn.guidance.control_limits(),
         correction=scn.filters.correction,
+        upmf_form=scn.filters.upmf_form,
         floor=scn.filters.floor,
         train_paths=scn.filters.train_paths,
     )
