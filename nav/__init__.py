@@ -9,6 +9,8 @@ from nav.errors import NavError as NavError
 
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchEKF": ("nav.ekf", "BatchEKF"),
+    "CmnfGains": ("nav.cmnf", "CmnfGains"),
+    "ControlLimits": ("nav.local_control", "ControlLimits"),
     "CorrectedDeadReckoning": ("nav.drns", "CorrectedDeadReckoning"),
     "CourseSpeedDepthMotion": ("nav.models", "CourseSpeedDepthMotion"),
     "CurrentAwareMotion": ("nav.models", "CurrentAwareMotion"),
@@ -26,13 +28,17 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "NavInputError": ("nav.errors", "NavInputError"),
     "Navigator": ("nav.navigator", "Navigator"),
     "OnlineNavigator": ("nav.navigator", "OnlineNavigator"),
+    "PredictedShift": ("nav.bearings", "PredictedShift"),
+    "Prediction": ("nav.bearings", "Prediction"),
     "SeriesSum": ("nav.metrics", "SeriesSum"),
     "SingleRunEKF": ("nav.ekf", "SingleRunEKF"),
+    "SystemPrediction": ("nav.bearings", "SystemPrediction"),
     "UpdateInfo": ("nav.ekf", "UpdateInfo"),
     "UsblMeasurement": ("nav.models", "UsblMeasurement"),
     "Waypoint": ("nav.guidance", "Waypoint"),
     "WaypointGuidance": ("nav.guidance", "WaypointGuidance"),
     "baseline": ("nav.correction", "baseline"),
+    "bearing_ekf_update": ("nav.bearings", "ekf_update"),
     "compensated_course": ("nav.correction", "compensated_course"),
     "cp1": ("nav.correction", "cp1"),
     "cp2": ("nav.correction", "cp2"),
@@ -41,9 +47,14 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "distance_3d": ("nav.metrics", "distance_3d"),
     "gate_limit": ("nav.ekf", "gate_limit"),
     "horizontal_distance": ("nav.metrics", "horizontal_distance"),
+    "limited_control": ("nav.local_control", "limited_control"),
     "nees": ("nav.metrics", "nees"),
     "nees_band": ("nav.metrics", "nees_band"),
+    "optimal_control": ("nav.local_control", "optimal_control"),
+    "pcrb": ("nav.pcrb", "pcrb"),
     "series_stats": ("nav.metrics", "series_stats"),
+    "train_cmnf": ("nav.cmnf", "train"),
+    "upmf_update": ("nav.bearings", "upmf_update"),
 }
 """Public name -> (module, attribute), imported on first use."""
 

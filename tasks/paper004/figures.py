@@ -78,7 +78,7 @@ def errors(
     out: Path, name: str, t: np.ndarray, sums, s_w: np.ndarray, s_0: np.ndarray, title: str
 ) -> list[str]:
     """Figure 8 (9): error mean (dotted) and standard deviation (solid) per axis and filter."""
-    fig, axes = style.subplots("page", height_in=4.2, nrows=3, sharex=True)
+    fig, axes = style.subplots("page", height_in=5.0, nrows=3, sharex=True)
     for fi, f in enumerate(FILTERS):
         cnt = np.maximum(sums.count[fi], 1.0)
         mean = sums.err[fi] / cnt[:, None]
@@ -94,7 +94,7 @@ def errors(
         ax.set_ylabel(style.label(f"error {'xyz'[i]}", "m"))
     axes[-1].set_xlabel(style.label("time", "s"))
     style.title(axes[0], title)
-    style.legend_outside(axes[0], ncol=4)
+    style.figure_legend(fig, axes, ncol=4)
     return style.save(fig, out / f"error-{name}.png")
 
 
