@@ -155,9 +155,11 @@ def check_beacons(beacons: Array) -> Array:
 
 
 def _offsets(x: Array, beacons: Array) -> tuple[Array, Array, Array, Array]:
-    d = beacons[None, :, :] - np.asarray(x, dtype=float)[:, None, :]  # (n, B, 3)
-    dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
-    rho = np.hypot(dx, dy)
+    x = np.asarray(x, dtype=float)
+    dx = beacons[:, 0] - x[:, 0:1]  # (n, B), contiguous
+    dy = beacons[:, 1] - x[:, 1:2]
+    dz = beacons[:, 2] - x[:, 2:3]
+    rho = np.sqrt(dx * dx + dy * dy)
     return dx, dy, dz, rho
 
 
@@ -192,9 +194,13 @@ def bearings(x: Array, beacons: Array) -> tuple[Array, NDArray[np.bool_]]:
     """
     dx, dy, dz, rho = _offsets(x, beacons)
     ok = (rho >= MIN_RHO_M) & (np.abs(dy) <= MAX_TAN * np.abs(dx))
-    sdx = np.where(ok, dx, 1.0)
-    srho = np.where(ok, rho, 1.0)
-    h = np.stack([np.where(ok, dy / sdx, 0.0), np.where(ok, dz / srho, 0.0)], axis=-1)
+    h = np.empty((*dx.shape, 2))
+    if ok.all():
+        np.divide(dy, dx, out=h[..., 0])
+        np.divide(dz, rho, out=h[..., 1])
+        return h, ok
+    h[..., 0] = np.where(ok, dy / np.where(ok, dx, 1.0), 0.0)
+    h[..., 1] = np.where(ok, dz / np.where(ok, rho, 1.0), 0.0)
     return h, ok
 
 

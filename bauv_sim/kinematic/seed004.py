@@ -37,7 +37,7 @@ from bauv_sim.rng import generator
 
 Array = NDArray[np.float64]
 
-TRAIN_CHUNK = 1000
+TRAIN_CHUNK = 10_000
 """Training paths per stream chunk (fixed: the draws of a path do not depend on the count)."""
 
 SECTION6_BEACONS = (
@@ -150,22 +150,31 @@ class Seed004Noise(Config):
 def velocity(u: Array) -> Array:
     """Velocity of controls ``(..., 3)`` (gamma, theta, V) -> ``(..., 3)`` m/s (seed 004, eq. 2)."""
     g, th, v = u[..., 0], u[..., 1], u[..., 2]
-    return np.stack(
-        [v * np.cos(g) * np.cos(th), v * np.cos(g) * np.sin(th), v * np.sin(g)], axis=-1
-    )
+    out = np.empty(u.shape)
+    vc = v * np.cos(g)
+    np.multiply(vc, np.cos(th), out=out[..., 0])
+    np.multiply(vc, np.sin(th), out=out[..., 1])
+    np.multiply(v, np.sin(g), out=out[..., 2])
+    return out
 
 
 def true_bearings(
     x: Array, beacons: Array, min_rho_m: float, max_tan: float
 ) -> tuple[Array, NDArray[np.bool_]]:
     """Noise-free eq. 17 tangents ``(n, B, 2)`` and their presence ``(n, B)`` at ``(n, 3)`` m."""
-    d = beacons[None] - x[:, None]
-    dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
+    dx = beacons[:, 0] - x[:, 0:1]  # (n, B)
+    dy = beacons[:, 1] - x[:, 1:2]
+    dz = beacons[:, 2] - x[:, 2:3]
     rho = np.sqrt(dx * dx + dy * dy)
     ok = (rho >= min_rho_m) & (np.abs(dy) <= max_tan * np.abs(dx))
-    t_phi = np.where(ok, dy / np.where(ok, dx, 1.0), 0.0)
-    t_lam = np.where(ok, dz / np.where(ok, rho, 1.0), 0.0)
-    return np.stack([t_phi, t_lam], axis=-1), ok
+    h = np.empty((*dx.shape, 2))
+    if ok.all():
+        np.divide(dy, dx, out=h[..., 0])
+        np.divide(dz, rho, out=h[..., 1])
+    else:
+        h[..., 0] = np.where(ok, dy / np.where(ok, dx, 1.0), 0.0)
+        h[..., 1] = np.where(ok, dz / np.where(ok, rho, 1.0), 0.0)
+    return h, ok
 
 
 class PathNoise:
@@ -258,7 +267,10 @@ class Seed004World:
     def observe(self, k: int, x: Array) -> tuple[Array, NDArray[np.bool_]]:
         """Measured tangents ``(n, B, 2)`` and presence ``(n, B)`` at t_k (eq. 17)."""
         h, ok = true_bearings(x, self.beacons, self.noise.min_rho_m, self.noise.max_tan)
-        return np.where(ok[..., None], h + self.draws.eps_at(k), 0.0), ok
+        h += self.draws.eps_at(k)
+        if not ok.all():
+            h[~ok] = 0.0
+        return h, ok
 
 
 def check_beacons(beacons) -> Array:

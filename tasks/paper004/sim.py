@@ -27,7 +27,7 @@ from bauv_sim.kinematic.seed004 import (
     TrainingNoise,
 )
 from nav.bearings import SystemPrediction, ekf_update, predict, upmf_update
-from nav.cmnf import CmnfGains, beta, train
+from nav.cmnf import CmnfGains, cmnf_step, train
 from nav.local_control import ControlLimits, limited_control, optimal_control
 from nav.pcrb import bearing_information
 
@@ -242,11 +242,8 @@ def fly(
             y, present = world.observe(k + 1, x)
             if name == "CMNF":
                 alpha = x_hat + shift.displacement_m
-                i = k
-                x_t = alpha @ gains.F[i].T + gains.f[i]
-                bb = beta(s.correction, x_t, y, present, b)
-                x_hat = x_t + bb @ gains.H[i].T + gains.h[i]
-                var = np.broadcast_to(np.diag(gains.p_hat[i]), (n, 3))
+                x_t, x_hat = cmnf_step(gains, k + 1, alpha, s.correction, y, present, b)
+                var = np.broadcast_to(np.diag(gains.p_hat[k]), (n, 3))
             else:
                 x_t, P_t = predict(x_hat, P, shift)
                 if name == "EKF":
