@@ -16,6 +16,7 @@ Usage: ``python benchmarks/bench_cmnf.py [--paths 100000] [--steps 300] [--subse
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import time
 
@@ -98,6 +99,7 @@ def main() -> None:
         return LoopSetting(path, Seed004Noise(), SECTION6_BEACONS, train_paths=n)
 
     full, sub = setting(a.paths), setting(a.subset)
+    load0 = os.getloadavg()[0]
     t0, c0 = time.perf_counter(), time.process_time()
     _, trace = train_gains(full, 1)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
@@ -119,7 +121,7 @@ def main() -> None:
     )
     res_full = {"batched full": res[f"batched ({a.subset} paths)"]}
     res_full["batched full"] = type(res_full["batched full"])(
-        f"batched ({a.paths} paths, one run)", a.paths * a.steps, [wall], [0.0]
+        f"batched ({a.paths} paths, one run)", a.paths * a.steps, [wall], [load0]
     )
     print(
         table(
