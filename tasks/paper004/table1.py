@@ -60,7 +60,13 @@ from nav.cmnf import CmnfGains
 from nav.local_control import ControlLimits
 from nav.pcrb import pcrb
 from tasks.core import store
-from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.registry import (
+    Experiment,
+    MemoryTerm,
+    ReportContext,
+    ReportSummary,
+    register,
+)
 from tasks.core.report import Table, write_metrics, write_tables
 from tasks.paper004.sim import FILTERS, LoopSetting, LoopSums, fly, gains_for
 
@@ -460,6 +466,31 @@ class Paper004Experiment(Experiment):
                     f"report.documented_variance_m2 = {v}: must be one of "
                     f"sweep.initial_variance_m2 = {scenario.sweep.initial_variance_m2}"
                 )
+
+    def memory(self, scenario: Paper004Scenario, n_runs: int) -> list[MemoryTerm]:
+        """Estimated peak memory, bytes: a block's draws and working arrays (per run and step),
+        the CMNF training's arrays of one step, and the report's per-step sums."""
+        steps = scenario.path.n_steps + 1
+        nb = len(scenario.beacons)
+        block = min(scenario.runner.block_size, n_runs)
+        n_cases = len(cases(scenario))
+        timing = (
+            f"path.duration_s = {scenario.path.duration_s:g} with path.dt_s = "
+            f"{scenario.path.dt_s:g} s ({steps} steps)"
+        )
+        return [
+            MemoryTerm(
+                8.0 * block * steps * (3 + 2 * nb) + 8.0 * block * 40 * (3 + 2 * nb) ** 2,
+                True,
+                f"{timing} in blocks of runner.block_size = {block} runs",
+            ),
+            MemoryTerm(
+                8.0 * scenario.filters.train_paths * 60 * (3 + 2 * nb),
+                True,
+                f"filters.train_paths = {scenario.filters.train_paths}",
+            ),
+            MemoryTerm(8.0 * n_cases * 3 * steps * 30, False, timing),
+        ]
 
     def run_block(self, scenario: Paper004Scenario, seed: int, runs: tuple[int, ...]):
         return reduce_block(scenario, seed, runs)

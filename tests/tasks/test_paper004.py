@@ -182,6 +182,18 @@ def _bauv(tmp_path, name, *args):
             "paper-004/table-1",
             [
                 "--set",
+                "path.duration_s=90000.0",
+                "--set",
+                "runner.block_size=100000",
+                "--runs",
+                "100000",
+            ],
+            "path.duration_s = 90000",
+        ),
+        (
+            "paper-004/table-1",
+            [
+                "--set",
                 "guidance.limits=true",
                 "--set",
                 "guidance.v_min_m_s=5.0",
