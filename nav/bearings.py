@@ -114,8 +114,12 @@ class Prediction(Protocol):
     """A prediction step: ``(k, estimate (n, 3) m, control (n, 3)) -> PredictedShift``.
 
     ``k`` is the index of the step the estimate belongs to (the prediction is for ``k + 1``).
-    Implementations: :class:`SystemPrediction` (seed 004, eq. 1, "by virtue of the system"); the
-    seabed-sensing dead reckoning (eq. 15-16) returns its shift estimate and covariance.
+    The closed loops call it after the truth has moved to ``t_{k+1}``, so an implementation that
+    senses the shift (the seabed-sensing dead reckoning of eq. 15-16, which needs the acoustic
+    images of ``t_k`` and ``t_{k+1}``) can read its sensor's data of ``t_{k+1}`` through its own
+    reference to that sensor; it never sees the truth. Implementations:
+    :class:`SystemPrediction` (seed 004, eq. 1, "by virtue of the system"); the seabed DR returns
+    its shift estimate (eq. 15) and the covariance of its error.
     """
 
     def __call__(self, k: int, x_hat: Array, u: Array) -> PredictedShift: ...

@@ -337,8 +337,8 @@ def train(
     mse[0] = float(np.mean(np.sum((x - x_hat) ** 2, axis=1)))
     for k in range(1, n_steps + 1):
         u = control(k - 1, x_hat)
-        shift = prediction(k - 1, x_hat, u)
         x = world.advance(k - 1, x, u)
+        shift = prediction(k - 1, x_hat, u)  # after the move: a sensed shift may use t_k's data
         alpha = x_hat + shift.displacement_m
         F, f, p_t = prediction_gain(x, alpha, floor)
         x_tilde = rows_times(alpha, F) + f

@@ -237,8 +237,8 @@ def fly(
         rec(0, alive, x, x_hat, np.diagonal(P, axis1=1, axis2=2), np.ones((n, len(b)), bool))
         for k in range(N):
             u = ctl(k, x_hat)
-            shift = pred(k, x_hat, u)
             x = world.advance(k, x, u)
+            shift = pred(k, x_hat, u)  # after the move (a sensed shift reads t_{k+1}'s data)
             y, present = world.observe(k + 1, x)
             if name == "CMNF":
                 alpha = x_hat + shift.displacement_m
