@@ -202,12 +202,15 @@ class PathNoise:
             ).standard_normal((n_steps + 1, n_beacons, 2))
 
     def start(self) -> Array:
+        """Deviation of X_0 from X°_0, ``(n, 3)`` m."""
         return self.x0
 
     def w_at(self, k: int) -> Array:
+        """W_k, ``(n, 3)`` m."""
         return self.w[:, k]
 
     def eps_at(self, k: int) -> Array:
+        """Tangent noise at t_k, ``(n, B, 2)``."""
         return self.eps[:, k]
 
 
@@ -232,12 +235,15 @@ class TrainingNoise:
         return np.concatenate(out)
 
     def start(self) -> Array:
+        """Deviation of X_0 from X°_0, ``(n, 3)`` m."""
         return np.asarray(self.noise.sigma_x0_m) * self._draw("x0", 0, (3,))
 
     def w_at(self, k: int) -> Array:
+        """W_k, ``(n, 3)`` m (drawn on each call: call once per step)."""
         return np.asarray(self.noise.sigma_w_m) * self._draw("w", k, (3,))
 
     def eps_at(self, k: int) -> Array:
+        """Tangent noise at t_k, ``(n, B, 2)`` (drawn on each call: call once per step)."""
         return self.noise.tangent_sigma * self._draw("eps", k, (self.nb, 2))
 
 

@@ -66,14 +66,17 @@ class LoopSetting:
 
     @property
     def b(self) -> Array:
+        """Beacons as a ``(B, 3)`` array, m."""
         return np.asarray(self.beacons, dtype=float)
 
     @property
     def fnoise(self) -> Seed004Noise:
+        """The noise the filters assume."""
         return self.filter_noise or self.noise
 
     @property
     def s0_filter(self) -> Array:
+        """The filters' initial covariance, ``(3, 3)`` m^2."""
         if self.filter_s0 is None:
             return self.noise.s_0
         return np.diag(np.square(self.filter_s0))
@@ -96,7 +99,11 @@ class LoopSetting:
 
 
 class Controller:
-    """The control law of a setting: eq. 7 (unbounded) or its box-limited form."""
+    """The control law of a setting: eq. 7 (unbounded) or its box-limited form.
+
+    Called as ``(k, x_hat (n, 3) m) -> u (n, 3)``; it remembers the previous command for the
+    rate limits (starting from the nominal control at t_0).
+    """
 
     def __init__(self, s: LoopSetting, n: int):
         self.xn = s.path.path()
