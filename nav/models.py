@@ -34,6 +34,10 @@ from nav.angles import (
 Array = NDArray[np.float64]
 
 
+TIME_CHUNK = 48
+"""Steps computed together in :meth:`CourseSpeedDepthMotion.increment_and_packed_Q`."""
+
+
 @dataclass(frozen=True)
 class CourseSpeedDepthMotion:
     """Dead-reckoning motion from course, speed and depth change (seed 000 eq. 8 and 16).
@@ -125,6 +129,51 @@ class CourseSpeedDepthMotion:
         Q[..., 0, 1] = Q[..., 1, 0] = g00 * g10 * sc2 + g01 * g11 * ss2
         Q[..., 1, 1] = g10 * g10 * sc2 + g11 * g11 * ss2
         Q[..., 2, 2] = self.sigma_depth_change_m**2
+        return inc, Q
+
+    def increment_and_packed_Q(self, u: Array, dt_s: float) -> tuple[Array, Array]:
+        """:meth:`increment_and_Q` of n runs' T steps laid out for :func:`nav.track_ekf.ekf_tracks`.
+
+        Args:
+            u: ``(C, S, dz)`` of each step, shape (n, T, 3).
+            dt_s: step duration, s.
+
+        Returns:
+            ``(displacement (T, 3, n) m, Q packed (T, 6, n) m^2)``: time-major structure of
+            arrays; Q's upper triangle in the order of :data:`nav.track_ekf.SYM`. The same
+            numbers as :meth:`increment_and_Q` (tested), with fewer temporaries.
+        """
+        n, T, _ = u.shape
+        inc = np.empty((T, 3, n))
+        Q = np.empty((T, 6, n))
+        Q[:, 2] = Q[:, 4] = 0.0
+        Q[:, 5] = self.sigma_depth_change_m**2
+        sc2, ss2 = self.sigma_course_rad**2, self.sigma_speed_m_s**2
+        # a few dozen steps at a time, so the temporaries stay in the cache (2-3x faster for
+        # blocks of 1,000 runs than whole-array operations)
+        for a in range(0, T, TIME_CHUNK):
+            b = min(a + TIME_CHUNK, T)
+            c, s, dz = (np.ascontiguousarray(u[:, a:b, i].T) for i in range(3))  # (b - a, n)
+            ue, un = np.sin(c), np.cos(c)
+            ds = np.multiply(dt_s, s, out=s)
+            np.multiply(ds, ue, out=inc[a:b, 0])
+            np.multiply(ds, un, out=inc[a:b, 1])
+            np.negative(dz, out=inc[a:b, 2])
+            # G's entries (:meth:`G`): g00 = ds un, g01 = dt ue, g10 = -ds ue, g11 = dt un
+            g00, g10 = inc[a:b, 1], np.negative(inc[a:b, 0], out=dz)
+            g01, g11 = np.multiply(dt_s, ue, out=ue), np.multiply(dt_s, un, out=un)
+            tmp = c  # scratch
+            for k, p, q, r, w in (
+                (0, g00, g00, g01, g01),
+                (1, g00, g10, g01, g11),
+                (3, g10, g10, g11, g11),
+            ):
+                out = Q[a:b, k]
+                np.multiply(p, q, out=out)
+                out *= sc2
+                np.multiply(r, w, out=tmp)
+                tmp *= ss2
+                out += tmp
         return inc, Q
 
     def predict_one(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
@@ -380,6 +429,32 @@ class CurrentAwareMotion:
         q = self.sigma_current_walk_m_s_per_sqrt_s**2 * dt_s
         Q[..., 3, 3] = Q[..., 4, 4] = q
         return Q
+
+    def increment_and_packed_Q(self, u: Array, dt_s: float) -> tuple[Array, Array]:
+        """:meth:`increment_and_Q` of n runs' T steps laid out for :func:`nav.track_ekf.ekf_tracks`.
+
+        Args:
+            u: ``(C, S, dz)`` of each step, shape (n, T, 3).
+            dt_s: step duration, s.
+
+        Returns:
+            ``(displacement (T, n, 3) m, Q packed (T, 6, n) m^2)``: time-major; Q's upper
+            triangle in the order of :data:`nav.track_ekf.SYM`, the same numbers as
+            :meth:`increment_and_Q` (tested).
+        """
+        c, s, dz = (np.ascontiguousarray(u[..., i].T) for i in range(3))  # (T, n) each
+        ue, un = np.sin(c), np.cos(c)
+        ds = dt_s * s
+        inc = np.empty((*c.shape, 3))
+        inc[..., 0], inc[..., 1], inc[..., 2] = ds * ue, ds * un, -dz
+        g00, g01, g10, g11 = ds * un, dt_s * ue, -ds * ue, dt_s * un
+        sc2, ss2 = self.sigma_course_rad**2, self.sigma_speed_m_s**2
+        Q = np.zeros((c.shape[0], 6, c.shape[1]))
+        Q[:, 0] = g00 * g00 * sc2 + g01 * g01 * ss2
+        Q[:, 1] = g00 * g10 * sc2 + g01 * g11 * ss2
+        Q[:, 3] = g10 * g10 * sc2 + g11 * g11 * ss2
+        Q[:, 5] = self.sigma_depth_change_m**2
+        return inc, Q
 
     def predict_one(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
         """One prediction of one run in closed form (eq. 17-18): ``F`` is the identity plus

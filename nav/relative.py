@@ -70,7 +70,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nav.angles import wrap_pi
-from nav.ekf import SingleRunEKF, update_one
+from nav.ekf import SingleRunEKF, update, update_one
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -606,8 +606,6 @@ def range_update(
     Returns:
         ``(x, P, info)`` as :func:`nav.ekf.update`.
     """
-    from nav.ekf import update
-
     model = RangeMeasurement(
         np.asarray(leader, float), sigma_m, None if leader_cov is None else np.asarray(leader_cov)
     )

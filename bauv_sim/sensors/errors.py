@@ -103,18 +103,16 @@ class ErrorProcess:
         self.seed = seed
         self.runs = tuple(runs)
         self.path = tuple(path)
-        self._gens: dict[str, list[np.random.Generator]] = {}
+        self._gens: dict[str, rng_mod.RunStreams] = {}
         self._walk = np.zeros(len(self.runs))
         self._t_last: float | None = None
 
     def _draw(self, component: str, k: int, fn: str, *args: Any) -> NDArray[np.float64]:
-        gens = self._gens.get(component)
-        if gens is None:
-            gens = rng_mod.generators(self.seed, self.runs, *self.path, component)
-            self._gens[component] = gens
-        if len(gens) == 1:  # the physics loop: one run, one sample
-            return getattr(gens[0], fn)(*args, size=k)[None]
-        return np.stack([getattr(g, fn)(*args, size=k) for g in gens])
+        gen = self._gens.get(component)
+        if gen is None:
+            gen = rng_mod.RunStreams(self.seed, self.runs, *self.path, component)
+            self._gens[component] = gen
+        return gen.draw(fn, k, *args)
 
     def apply(
         self,

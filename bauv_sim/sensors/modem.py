@@ -187,7 +187,7 @@ class Modem:
         base = ("sensor", name)
         self._err = ErrorProcess(cfg.range.to_model(), seed, runs, (*base, "range"))
         self._drop = (
-            rng_mod.generators(seed, runs, *base, "message_dropout")
+            rng_mod.RunStreams(seed, runs, *base, "message_dropout")
             if cfg.dropout_probability > 0
             else None
         )
@@ -214,7 +214,7 @@ class Modem:
             produced &= ~((t >= a) & (t < b))[None, :]
         if self._drop is not None:
             k = r.shape[1]
-            lost = np.stack([g.random(k) for g in self._drop]) < c.dropout_probability
+            lost = self._drop.draw("random", k) < c.dropout_probability
             produced &= ~lost
         t_arr = t[None, :] + r / c.sound_speed_m_s + c.processing_delay_s
         return meas, produced, t_arr

@@ -93,7 +93,7 @@ class Usbl:
             ErrorProcess(cfg.elevation.to_model(), seed, runs, (*base, "elevation")),
         ]
         self._drop = (
-            rng_mod.generators(seed, runs, *base, "fix_dropout")
+            rng_mod.RunStreams(seed, runs, *base, "fix_dropout")
             if cfg.dropout_probability > 0
             else None
         )
@@ -123,7 +123,7 @@ class Usbl:
         produced &= true_rae[..., 0] <= self.cfg.max_range_m
         produced &= true_rae[..., 2] >= np.radians(self.cfg.min_elevation_deg)
         if self._drop is not None:
-            lost = np.stack([g.random(k) for g in self._drop]) < self.cfg.dropout_probability
+            lost = self._drop.draw("random", k) < self.cfg.dropout_probability
             produced &= ~lost
         t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
         return SensorSamples(tr.t_s, meas, produced, t_arr)

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, Field
 
 from bauv_sim.frames import velocity_from_course_speed
+from nav.metrics import chi2_ppf
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.scenario import MissionScenario
 from tasks.core.registry import Experiment, ReportContext, ReportSummary
@@ -730,13 +731,11 @@ def record_current(rec, v: VehicleRun, every: int) -> None:
 
 def record_consistency(rec, v: VehicleRun, probability: float = 0.95) -> None:
     """The EKF's position NEES at each tick against the chi-square band of one run (dof 3)."""
-    from scipy.stats import chi2
-
     t = v["t"]
     rec.scalars(
         "consistency/nees", t, position_nees(v), (31, 119, 180), "EKF position NEES (dof 3)"
     )
-    lo, hi = chi2.ppf([(1 - probability) / 2, (1 + probability) / 2], 3)
+    lo, hi = chi2_ppf(np.array([(1 - probability) / 2, (1 + probability) / 2]), 3)
     for name, val in (("band_low", lo), ("band_high", hi)):
         rec.scalars(
             f"consistency/nees_{name}",

@@ -11,8 +11,9 @@ run's numbers depend only on ``(scenario, seed, run index)``, blocks are reduced
 and the encoding keeps every bit, the outputs are bit-identical whatever the executor and worker
 count, and a batch interrupted and resumed with ``--resume`` equals one run straight through.
 
-Executors: ``local`` (in-process for one worker, else a :class:`ProcessPoolExecutor` with the
-``spawn`` start method) and ``dask`` (``distributed.Client(address)``, or a local cluster with
+Executors: ``local`` (in-process for one worker, else a :class:`ProcessPoolExecutor` whose workers
+are forked warm from a fork server with the experiment preloaded, or spawned where there is
+none) and ``dask`` (``distributed.Client(address)``, or a local cluster with
 ``workers`` single-threaded processes when no address is given).
 
 The run folder holds ``run.json`` (``state`` is ``incomplete`` until the report is written, then
@@ -588,6 +589,49 @@ PARENT_POLL_S = 0.5
 """How often a local worker checks that the ``bauv`` process that started it is alive, s."""
 
 
+def _process_alive(pid: int) -> bool:
+    """Whether a process exists (signal 0 delivers nothing, it only checks)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _pool_context(preload: Sequence[str]) -> multiprocessing.context.BaseContext:
+    """The start method of local workers: ``forkserver`` with the experiment's modules preloaded
+    where the platform has it, else ``spawn``.
+
+    A spawned worker starts a fresh interpreter and imports the project again (about a second,
+    issue 13); the fork server imports the preloaded modules once and forks each worker from
+    itself, so a worker starts warm. Neither inherits bauv's own threads, locks or open
+    files, which ``fork`` would.
+    """
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["tasks.core.runner", *preload])
+        return ctx
+    return multiprocessing.get_context("spawn")
+
+
+def _start_fork_server(name: str) -> None:
+    """Start the local workers' fork server now, with the package of ``name``'s family
+    preloaded, so that it imports the project on another core while this process plans the
+    batch (otherwise both happen one after the other). Nothing happens for an unknown family
+    (the plan reports it) or where there is no fork server.
+    """
+    package = registry.FAMILIES.get(name.split("/", 1)[0])
+    if package is None or "forkserver" not in multiprocessing.get_all_start_methods():
+        return
+    from multiprocessing import forkserver
+
+    _pool_context((package,))
+    with contextlib.suppress(OSError):
+        forkserver.ensure_running()
+
+
 def _die_with_parent(parent_pid: int) -> None:
     """Initializer of a local worker process: exit when the process that started it is gone.
 
@@ -603,13 +647,15 @@ def _die_with_parent(parent_pid: int) -> None:
         with contextlib.suppress(OSError, AttributeError):
             import ctypes
 
+            # the process that forked this worker: bauv itself, or its fork server, which
+            # exits when bauv does
             pr_set_pdeathsig = 1
             ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
-    if os.getppid() != parent_pid:  # the parent died before the line above
+    if not _process_alive(parent_pid):  # bauv died before the line above
         os._exit(1)
 
     def watch() -> None:
-        while os.getppid() == parent_pid:
+        while _process_alive(parent_pid):
             time.sleep(PARENT_POLL_S)
         os._exit(1)
 
@@ -670,13 +716,17 @@ def check_executor(kind: str, workers: int, address: str | None) -> None:
 
 
 @contextlib.contextmanager
-def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.Executor]:
+def make_executor(
+    kind: str, workers: int, address: str | None, preload: Sequence[str] = ()
+) -> Iterator[cf.Executor]:
     """Open an executor of the given kind.
 
     Args:
         kind: ``"local"`` or ``"dask"``.
         workers: worker processes (local, and local Dask cluster), >= 1.
         address: a Dask scheduler address (``tcp://host:8786``) or ``None``.
+        preload: modules local workers import before they are forked (the experiment's), see
+            :func:`_pool_context`.
 
     Yields:
         The executor; it is shut down on exit.
@@ -692,7 +742,7 @@ def make_executor(kind: str, workers: int, address: str | None) -> Iterator[cf.E
             return
         ex = cf.ProcessPoolExecutor(
             max_workers=workers,
-            mp_context=multiprocessing.get_context("spawn"),
+            mp_context=_pool_context(preload),
             initializer=_die_with_parent,
             initargs=(os.getpid(),),
         )
@@ -786,7 +836,7 @@ def execute(
             with (
                 contextlib.nullcontext(pool)
                 if pool is not None
-                else make_executor(executor, workers, address)
+                else make_executor(executor, workers, address, (type(plan.experiment).__module__,))
             ) as ex:
                 futures = {
                     ex.submit(
@@ -897,6 +947,8 @@ def run(
         BatchFailed: if a block raised.
     """
     check_executor(executor, workers, address)
+    if executor == "local" and workers > 1:
+        _start_fork_server(name)
     if resume:
         if out_dir is None:
             raise ConfigError("--resume needs --out: the folder of the batch to complete")

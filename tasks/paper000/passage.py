@@ -60,18 +60,19 @@ from bauv_sim.sensors import (
     periodic_indices,
 )
 from bauv_sim.truth import Truth
-from nav.dead_reckoning import dead_reckon
-from nav.ekf import BatchEKF, check_estimate
+from nav.ekf import gate_limit
 from nav.metrics import (
     Histogram,
     SeriesSum,
+    batch_stats,
+    chi2_ppf,
     distance_3d,
     horizontal_distance,
-    nees,
     nees_band,
     series_stats,
 )
-from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+from nav.models import TIME_CHUNK, CourseSpeedDepthMotion, UsblMeasurement
+from nav.track_ekf import Tracks, ekf_tracks, nees_packed, unpack
 from tasks.core import figures, store
 from tasks.core.recording import COLORS, Recording
 from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary, register
@@ -226,10 +227,30 @@ class ReportConfig(Config):
     )
 
 
+BLOCK_PASSAGE_TICKS = 600_000
+"""The work of a default block, passage-ticks (see :class:`RunnerConfig`)."""
+
+
+def block_passages(scn: Paper000Scenario) -> int:
+    """Passages per block: ``runner.block_size``, or by work (:data:`BLOCK_PASSAGE_TICKS`)."""
+    if scn.runner.block_size is not None:
+        return scn.runner.block_size
+    return max(1, min(100_000, BLOCK_PASSAGE_TICKS // max(1, scn.passage.n_ticks - 1)))
+
+
 class RunnerConfig(Config):
     """Batching (fixed by the scenario, never by the worker count)."""
 
-    block_size: int = Field(100, ge=1, le=100_000, description="passages per block")
+    block_size: int | None = Field(
+        None,
+        ge=1,
+        le=100_000,
+        description=(
+            "passages per block; default: sized by work, as many passages as make "
+            f"{BLOCK_PASSAGE_TICKS:,} passage-ticks (1,000 passages of the paper's 600 ticks), "
+            "enough to amortise numpy's per-call cost and small enough to stay in memory"
+        ),
+    )
 
 
 class Paper000Scenario(Config):
@@ -280,8 +301,9 @@ class Passages:
         truth: the reference motion (run axis 1).
         t_fix_s: USBL fix times, shape (k,), s.
         fix_tick: tick index of each fix, shape (k,).
-        ekf_m: EKF positions, shape (n, T + 1, 3), m, world.
-        ekf_P: EKF covariances, shape (n, T + 1, 3, 3), m^2.
+        ekf_m: EKF positions, shape (n, T + 1, 3), m, world (a view of time-major tracks).
+        ekf_Pp: EKF covariances' upper triangles, shape (T + 1, 6, n), m^2, in the order of
+            :data:`nav.track_ekf.SYM` (:attr:`ekf_P` gives the full matrices).
         dr_m: DR positions, shape (n, T + 1, 3), m, world.
         usbl_m: USBL-only fixes, shape (n, k, 3), m, world; meaningless where not produced.
         usbl_produced: shape (n, k).
@@ -294,7 +316,7 @@ class Passages:
     t_fix_s: NDArray[np.float64]
     fix_tick: NDArray[np.intp]
     ekf_m: NDArray[np.float64]
-    ekf_P: NDArray[np.float64]
+    ekf_Pp: NDArray[np.float64]
     dr_m: NDArray[np.float64]
     usbl_m: NDArray[np.float64]
     usbl_produced: NDArray[np.bool_]
@@ -315,9 +337,20 @@ class Passages:
             "USBL": distance_3d(self.usbl_m, ref[self.fix_tick]),
         }
 
+    @property
+    def ekf_P(self) -> NDArray[np.float64]:
+        """EKF covariances, shape (n, T + 1, 3, 3), m^2 (built on each call)."""
+        return unpack(self.ekf_Pp)
+
     def ekf_nees(self) -> NDArray[np.float64]:
         """NEES of the EKF (3-D state), shape (n, T + 1)."""
-        return nees(self.ekf_m - self.reference_m, self.ekf_P)
+        xs, Pp, ref = self.ekf_m.transpose(1, 2, 0), self.ekf_Pp, self.reference_m  # time-major
+        out = np.empty(xs.shape[::2])
+        for a in range(0, len(out), TIME_CHUNK):  # a few dozen ticks at a time: in the cache
+            b = a + TIME_CHUNK
+            err = np.moveaxis(xs[a:b] - ref[a:b, :, None], 1, 0)  # (3, ticks, n)
+            out[a:b] = nees_packed(err, np.moveaxis(Pp[a:b], 1, 0))
+        return out.T
 
 
 def _hold_last(values: NDArray[np.float64], produced: NDArray[np.bool_], what: str):
@@ -398,7 +431,7 @@ def measure_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) ->
     x0 = np.broadcast_to(truth.pos_world_m[0, 0], (n, 3)).copy()
     if scn.initial_error.distribution == "gaussian":
         L = np.linalg.cholesky(P0)
-        draws = np.stack([rng_mod.generator(seed, r, "initial").standard_normal(3) for r in runs])
+        draws = rng_mod.RunStreams(seed, runs, "initial").draw("standard_normal", 3)
         x0 = x0 + draws @ L.T
     return PassageInputs(
         truth, u, fix_tick, fixes.values, fixes.produced, x0, P0, motion, usbl_model
@@ -406,39 +439,29 @@ def measure_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) ->
 
 
 def run_ekf(
-    inp: PassageInputs, tick_s: float, gate_probability: float | None = None
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
-    """The EKF of eq. 15-23 over the passages, batched over runs.
+    inp: PassageInputs,
+    tick_s: float,
+    gate_probability: float | None = None,
+    steps: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> Tracks:
+    """The EKF of eq. 15-23 over the passages, batched over runs
+    (:func:`nav.track_ekf.ekf_tracks`: F = I, so a prediction adds the step's displacement and
+    process noise, computed for all steps in one pass).
+
+    Args:
+        inp: the passages' inputs.
+        tick_s: step duration, s.
+        gate_probability: the chi-square gate, or None.
+        steps: ``inp.motion.increment_and_packed_Q(inp.u, tick_s)`` if already computed.
 
     Returns:
-        ``(x (n, T + 1, 3), P (n, T + 1, 3, 3), nis (n, k), gate_rejected (n, k))``; ``x`` and
-        ``P`` are views of time-major arrays.
+        The tracks: states (T + 1, 3, n) and packed covariances (T + 1, 6, n), time-major.
     """
-    n, T, _ = inp.u.shape
-    ekf = BatchEKF(inp.motion)
-    nis = np.full(inp.z_produced.shape, np.nan)
-    rejected = np.zeros(inp.z_produced.shape, dtype=bool)
-    # F = I, so a prediction adds the step's displacement and process noise, computed for all
-    # steps in one pass; the arrays are time-major, so each tick's slice is contiguous
-    inc, Q = inp.motion.increment_and_Q(np.ascontiguousarray(np.swapaxes(inp.u, 0, 1)), tick_s)
-    xs = np.empty((T + 1, n, 3))
-    Ps = np.empty((T + 1, n, 3, 3))
-    xs[0], Ps[0] = inp.x0, inp.P0
-    fix_at = {int(t): j for j, t in enumerate(inp.fix_tick)}
-    for k in range(T):
-        np.add(xs[k], inc[k], out=xs[k + 1])  # eq. 17 with F = I
-        np.add(Ps[k], Q[k], out=Ps[k + 1])  # eq. 18 with F = I
-        j = fix_at.get(k + 1)
-        if j is not None:
-            xs[k + 1], Ps[k + 1], info = ekf.update(
-                xs[k + 1], Ps[k + 1], inp.usbl, inp.z[:, j], inp.z_produced[:, j], gate_probability
-            )
-            nis[:, j] = info.nis
-            rejected[:, j] = info.rejected
-    x, P = xs[T], Ps[T]
-    xs, Ps = np.swapaxes(xs, 0, 1), np.swapaxes(Ps, 0, 1)
-    check_estimate(x, P, T * tick_s)
-    return xs, Ps, nis, rejected
+    inc, Q = inp.motion.increment_and_packed_Q(inp.u, tick_s) if steps is None else steps
+    limits = None
+    if gate_probability is not None:
+        limits = np.array([np.inf, *(gate_limit(gate_probability, d) for d in (1, 2, 3))])
+    return ekf_tracks(inp.x0, inp.P0, inc, Q, inp.fix_tick, inp.z, inp.z_produced, inp.usbl, limits)
 
 
 def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -> Passages:
@@ -454,21 +477,26 @@ def simulate_passages(scn: Paper000Scenario, seed: int, runs: tuple[int, ...]) -
     """
     inp = measure_passages(scn, seed, runs)
     tick = scn.passage.tick_s
-    dr, _ = dead_reckon(inp.x0, inp.u, tick, inp.motion)
-    xs, Ps, nis, rejected = run_ekf(inp, tick, scn.filter.gate_probability)
+    # DR and the EKF's predictions add the same displacements (eq. 8 and 17), computed once
+    steps = inp.motion.increment_and_packed_Q(inp.u, tick)
+    dr = np.empty((steps[0].shape[0] + 1, 3, len(runs)))  # time-major, as the EKF's states
+    dr[0] = inp.x0.T
+    np.cumsum(steps[0], axis=0, out=dr[1:])
+    dr[1:] += dr[0]
+    tracks = run_ekf(inp, tick, scn.filter.gate_probability, steps)
     truth = inp.truth
     return Passages(
         runs,
         truth,
         truth.t_s[inp.fix_tick],
         inp.fix_tick,
-        xs,
-        Ps,
-        dr,
+        tracks.positions(),
+        tracks.Ps,
+        dr.transpose(2, 0, 1),
         inp.usbl.invert(inp.z),
         inp.z_produced,
-        nis,
-        rejected,
+        tracks.nis,
+        tracks.rejected,
     )
 
 
@@ -511,9 +539,10 @@ class Paper000Block:
     ekf_sigma_h: SeriesSum | None = None
 
 
-def _ekf_sigma_h(P: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The horizontal 1-sigma radius ``sqrt(P_ee + P_nn)`` of covariances (..., 3, 3), m."""
-    return np.sqrt(np.maximum(P[..., 0, 0] + P[..., 1, 1], 0.0))
+def _ekf_sigma_h(Pp: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The horizontal 1-sigma radius ``sqrt(P_ee + P_nn)`` of packed covariance tracks
+    (T + 1, 6, ...), shape (T + 1, ...), m."""
+    return np.sqrt(np.maximum(Pp[:, 0] + Pp[:, 3], 0.0))
 
 
 def _edges(cfg: ReportConfig) -> NDArray[np.float64]:
@@ -525,13 +554,13 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
     d = p.distances()
     prod = p.usbl_produced
     edges = _edges(scn.report)
-    per_run = np.full((len(p.runs), 3, 3), np.nan)
-    for i in range(len(p.runs)):
-        for m, name in enumerate(METHODS):
-            present = prod[i] if name == "USBL" else None
-            series = d[name][i] if name == "USBL" else d[name][i, 1:]
-            st = series_stats(series, present)
-            per_run[i, m] = (st.min, st.max, st.mean)
+    per_run = np.stack(
+        [
+            batch_stats(d[name], prod) if name == "USBL" else batch_stats(d[name][:, 1:])
+            for name in METHODS
+        ],
+        axis=1,
+    )
     block = Paper000Block(
         runs=p.runs,
         zeta={
@@ -550,7 +579,7 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
         fixes_produced=int(prod.sum()),
         fixes_expected=int(prod.size),
         gate_rejected=int(p.gate_rejected.sum()),
-        ekf_sigma_h=SeriesSum.of(_ekf_sigma_h(p.ekf_P)),
+        ekf_sigma_h=SeriesSum.of(_ekf_sigma_h(p.ekf_Pp).T),
     )
     for i, run in enumerate(p.runs):
         if run < scn.report.routes_max:
@@ -564,7 +593,7 @@ def reduce_block(scn: Paper000Scenario, p: Passages) -> Paper000Block:
                 "EKF": d["EKF"][i],
                 "DR": d["DR"][i],
                 "USBL": np.where(prod[i], d["USBL"][i], np.nan),
-                "EKF_sigma_h": _ekf_sigma_h(p.ekf_P[i]),
+                "EKF_sigma_h": _ekf_sigma_h(p.ekf_Pp[:, :, i]),
             }
     return block
 
@@ -701,7 +730,7 @@ class StraightPassageExperiment(Experiment):
     test: str = "test-1"
 
     def block_size(self, scenario: Paper000Scenario) -> int:
-        return scenario.runner.block_size
+        return block_passages(scenario)
 
     def check(self, scenario: Paper000Scenario, n_runs: int) -> None:
         if scenario.report.record_run >= n_runs:
@@ -721,7 +750,7 @@ class StraightPassageExperiment(Experiment):
         """
         p, rep = scenario.passage, scenario.report
         ticks = p.duration_s / p.tick_s + 1
-        block = min(scenario.runner.block_size, n_runs)
+        block = min(block_passages(scenario), n_runs)
         bins = rep.histogram_max_m / rep.histogram_bin_m
         timing = (
             f"passage.duration_s = {p.duration_s:g} with passage.tick_s = {p.tick_s:g} s "
@@ -1128,7 +1157,6 @@ def record_passage(exp: Experiment, scn: Paper000Scenario, seed: int, run: int, 
     """
     import rerun as rr
     import rerun.blueprint as rrb
-    from scipy.stats import chi2
 
     from bauv_sim.frames import R_from_roll_pitch_heading, quat_wxyz_from_R, quat_wxyz_to_xyzw
     from bauv_sim.hull import MODEL_DIR
@@ -1172,7 +1200,7 @@ def record_passage(exp: Experiment, scn: Paper000Scenario, seed: int, run: int, 
     rec.scalars("distance/usbl", p.t_fix_s[ok], d["USBL"][0][ok], COLORS["usbl"], "USBL (3-D, m)")
     rec.scalars("consistency/nees_ekf", t, p.ekf_nees()[0], COLORS["ekf"], "EKF NEES (dof 3)")
     q = scn.report.consistency_probability
-    lo, hi = chi2.ppf([(1 - q) / 2, (1 + q) / 2], 3)
+    lo, hi = chi2_ppf(np.array([(1 - q) / 2, (1 + q) / 2]), 3)
     for name, val in (("low", lo), ("high", hi)):
         rec.scalars(
             f"consistency/nees_band_{name}",

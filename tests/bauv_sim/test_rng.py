@@ -34,3 +34,40 @@ def test_component_key_is_stable():
 def test_bad_seed(bad):
     with pytest.raises(ConfigError, match="seed"):
         rng.check_seed(bad)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 7, 2**32 - 1, 2**32, 2**40 + 3, rng.MAX_SEED])
+@pytest.mark.parametrize("names", [(), ("x",), ("sensor", "usbl", "range", "noise")])
+def test_batched_seeding_is_numpys_seed_sequence(seed, names):
+    # the independent truth: numpy's own SeedSequence -> PCG64 seeding, run by run
+    # one-word run indices are hashed in numpy; a two-word one sends the batch to numpy itself
+    for runs in ([0, 1, 2, 99, 12345, 2**31, 2**32 - 1], [3, 2**32, 2**33 + 5]):
+        _check_states(seed, runs, names)
+
+
+def _check_states(seed, runs, names):
+    got = rng.pcg64_states(seed, runs, *names)
+    for run, (state, inc) in zip(runs, got, strict=True):
+        want = np.random.PCG64(rng.seed_sequence(seed, run, *names)).state["state"]
+        assert (state, inc) == (want["state"], want["inc"])
+
+
+@pytest.mark.parametrize("runs", [[4], [3, 1, 4, 1, 5], list(range(60))])
+def test_run_streams_draw_what_each_runs_generator_draws(runs):
+    streams = rng.RunStreams(11, runs, "sensor", "log")
+    gens = rng.generators(11, runs, "sensor", "log")
+    # repeated draws of mixed kinds and sizes continue each run's stream exactly
+    for kind, size, args in [
+        ("uniform", 40, (-1.5, 1.5)),
+        ("standard_normal", 33, ()),
+        ("random", 7, ()),
+        ("standard_normal", 1, ()),
+        ("uniform", 2, (0.25, 2.0)),
+        ("random", 1, ()),
+    ]:
+        got = streams.draw(kind, size, *args)
+        want = np.stack([getattr(g, kind)(*args, size=size) for g in gens])
+        assert got.shape == (len(runs), size)
+        assert np.array_equal(got, want)
+    with pytest.raises(ValueError, match="kind"):
+        streams.draw("poisson", 3)

@@ -45,3 +45,58 @@ def test_series_stats_ignores_absent():
     st = series_stats(np.array([5.0, 1.0, 3.0, 100.0]), np.array([True, True, True, False]))
     assert (st.min, st.max, st.mean) == (1.0, 5.0, 3.0)
     assert np.isnan(series_stats(np.array([1.0]), np.array([False])).mean)
+
+
+@pytest.mark.parametrize(
+    "edges",
+    [
+        np.arange(0.0, 50.0 + 0.25, 0.5),  # the reports' edges: arange, not numpy's linspace
+        np.arange(0.0, 3.0 + 0.05, 0.1),
+        np.array([0.0, 0.1, 0.5, 2.0, 9.0]),  # far from uniform: numpy's own path
+    ],
+)
+def test_histogram_counts_equal_numpys_for_the_given_edges(edges, monkeypatch):
+    from nav.metrics import _bin_counts
+
+    g = np.random.default_rng(4)
+    v = g.uniform(edges[0], edges[-1], 200_000)
+    # values exactly on every edge and one ulp either side: where a guess from the width errs
+    on = np.concatenate(
+        [edges[:-1], np.nextafter(edges[1:-1], -np.inf), np.nextafter(edges[:-1], np.inf)]
+    )
+    v = np.concatenate([v, on])
+    want, _ = np.histogram(v, bins=edges)
+    uniform = np.allclose(np.diff(edges), edges[1] - edges[0])
+    if uniform:  # the linear-time path itself, not numpy's sorting one as a fallback
+        monkeypatch.setattr(np, "histogram", None)
+    assert np.array_equal(_bin_counts(v, edges), want)
+    monkeypatch.undo()
+    h = Histogram.of(np.concatenate([v, [edges[-1] + 5.0]]), edges)  # overflow into the last bin
+    assert h.counts.sum() == v.size + 1 and h.counts[-1] == want[-1] + 1
+
+
+def test_batch_stats_are_series_stats_row_by_row():
+    from nav.metrics import batch_stats
+
+    g = np.random.default_rng(5)
+    v = g.gamma(2.0, 3.0, (50, 121))
+    present = g.random((50, 121)) < 0.7
+    present[3] = False  # a row with no sample: NaN, as series_stats
+    present[4] = False
+    present[4, 17] = True  # and one with a single sample
+    for got, pres in ((batch_stats(v), None), (batch_stats(v, present), present)):
+        for i in range(len(v)):
+            st = series_stats(v[i], None if pres is None else pres[i])
+            np.testing.assert_allclose(got[i], [st.min, st.max, st.mean], rtol=1e-13)
+    assert np.isnan(batch_stats(v, present)[3]).all()
+
+
+def test_chi2_quantile_is_scipys():
+    from scipy.stats import chi2
+
+    from nav.metrics import chi2_ppf
+
+    for dof in (1, 2, 3, 7, 300, 30_000):
+        for p in (0.001, 0.025, 0.5, 0.95, 0.975, 0.999):
+            assert chi2_ppf(p, dof) == chi2.ppf(p, dof)
+    np.testing.assert_array_equal(chi2_ppf(np.array([0.1, 0.9]), 3), chi2.ppf([0.1, 0.9], 3))

@@ -166,7 +166,8 @@ def test_the_shipped_ekf_equals_filterpy_on_real_passages():
 
     scn = plan_batch("paper-000/test-1").scenario
     inp = measure_passages(scn, 3, (0, 1, 2))
-    xs, Ps, _, _ = run_ekf(inp, scn.passage.tick_s)
+    tracks = run_ekf(inp, scn.passage.tick_s)
+    xs, Ps = tracks.positions(), tracks.covariances()
     fix = {int(k): j for j, k in enumerate(inp.fix_tick)}
     usbl, motion = inp.usbl, inp.motion
     n, T, _ = inp.u.shape
