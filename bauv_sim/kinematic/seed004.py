@@ -33,7 +33,7 @@ from pydantic import Field, field_validator, model_validator
 
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
-from bauv_sim.rng import generator
+from bauv_sim.rng import RunStreams, generator
 
 Array = NDArray[np.float64]
 
@@ -189,17 +189,20 @@ class PathNoise:
         self, noise: Seed004Noise, n_steps: int, n_beacons: int, seed: int, runs: tuple[int, ...]
     ):
         n = len(runs)
-        self.x0 = np.empty((n, 3))
-        self.w = np.empty((n, n_steps, 3))
-        self.eps = np.empty((n, n_steps + 1, n_beacons, 2))
         sw = np.asarray(noise.sigma_w_m)
         s0 = np.asarray(noise.sigma_x0_m)
-        for i, r in enumerate(runs):
-            self.x0[i] = s0 * generator(seed, r, "seed004", "x0").standard_normal(3)
-            self.w[i] = sw * generator(seed, r, "seed004", "w").standard_normal((n_steps, 3))
-            self.eps[i] = noise.tangent_sigma * generator(
-                seed, r, "seed004", "eps"
-            ).standard_normal((n_steps + 1, n_beacons, 2))
+
+        def normals(part: str, shape: tuple[int, ...]) -> Array:
+            size = int(np.prod(shape))
+            return (
+                RunStreams(seed, runs, "seed004", part)
+                .draw("standard_normal", size)
+                .reshape(n, *shape)
+            )
+
+        self.x0 = s0 * normals("x0", (3,))
+        self.w = sw * normals("w", (n_steps, 3))
+        self.eps = noise.tangent_sigma * normals("eps", (n_steps + 1, n_beacons, 2))
 
     def start(self) -> Array:
         """Deviation of X_0 from X°_0, ``(n, 3)`` m."""

@@ -234,3 +234,16 @@ def test_box_limited_guidance_runs_and_costs_accuracy(tmp_path):
     jl = _metrics(lim)["cases"][0]["filters"]
     for a, b in zip(jf, jl, strict=True):
         assert b["j_bar_m2"] > a["j_bar_m2"]  # the speed limit keeps it from catching up
+
+
+def test_a_runs_draws_do_not_depend_on_its_block():
+    from bauv_sim.kinematic.seed004 import PathNoise, Seed004Noise
+    from bauv_sim.rng import generator
+
+    noise = Seed004Noise()
+    block = PathNoise(noise, 7, 4, 3, (5, 9, 2))
+    alone = PathNoise(noise, 7, 4, 3, (9,))
+    np.testing.assert_array_equal(block.w[1], alone.w[0])
+    np.testing.assert_array_equal(block.eps[1], alone.eps[0])
+    w = generator(3, 2, "seed004", "w").standard_normal((7, 3))
+    np.testing.assert_array_equal(block.w[2], w)
