@@ -410,6 +410,51 @@ class BauvPhysics(mjcf.Physics):
         names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, i) or "" for i in range(m.nsite)]
         return {n: self.scene_site_world(n) for n in names if n.startswith("beacon_")}
 
+    def seabed_ray_distances(
+        self, origin_world_m: ArrayLike, directions_world: ArrayLike, max_range_m: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Distances along rays from one point to the scene's seabed (MuJoCo ``mj_multiRay``).
+
+        The rays see the static geoms of the seabed's geom group (the vehicles' geoms are in
+        groups 2-5 and are not seen); a ray that first meets another geom than the seabed
+        heightfield, or none within ``max_range_m``, has no hit. MuJoCo intersects the
+        heightfield's triangles (each cell split along its lower-left to upper-right diagonal,
+        :meth:`bauv_sim.seabed.Seabed.height_world`).
+
+        Args:
+            origin_world_m: ray origin, shape (3,), m, world ENU.
+            directions_world: ray directions, shape (m, 3), world ENU (normalised here).
+            max_range_m: longest distance that counts, m.
+
+        Returns:
+            ``(distance_m, hit)``: shape (m,) each; ``distance_m`` is 0 where ``hit`` is False.
+
+        Raises:
+            ConfigError: if the scene has no geom named ``seabed``, or a direction is zero or
+                not finite.
+        """
+        m, d = self.model.ptr, self.data.ptr
+        gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "seabed")
+        if gid < 0:
+            raise ConfigError("seabed ray: the scene has no geom named 'seabed'")
+        vec = np.array(directions_world, dtype=float).reshape(-1, 3)
+        norm = np.linalg.norm(vec, axis=1)
+        if not np.all(np.isfinite(norm) & (norm > 0)):
+            raise ConfigError("seabed ray: every direction must be finite and non-zero")
+        vec /= norm[:, None]
+        n = vec.shape[0]
+        group = np.zeros(6, dtype=np.uint8)
+        group[int(m.geom_group[gid])] = 1
+        ids = np.full(n, -1, dtype=np.int32)
+        dist = np.zeros(n)
+        self._ensure_kinematics()
+        pnt = np.array(origin_world_m, dtype=float).reshape(3)
+        mujoco.mj_multiRay(
+            m, d, pnt, vec.ravel(), group, 1, -1, ids, dist, None, n, float(max_range_m)
+        )
+        hit = (ids == gid) & (dist >= 0) & (dist <= max_range_m)
+        return np.where(hit, dist, 0.0), hit
+
     def inject_fault(self) -> None:
         """Corrupt the simulation on purpose (a NaN motor command), so that the next step raises
         :class:`~bauv_sim.errors.PhysicsError`: for tests of a mission's error handling."""

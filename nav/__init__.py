@@ -9,6 +9,7 @@ from nav.errors import NavError as NavError
 
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchEKF": ("nav.ekf", "BatchEKF"),
+    "BeamGeometry": ("nav.seabed", "BeamGeometry"),
     "CmnfGains": ("nav.cmnf", "CmnfGains"),
     "ControlLimits": ("nav.local_control", "ControlLimits"),
     "CorrectedDeadReckoning": ("nav.drns", "CorrectedDeadReckoning"),
@@ -31,7 +32,9 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "PredictedShift": ("nav.bearings", "PredictedShift"),
     "Prediction": ("nav.bearings", "Prediction"),
     "SeriesSum": ("nav.metrics", "SeriesSum"),
+    "ShiftEstimate": ("nav.seabed", "ShiftEstimate"),
     "SingleRunEKF": ("nav.ekf", "SingleRunEKF"),
+    "SlopeBasis": ("nav.seabed", "SlopeBasis"),
     "SystemPrediction": ("nav.bearings", "SystemPrediction"),
     "UpdateInfo": ("nav.ekf", "UpdateInfo"),
     "UsblMeasurement": ("nav.models", "UsblMeasurement"),
@@ -52,7 +55,9 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "nees_band": ("nav.metrics", "nees_band"),
     "optimal_control": ("nav.local_control", "optimal_control"),
     "pcrb": ("nav.pcrb", "pcrb"),
+    "seabed_track": ("nav.seabed", "seabed_track"),
     "series_stats": ("nav.metrics", "series_stats"),
+    "shift_estimate": ("nav.seabed", "shift_estimate"),
     "train_cmnf": ("nav.cmnf", "train"),
     "upmf_update": ("nav.bearings", "upmf_update"),
 }

@@ -3,6 +3,7 @@
 
 from bauv_sim.sensors.base import SensorSamples, check_multiple, periodic_indices
 from bauv_sim.sensors.compass import Compass, CompassConfig
+from bauv_sim.sensors.doa import Doa, DoaConfig, DoaSamples
 from bauv_sim.sensors.errors import (
     AngleErrorConfig,
     ErrorModel,
@@ -13,6 +14,12 @@ from bauv_sim.sensors.errors import (
 from bauv_sim.sensors.gps import Gps, GpsConfig
 from bauv_sim.sensors.log import Log, LogConfig
 from bauv_sim.sensors.modem import Modem, ModemConfig
+from bauv_sim.sensors.multibeam import (
+    HarmonicSeabed,
+    Multibeam,
+    MultibeamConfig,
+    MultibeamImages,
+)
 from bauv_sim.sensors.odometry import Odometry, OdometryConfig
 from bauv_sim.sensors.pressure import Pressure, PressureConfig
 from bauv_sim.sensors.usbl import Usbl, UsblConfig
@@ -21,15 +28,22 @@ __all__ = [
     "AngleErrorConfig",
     "Compass",
     "CompassConfig",
+    "Doa",
+    "DoaConfig",
+    "DoaSamples",
     "ErrorModel",
     "ErrorProcess",
     "Gps",
     "GpsConfig",
+    "HarmonicSeabed",
     "LengthErrorConfig",
     "Log",
     "LogConfig",
     "Modem",
     "ModemConfig",
+    "Multibeam",
+    "MultibeamConfig",
+    "MultibeamImages",
     "Odometry",
     "OdometryConfig",
     "Pressure",

@@ -8,8 +8,9 @@ time of arrival), the way the vehicle's computer would receive them:
   ``period_s`` (a whole number of ticks) and their latest value is held in between; a device that
   produces nothing at a sampling tick (the log below its minimum speed) holds nothing until its
   next good sample;
-* **event** devices (USBL, GPS, the acoustic modem; later DOA) deliver measurements that are
-  valid at one instant and reach the vehicle later (acoustic travel time and modem delay): the
+* **event** devices (USBL, GPS, the acoustic modem, DOA bearings, the multibeam) deliver
+  measurements that are valid at one instant and reach the vehicle later (acoustic travel time
+  and modem delay): the
   rig queues them and hands each one over at the first tick at or after its arrival, with its
   time of validity and the vehicle's own measured attitude at that time (for the lever arm of the
   transponder or antenna). Event devices are silent on the initial tick. Devices that measure
@@ -42,7 +43,18 @@ from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 
 # the rig's registry of device types: each device module adds its online class to DEVICE_TYPES
-from bauv_sim.sensors import compass, gps, ins, log, modem, odometry, pressure, usbl  # noqa: F401
+from bauv_sim.sensors import (  # noqa: F401
+    compass,
+    doa,
+    gps,
+    ins,
+    log,
+    modem,
+    multibeam,
+    odometry,
+    pressure,
+    usbl,
+)
 from bauv_sim.sensors.online import (
     DEVICE_TYPES,
     Device,

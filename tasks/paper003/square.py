@@ -201,10 +201,30 @@ class ReportConfig(Config):
     consistency_probability: float = Field(0.95, gt=0, lt=1)
 
 
+BLOCK_RUN_TICKS = 2_400_000
+"""The work of a default block, run-ticks (see :class:`RunnerConfig`)."""
+
+
 class RunnerConfig(Config):
     """Batching (fixed by the scenario, never by the worker count)."""
 
-    block_size: int = Field(100, ge=1, le=100_000, description="runs per block")
+    block_size: int | None = Field(
+        None,
+        ge=1,
+        le=100_000,
+        description=(
+            "runs per block; default: sized by work, as many runs as make "
+            f"{BLOCK_RUN_TICKS:,} run-ticks (500 runs of the paper's 4,800 ticks at 10 Hz): "
+            "1.5x faster than blocks of 100, about 0.5 GB per block"
+        ),
+    )
+
+
+def block_runs(scn: Paper003Scenario) -> int:
+    """Runs per block: ``runner.block_size``, or by work (:data:`BLOCK_RUN_TICKS`)."""
+    if scn.runner.block_size is not None:
+        return scn.runner.block_size
+    return max(1, min(100_000, BLOCK_RUN_TICKS // max(1, scn.path.n_ticks - 1)))
 
 
 class Paper003Scenario(Config):
@@ -896,7 +916,7 @@ class SquareExperiment(Experiment):
     test: str = "test-1"
 
     def block_size(self, scenario: Paper003Scenario) -> int:
-        return scenario.runner.block_size
+        return block_runs(scenario)
 
     def check(self, scenario: Paper003Scenario, n_runs: int) -> None:
         if scenario.report.single_sample >= n_runs:
