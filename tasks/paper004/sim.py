@@ -34,6 +34,8 @@ from nav.pcrb import bearing_information
 Array = NDArray[np.float64]
 
 FILTERS = ("CMNF", "UPMF", "EKF")
+SHIFT_BIN_M = 0.05
+SHIFT_BINS = 2000
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,8 @@ class LoopSetting:
         upmf_form: ``"unbiased"`` or ``"printed"`` (:func:`nav.bearings.upmf_update`).
         floor: the CMNF's singular-value floor.
         train_paths: CMNF training paths.
+        prediction: ``"system"`` (eq. 1, row 1 of Table 1) or ``"seabed-one_attitude"`` /
+            ``"seabed-turning"`` (eq. 15, row 2; :mod:`tasks.paper004.seabed`).
     """
 
     path: NominalPathConfig
@@ -63,6 +67,7 @@ class LoopSetting:
     upmf_form: str = "unbiased"
     floor: float = 1e-9
     train_paths: int = 100_000
+    prediction: str = "system"
 
     @property
     def b(self) -> Array:
@@ -94,6 +99,7 @@ class LoopSetting:
             "upmf_form": self.upmf_form,
             "floor": self.floor,
             "train": self.train_paths,
+            "prediction": self.prediction,
         }
         return json.dumps(d, sort_keys=True)
 
@@ -121,11 +127,44 @@ class Controller:
         return u
 
 
+class _SensedWorld:
+    """A world whose every move is imaged by a sensing prediction (before and after)."""
+
+    def __init__(self, world: Seed004World, pred):
+        self.world, self.pred = world, pred
+
+    def start(self) -> Array:
+        return self.world.start()
+
+    def advance(self, k: int, x: Array, u: Array) -> Array:
+        self.pred.before(k, x, u)
+        x1 = self.world.advance(k, x, u)
+        self.pred.after(k, x1, u)
+        return x1
+
+    def observe(self, k: int, x: Array):
+        return self.world.observe(k, x)
+
+
+def prediction_of(s: LoopSetting, seed: int, runs: tuple[int, ...], world, stream: str):
+    """The setting's prediction for a batch of paths, and the world it needs (sensed or not)."""
+    if s.prediction == "system":
+        return SystemPrediction(s.path.dt_s, s.fnoise.s_w), world
+    from tasks.paper004.seabed import SeabedPrediction
+
+    reading = s.prediction.removeprefix("seabed-")
+    pred = SeabedPrediction(reading, seed, runs, s.path.dt_s, s.path.controls(), stream)
+    return pred, _SensedWorld(world, pred)
+
+
 def train_gains(s: LoopSetting, seed: int) -> tuple[CmnfGains, object]:
     """Fit the CMNF gains of a setting on ``s.train_paths`` training paths (CMNF in the loop)."""
+    from tasks.paper004.seabed import TRAIN_RUN_OFFSET
+
     draws = TrainingNoise(s.noise, len(s.beacons), seed, s.train_paths)
     world = Seed004World(s.path, s.noise, s.b, draws)
-    pred = SystemPrediction(s.path.dt_s, s.fnoise.s_w)
+    runs = tuple(range(TRAIN_RUN_OFFSET, TRAIN_RUN_OFFSET + s.train_paths))
+    pred, world = prediction_of(s, seed, runs, world, "train")
     return train(
         world,
         np.asarray(s.path.start_m),
@@ -136,7 +175,7 @@ def train_gains(s: LoopSetting, seed: int) -> tuple[CmnfGains, object]:
         correction=s.correction,
         floor=s.floor,
         nominal=s.path.path(),
-        info={"seed": seed, "prediction": "system"},
+        info={"seed": seed, "prediction": s.prediction},
     )
 
 
@@ -164,6 +203,10 @@ class LoopSums:
         info: sum of the bearing information at the true positions, ``(F, N + 1, 3, 3)`` 1/m^2.
         absent: absent bearing pairs, ``(F, N + 1)``.
         diverged: paths that became non-finite, ``(F,)``.
+        shift_n: predicted shifts compared with the true move (sensed predictions), ``(F,)``.
+        shift_err: sum of ``dX^ - (X_{k+1} - X_k)``, ``(F, 3)`` m.
+        shift_hist: histogram of its norm, bins of :data:`SHIFT_BIN_M` from 0 (the last bin
+            holds everything beyond), ``(F, SHIFT_BINS)``.
         samples: run -> filter -> ``(N + 1, 6)`` true and estimated positions (float32).
     """
 
@@ -175,6 +218,9 @@ class LoopSums:
     info: Array
     absent: Array
     diverged: Array
+    shift_n: Array
+    shift_err: Array
+    shift_hist: Array
     samples: dict = field(default_factory=dict)
 
 
@@ -217,7 +263,6 @@ def fly(
     draws = PathNoise(s.noise, N, len(s.beacons), seed, runs)
     b = s.b
     fn = s.fnoise
-    pred = SystemPrediction(s.path.dt_s, fn.s_w)
     xn = s.path.path()
     F = len(filters)
     out = LoopSums(
@@ -229,10 +274,14 @@ def fly(
         info=np.zeros((F, N + 1, 3, 3)),
         absent=np.zeros((F, N + 1)),
         diverged=np.zeros(F),
+        shift_n=np.zeros(F),
+        shift_err=np.zeros((F, 3)),
+        shift_hist=np.zeros((F, SHIFT_BINS)),
     )
     keep = [i for i, r in enumerate(runs) if r < sample_runs]
     for fi, name in enumerate(filters):
         world = Seed004World(s.path, s.noise, b, draws)
+        pred, world = prediction_of(s, seed, runs, world, "test")
         ctl = Controller(s, n)
         x = world.start()
         x_hat = np.broadcast_to(xn[0], (n, 3)).copy()
@@ -244,8 +293,15 @@ def fly(
         rec(0, alive, x, x_hat, np.diagonal(P, axis1=1, axis2=2), np.ones((n, len(b)), bool))
         for k in range(N):
             u = ctl(k, x_hat)
+            x_prev = x
             x = world.advance(k, x, u)
             shift = pred(k, x_hat, u)  # after the move (a sensed shift reads t_{k+1}'s data)
+            if s.prediction != "system":
+                e = (shift.displacement_m - (x - x_prev))[alive]
+                out.shift_n[fi] += len(e)
+                out.shift_err[fi] += e.sum(0)
+                idx = np.minimum(np.linalg.norm(e, axis=1) / SHIFT_BIN_M, SHIFT_BINS - 1)
+                out.shift_hist[fi] += np.bincount(idx.astype(int), minlength=SHIFT_BINS)
             y, present = world.observe(k + 1, x)
             if name == "CMNF":
                 alpha = x_hat + shift.displacement_m

@@ -26,9 +26,12 @@ true paths): with eq. 7 the estimate plus one commanded step lands on the next n
   The table shows where, as the spread grows, the EKF starts to lose. The UPMF is eq. 21 as
   printed there (:data:`NEAR_BEACON_PRESET`).
 
-Row 2 of Table 1 (prediction from seabed-sensing dead reckoning, eq. 15-16) needs
-:mod:`nav.seabed`, which this module does not have yet; the filters' prediction is pluggable
-(:class:`nav.bearings.Prediction`) for it.
+* ``paper-004/table-1-seabed``: Table 1's row 2, the prediction from seabed-sensing dead
+  reckoning (eq. 15, :mod:`tasks.paper004.seabed` over :mod:`nav.seabed`) for both readings of
+  the beam attitude between two images, the CMNF with ``alpha = X^ + dX^`` (eq. 24) trained with
+  that prediction in the loop; J-bar beside the paper's 27.25 / - / -, the verdict on EKF and UPMF
+  (they "fail to follow" when their J-bar is at least 3 x the CMNF's), and the shift estimate's
+  own error (median, 90th percentile, bias).
 
 Bad geometry: a bearing pair is not produced when the beacon is (almost) straight above or below
 the vehicle; the report counts the absent pairs, names diverged paths (non-finite estimates: they
@@ -148,6 +151,14 @@ class SweepConfig(Config):
         [1.0], min_length=1, max_length=12, description="S_0 = this I (truth and filters), m^2"
     )
 
+    prediction: list[Literal["system", "seabed-one_attitude", "seabed-turning"]] = Field(
+        ["system"],
+        min_length=1,
+        max_length=3,
+        description="the filters' prediction: by virtue of the system (row 1) or the seabed "
+        "shift with one reading of the beam attitude (row 2; tasks.paper004.seabed)",
+    )
+
     @field_validator("bearing_sigma_deg")
     @classmethod
     def _bearing(cls, v: list[float]) -> list[float]:
@@ -209,16 +220,22 @@ class Case:
 
     bearing_sigma_deg: float
     initial_variance_m2: float
+    prediction: str = "system"
 
     @property
     def label(self) -> str:
-        return f"bearing{self.bearing_sigma_deg:g}deg-s0x{self.initial_variance_m2:g}"
+        """Short label, e.g. ``bearing1deg-s0x1`` (``-seabed-one_attitude`` for row 2)."""
+        base = f"bearing{self.bearing_sigma_deg:g}deg-s0x{self.initial_variance_m2:g}"
+        return base if self.prediction == "system" else f"{base}-{self.prediction}"
 
 
 def cases(scn: Paper004Scenario) -> tuple[Case, ...]:
     """The batch's cases, in sweep order."""
     return tuple(
-        Case(b, v) for b, v in product(scn.sweep.bearing_sigma_deg, scn.sweep.initial_variance_m2)
+        Case(b, v, p)
+        for p, b, v in product(
+            scn.sweep.prediction, scn.sweep.bearing_sigma_deg, scn.sweep.initial_variance_m2
+        )
     )
 
 
@@ -241,6 +258,7 @@ def setting(scn: Paper004Scenario, case: Case) -> LoopSetting:
         upmf_form=scn.filters.upmf_form,
         floor=scn.filters.floor,
         train_paths=scn.filters.train_paths,
+        prediction=case.prediction,
     )
 
 
@@ -329,15 +347,27 @@ class FilterResult(BaseModel):
     ratio_to_paper: float | None = None
 
 
+class ShiftError(BaseModel):
+    """The seabed shift estimate's own error ``dX^ - (X_{k+1} - X_k)`` on one filter's paths."""
+
+    filter: str
+    shifts: int
+    median_m: float | None
+    p90_m: float | None
+    bias_m: list[float] | None
+
+
 class CaseResult(BaseModel):
     """One case of the batch."""
 
     label: str
     bearing_sigma_deg: float
     initial_variance_m2: float
+    prediction: str = "system"
     paths: int
     filters: list[FilterResult]
     spread: float | None = Field(description="(max - min) / min of the three J-bars")
+    shift_error: list[ShiftError] = Field(default_factory=list)
 
 
 class Paper004Metrics(BaseModel):
@@ -426,6 +456,30 @@ def filter_result(
     )
 
 
+def _shift_errors(s: LoopSums) -> list[ShiftError]:
+    from tasks.paper004.sim import SHIFT_BIN_M
+
+    out = []
+    for fi, name in enumerate(FILTERS):
+        n = int(s.shift_n[fi])
+        if n == 0:
+            out.append(ShiftError(filter=name, shifts=0, median_m=None, p90_m=None, bias_m=None))
+            continue
+        c = np.cumsum(s.shift_hist[fi]) / s.shift_hist[fi].sum()
+        med = (np.searchsorted(c, 0.5) + 0.5) * SHIFT_BIN_M
+        p90 = (np.searchsorted(c, 0.9) + 0.5) * SHIFT_BIN_M
+        out.append(
+            ShiftError(
+                filter=name,
+                shifts=n,
+                median_m=float(med),
+                p90_m=float(p90),
+                bias_m=[float(v) for v in s.shift_err[fi] / n],
+            )
+        )
+    return out
+
+
 def steep_beacons(scn: Paper004Scenario) -> list[tuple[int, float]]:
     """Beacons whose elevation seen from the nominal path exceeds ``report.steep_elevation_deg``:
     ``(index, largest elevation deg)``."""
@@ -508,7 +562,7 @@ def report_paper004(exp: Paper004Experiment, ctx: ReportContext) -> ReportSummar
     warnings: list[str] = []
     for c, s in zip(cs, tot, strict=True):
         st = setting(scn, c)
-        paper_row = PAPER_ROW1 if exp.kind == "table-1" else {}
+        paper_row = PAPER_ROW1 if exp.kind == "table-1" and c.prediction == "system" else {}
         frs = [
             filter_result(
                 name,
@@ -520,6 +574,12 @@ def report_paper004(exp: Paper004Experiment, ctx: ReportContext) -> ReportSummar
             )
             for fi, name in enumerate(FILTERS)
         ]
+        if c.prediction != "system" and exp.kind == "seabed":
+            for f in frs:
+                f.paper_m2 = PAPER_ROW2[f.filter]
+                f.ratio_to_paper = (
+                    _f(f.j_bar_m2 / f.paper_m2) if f.paper_m2 and f.j_bar_m2 else None
+                )
         js = [f.j_bar_m2 for f in frs if f.j_bar_m2 is not None]
         spread = (max(js) - min(js)) / min(js) if len(js) == len(frs) else None
         results.append(
@@ -530,6 +590,8 @@ def report_paper004(exp: Paper004Experiment, ctx: ReportContext) -> ReportSummar
                 paths=ctx.n_runs,
                 filters=frs,
                 spread=spread,
+                prediction=c.prediction,
+                shift_error=_shift_errors(s) if c.prediction != "system" else [],
             )
         )
         for f in frs:
@@ -597,6 +659,14 @@ def _claims(
                     f.ratio_to_paper is not None and abs(f.ratio_to_paper - 1) <= 0.25
                     for f in r.filters
                 )
+        elif exp.kind == "seabed":
+            cm = j["CMNF"]
+            claims[f"{r.label}: CMNF J-bar finite"] = cm is not None
+            for f in ("UPMF", "EKF"):
+                v = j[f]
+                claims[f"{r.label}: {f} fails to follow the path (J-bar >= 3 x the CMNF's)"] = (
+                    cm is not None and (v is None or v >= 3 * cm)
+                )
         else:
             ekf, others = j["EKF"], [j["UPMF"], j["CMNF"]]
             if ekf is None or any(o is None for o in others):
@@ -646,7 +716,82 @@ def _tables(exp: Paper004Experiment, scn: Paper004Scenario, m: Paper004Metrics) 
                 digits=2,
                 note="The paper states tan^2(0.5 deg) bearing noise; its values are beside the "
                 "tan(1 deg) rows, which reproduce them (seed README). Row 2 (seabed-sensing "
-                "prediction, paper 27.25 / - / -) is not computed yet.",
+                "prediction, paper 27.25 / - / -) is paper-004/table-1-seabed.",
+            )
+        )
+    elif exp.kind == "seabed":
+        rows = []
+        for r in m.cases:
+            cm = next(f for f in r.filters if f.filter == "CMNF").j_bar_m2
+            for f in r.filters:
+                fails = f.filter != "CMNF" and (
+                    f.j_bar_m2 is None or (cm is not None and f.j_bar_m2 >= 3 * cm)
+                )
+                verdict = (
+                    f"fails to follow ({f.j_bar_m2 / cm:.0f} x CMNF)"
+                    if fails and f.j_bar_m2 is not None and cm
+                    else ("diverged" if f.j_bar_m2 is None else "follows")
+                )
+                rows.append(
+                    [
+                        r.prediction.removeprefix("seabed-"),
+                        f.filter,
+                        f.j_bar_m2,
+                        f.pcrb_level_m2,
+                        f.paper_m2,
+                        verdict,
+                        f.diverged_paths,
+                    ]
+                )
+        out.append(
+            Table(
+                f"Table 1, row 2 (prediction from seabed-sensing DR, eq. 15; {m.n_runs} test "
+                f"paths, {m.train_paths} CMNF training paths, bearing "
+                f"{scn.sweep.bearing_sigma_deg[0]:g} deg)",
+                [
+                    "beam attitude",
+                    "filter",
+                    "J-bar (m^2)",
+                    "PCRB level (m^2)",
+                    "paper (m^2)",
+                    "verdict",
+                    "diverged",
+                ],
+                rows,
+                digits=2,
+                note="The paper's dashes: EKF and UPMF fail. 'Fails to follow': J-bar at least "
+                "3 x the CMNF's. The PCRB level is that of the prediction by virtue of the "
+                "system (S^W), which the seabed shift does not reach.",
+            )
+        )
+        rows = []
+        for r in m.cases:
+            for e in r.shift_error:
+                rows.append(
+                    [
+                        r.prediction.removeprefix("seabed-"),
+                        e.filter,
+                        e.shifts,
+                        e.median_m,
+                        e.p90_m,
+                        *(e.bias_m or [None] * 3),
+                    ]
+                )
+        out.append(
+            Table(
+                "Seabed shift estimate's own error (dX^ - true move), on each filter's paths",
+                [
+                    "beam attitude",
+                    "paths of",
+                    "shifts",
+                    "median (m)",
+                    "p90 (m)",
+                    "bias x (m)",
+                    "bias y (m)",
+                    "bias z (m)",
+                ],
+                rows,
+                digits=2,
             )
         )
     else:
@@ -744,6 +889,28 @@ register(
         "the PCRB at tan(0.5 deg) and tan(1 deg) noise",
         default_runs=100_000,
         kind="table-1",
+    )
+)
+SEABED_PRESET = {
+    "sweep": {
+        "bearing_sigma_deg": [1.0],
+        "prediction": ["seabed-one_attitude", "seabed-turning"],
+    },
+    "filters": {"train_paths": 300},
+    "runner": {"block_size": 50},
+}
+"""Row 2: both readings of the beam attitude, at the bearing noise that reproduces row 1. Every
+step ray-casts two 8 x 8 images per path (~1 ms per path-step here), so the defaults are 300
+training paths and 200 test paths (the paper: 1e5)."""
+
+register(
+    Paper004Experiment(
+        name="paper-004/table-1-seabed",
+        summary="seed 004 Table 1 row 2: CMNF, UPMF, EKF with the seabed-sensing DR "
+        "prediction (eq. 15), both readings of the beam attitude",
+        preset=SEABED_PRESET,
+        default_runs=200,
+        kind="seabed",
     )
 )
 register(

@@ -247,3 +247,35 @@ def test_a_runs_draws_do_not_depend_on_its_block():
     np.testing.assert_array_equal(block.eps[1], alone.eps[0])
     w = generator(3, 2, "seed004", "w").standard_normal((7, 3))
     np.testing.assert_array_equal(block.w[2], w)
+
+
+def test_row2_seabed_prediction_runs_for_both_readings_and_reports_the_shift_error(tmp_path):
+    out = tmp_path / "row2"
+    over = [
+        "path.duration_s=15.0",
+        "filters.train_paths=30",
+        "runner.block_size=6",
+        "report.figures=false",
+    ]
+    run("paper-004/table-1-seabed", n_runs=6, seed=0, out_dir=out, overrides=over, progress=False)
+    m = _metrics(out)
+    assert [c["prediction"] for c in m["cases"]] == ["seabed-one_attitude", "seabed-turning"]
+    for c in m["cases"]:
+        cmnf = next(f for f in c["filters"] if f["filter"] == "CMNF")
+        assert cmnf["j_bar_m2"] is not None and math.isfinite(cmnf["j_bar_m2"])
+        assert cmnf["paper_m2"] == 27.25
+        assert m["claims"][f"{c['label']}: CMNF J-bar finite"]
+        for e in c["shift_error"]:
+            assert e["shifts"] == 6 * 15 and 0 < e["median_m"] <= e["p90_m"]
+            assert len(e["bias_m"]) == 3
+    text = (out / "tables.md").read_text()
+    assert "Table 1, row 2" in text and "shift estimate" in text and "nan" not in text.lower()
+
+
+def test_training_seabeds_are_not_the_test_seabeds():
+    from bauv_sim.sensors.multibeam import HarmonicSeabed
+    from tasks.paper004.seabed import TRAIN_RUN_OFFSET
+
+    test = HarmonicSeabed.draw(0, (0, 1))
+    train = HarmonicSeabed.draw(0, (TRAIN_RUN_OFFSET, TRAIN_RUN_OFFSET + 1))
+    assert not np.allclose(test.a, train.a)
