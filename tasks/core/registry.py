@@ -39,6 +39,7 @@ FAMILIES: dict[str, str] = {
     "paper-000": "tasks.paper000",
     "paper-001": "tasks.paper001",
     "paper-003": "tasks.paper003",
+    "paper-004": "tasks.paper004",
     "mission": "tasks.missions",
     "vehicle": "tasks.vehicle",
 }

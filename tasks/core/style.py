@@ -101,6 +101,9 @@ METHODS: dict[str, dict[str, Any]] = {
     "GA1": {"color": _P["reddish_purple"], "ls": "-", "label": "GA1"},
     "GA2": {"color": _P["sky_blue"], "ls": "-", "label": "GA2"},
     "leader": {"color": _P["grey"], "ls": "--", "label": "leader"},
+    "CMNF": {"color": _P["orange"], "ls": "-", "label": "CMNF"},
+    "UPMF": {"color": _P["bluish_green"], "ls": "--", "label": "UPMF"},
+    "PCRB": {"color": _P["black"], "ls": ":", "label": "PCRB"},
 }
 """Fixed look of each method: colour, line style (marker for fixes) and legend label."""
 
