@@ -348,9 +348,8 @@ class SwarmScenario(Config):
     timing: TimingConfig = Field(
         default_factory=lambda: TimingConfig(max_duration_s=600.0, physics_timestep_s=0.002),
         description="the physics at 2 ms, not the missions' 4 ms preset: at 4 ms the follower's "
-        "closed loop drifts from the 1 ms track about 5 times faster than at 2 ms and GA1 takes "
-        "the wrong intersection in 4 of 5 seeds (0 of 5 at 1 and 2 ms; models/bauv/README.md, "
-        "Timestep presets)",
+        "track departs from the 1 ms one about 5 times faster than at 2 ms and GA1's largest "
+        "error grows 1.5-9x in 4 of 5 seeds (models/bauv/README.md, Timestep presets)",
     )
     faults: FaultConfig = Field(default_factory=FaultConfig)
     report: MissionReportConfig = Field(default_factory=MissionReportConfig)
