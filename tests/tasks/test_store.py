@@ -564,7 +564,7 @@ def test_autopilot_block():
     from tasks.vehicle import autopilot as va
 
     scn = plan_batch("vehicle/autopilot").scenario
-    trial = va._fly(scn, 1.0, lambda t: 0.0, lambda t: scn.depth_m, lambda t: scn.speed_to_m_s)
+    trial = va.fly_trial(scn, 1.0, lambda t: 0.0, lambda t: scn.depth_m, lambda t: scn.speed_to_m_s)
     block = {name: trial for name in ("heading", "depth", "speed", "current")}
     same(roundtrip(block).value, block)
 
