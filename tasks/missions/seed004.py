@@ -15,9 +15,12 @@ bearing tangents of that tick (eq. 17) and the locally optimal control with box 
 (:func:`nav.local_control.limited_control`, eq. 5-7) is computed on its estimate. The control
 ``u = (gamma, theta, V)`` (seed 004's angles: theta counter-clockwise from east, gamma up) goes to
 the existing autopilot as set-points held for the step: course ``pi/2 - theta`` (clockwise from
-north), speed ``V`` (through water) and, since the autopilot holds a depth, the depth the control
-moves to in one step from the measured one, ``depth - V sin(gamma) dt`` (eq. 1's vertical
-displacement applied to the vehicle where it is).
+north), speed ``V`` (through water) and, since the autopilot holds a depth, not a pitch, the depth
+set-point at which its depth loop settles at the vertical rate ``w = V sin(gamma)`` (up): that loop
+is a PD on the depth error, ``pitch = kp e - kd w`` with ``w = V pitch``, so it climbs at ``w`` with
+the set-point ``e = w (1 + V kd) / (V kp)`` above the measured depth (:func:`depth_setpoint`; 5.3
+s of climb at the default gains and 1 m/s). A set-point one step ahead (``w dt``) would be flown at
+a fifth of the commanded rate (measured: the vertical residual then adds up to 1.5 m in 160 s).
 
 The CMNF's gains are fitted (CMNF in the loop, :func:`tasks.paper004.sim.train_gains`) on a
 kinematic surrogate of the same mission (:mod:`bauv_sim.kinematic.seed004` with the scaled path,
@@ -38,7 +41,7 @@ import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,8 +69,9 @@ from tasks.closed_loop.scenario import MissionScenario, NavigationConfig
 from tasks.closed_loop.world import fly, place_vehicle, scenario_sea, streams
 from tasks.core import store
 from tasks.core.registry import ReportContext, ReportSummary, register
-from tasks.paper004.sim import Controller, LoopSetting, train_gains
-from tasks.paper004.sim import fly as fly_surrogate
+
+if TYPE_CHECKING:
+    from tasks.paper004.sim import LoopSetting
 
 Array = NDArray[np.float64]
 
@@ -187,7 +191,12 @@ def limits_of(c: Seed004Config) -> ControlLimits:
 
 
 def surrogate(scn: Seed004Scenario) -> LoopSetting:
-    """The kinematic surrogate of the mission (the CMNF is trained on it)."""
+    """The kinematic surrogate of the mission (the CMNF is trained on it).
+
+    ``tasks.paper004`` is imported here, not at module level: importing ``tasks.missions`` must
+    register the missions only (its experiments register when it is imported)."""
+    from tasks.paper004.sim import LoopSetting
+
     c = scn.seed004
     az = scn.doa.azimuth.sigma_deg
     return LoopSetting(
@@ -207,6 +216,8 @@ def surrogate(scn: Seed004Scenario) -> LoopSetting:
 
 @functools.lru_cache(maxsize=4)
 def _gains(key: str, seed: int, s: LoopSetting) -> CmnfGains:
+    from tasks.paper004.sim import train_gains
+
     return train_gains(s, seed)[0]
 
 
@@ -218,6 +229,23 @@ def gains_for(scn: Seed004Scenario, seed: int) -> CmnfGains:
 
 # ---------------------------------------------------------------------------------------------
 # The parts
+
+
+def depth_setpoint(depth_m: float, u: Array, ap) -> float:
+    """The depth set-point that makes the autopilot's depth loop fly the control's pitch.
+
+    Args:
+        depth_m: measured depth, m.
+        u: the control ``(gamma rad, theta rad, V m/s)``, shape (3,) (seed 004's angles).
+        ap: the autopilot's gains (:class:`~bauv_sim.autopilot.AutopilotConfig`).
+
+    Returns:
+        ``depth - w (1 + V kd) / (V kp)`` with ``w = V sin(gamma)`` (module docstring), m, at
+        least 0.
+    """
+    gamma, v = float(u[0]), max(float(u[2]), 1e-3)
+    w = v * math.sin(gamma)
+    return max(depth_m - w * (1.0 + v * ap.depth_kd) / (v * ap.depth_kp), 0.0)
 
 
 class BearingNavigation:
@@ -234,12 +262,21 @@ class BearingNavigation:
         name: ``"ekf"``, ``"upmf"`` or ``"cmnf"``.
         setting: the surrogate setting (path, noise the filter assumes, beacons, limits).
         gains: the CMNF's gains (for ``"cmnf"``).
+        autopilot: the autopilot's gains (for :func:`depth_setpoint`).
     """
 
     def __init__(
-        self, base: EkfNavigation, name: str, setting: LoopSetting, gains: CmnfGains | None
+        self,
+        base: EkfNavigation,
+        name: str,
+        setting: LoopSetting,
+        gains: CmnfGains | None,
+        autopilot,
     ):
         self.base, self.name, self.s, self.gains = base, name, setting, gains
+        self.ap = autopilot
+        from tasks.paper004.sim import Controller
+
         self.dt = setting.path.dt_s
         self.n_steps = setting.path.n_steps
         self.beacons = setting.b
@@ -270,7 +307,7 @@ class BearingNavigation:
         j = round(tick.t_s / self.dt)
         at_step = abs(tick.t_s - j * self.dt) < 1e-6
         if initial:
-            self.depth_cmd = out.depth_m - self.dt * float(velocity(self.u)[0, 2])
+            self.depth_cmd = depth_setpoint(out.depth_m, self.u[0], self.ap)
         elif at_step and self.j < j <= self.n_steps:
             y, present = self._bearings(tick)
             self.absent_total += int((~present).sum())
@@ -293,7 +330,7 @@ class BearingNavigation:
                 raise NavError(f"{self.name.upper()} estimate not finite at step {j}")
             if j < self.n_steps:
                 self.u = self.ctl(j, self.x_hat)
-            self.depth_cmd = out.depth_m - self.dt * float(velocity(self.u)[0, 2])
+            self.depth_cmd = depth_setpoint(out.depth_m, self.u[0], self.ap)
         extra = {
             "control": self.u[0].copy(),
             "depth_cmd": self.depth_cmd,
@@ -337,7 +374,7 @@ class ControlGuidance:
         self.finished = bool(nav.extra["done"])
         course = (math.pi / 2 - theta) % (2 * math.pi)
         mode = "done" if self.finished else "transit"
-        return GuidanceCommand(course, max(nav.extra["depth_cmd"], 0.0), v, mode, 0)
+        return GuidanceCommand(course, nav.extra["depth_cmd"], v, mode, 0)
 
     def waypoints(self) -> list[tuple[float, float, float]]:
         return []
@@ -390,7 +427,7 @@ class Seed004Mission:
         P0 = initial_covariance(n)
         e0 = rng_mod.generator(seed, run, *streams("", "initial")).standard_normal(3) @ np.sqrt(P0)
         base = EkfNavigation(n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, False)
-        nav = BearingNavigation(base, self.filter, surrogate(scn), self.gains)
+        nav = BearingNavigation(base, self.filter, surrogate(scn), self.gains, scn.autopilot)
         v = P.VehicleParts("bauv", rig, nav, ControlGuidance(), scn.autopilot, table)
         v.extra_columns = EXTRA_COLUMNS
         return P.MissionParts([v], scenario_sea(scn, seed, run))
@@ -451,6 +488,7 @@ def flight_metrics(run: MissionRun, nominal: Array, dt: float) -> dict[str, Any]
         "j_k": [float(a) for a in jk],
         "est_rmse_m": float(np.sqrt(np.mean(e[1:] ** 2))),
         "est_max_m": float(e[1:].max()),
+        "est_rmse_axis_m": [float(a) for a in np.sqrt(np.mean((xk - xh[sel])[1:] ** 2, axis=0))],
         "residual_std_m": [float(a) for a in res.std(axis=0)],
         "residual_mean_m": [float(a) for a in res.mean(axis=0)],
         "track": xk.astype(np.float32),
@@ -482,7 +520,9 @@ class FilterSummary(BaseModel):
     path_max_mean_m: float | None = Field(description="mean over runs of the max distance, m")
     est_rmse_m: float | None = Field(description="RMS estimation error at the filter steps, m")
     est_max_m: float | None = Field(description="max estimation error over runs and steps, m")
+    est_rmse_axis_m: list[float] | None = Field(description="RMS error per axis (x, y, z), m")
     j_bar_m2: float | None = Field(description="max_k mean over runs ||X°_k - X_k||^2, m^2")
+    j_mean_m2: float | None = Field(description="mean_k mean over runs ||X°_k - X_k||^2, m^2")
     residual_std_m: list[float] | None = Field(description="physics step residual std, m")
     residual_mean_m: list[float] | None = Field(description="physics step residual mean, m")
 
@@ -498,6 +538,9 @@ class Seed004Metrics(BaseModel):
     cmnf_j_bar_surrogate_m2: float | None = Field(description="CMNF J-bar on the surrogate")
     cmnf_j_bar_physics_m2: float | None
     cmnf_gap_m2: float | None = Field(description="physics minus surrogate J-bar, m^2")
+    cmnf_j_mean_surrogate_m2: float | None = Field(description="CMNF time-mean J, surrogate")
+    cmnf_j_mean_physics_m2: float | None
+    cmnf_j_mean_gap_m2: float | None = Field(description="physics minus surrogate mean J, m^2")
     cmnf_train_paths: int
     failures: list[str]
     warnings: list[str]
@@ -522,9 +565,11 @@ def summarise_filter(results: list[Seed004RunResult], name: str) -> FilterSummar
             j_bar_m2=None,
             residual_std_m=None,
             residual_mean_m=None,
+            est_rmse_axis_m=None,
         )
     n = min(len(m["j_k"]) for m in ms)
-    jbar = float(np.max(np.mean([m["j_k"][:n] for m in ms], axis=0)))
+    jk = np.mean([m["j_k"][:n] for m in ms], axis=0)
+    jbar, jmean = float(np.max(jk)), float(np.mean(jk))
     return FilterSummary(
         runs_ok=len(ms),
         path_mean_m=_mean([m["path_mean_m"] for m in ms]),
@@ -532,22 +577,33 @@ def summarise_filter(results: list[Seed004RunResult], name: str) -> FilterSummar
         path_max_mean_m=_mean([m["path_max_m"] for m in ms]),
         est_rmse_m=float(np.sqrt(np.mean([m["est_rmse_m"] ** 2 for m in ms]))),
         est_max_m=float(max(m["est_max_m"] for m in ms)),
+        est_rmse_axis_m=[
+            float(a) for a in np.sqrt(np.mean([np.square(m["est_rmse_axis_m"]) for m in ms], 0))
+        ],
         j_bar_m2=jbar,
+        j_mean_m2=jmean,
         residual_std_m=[float(a) for a in np.mean([m["residual_std_m"] for m in ms], axis=0)],
         residual_mean_m=[float(a) for a in np.mean([m["residual_mean_m"] for m in ms], axis=0)],
     )
 
 
-def surrogate_j_bar(scn: Seed004Scenario, seed: int, gains: CmnfGains) -> float | None:
-    """The CMNF's J-bar on fresh surrogate paths (the same definition as on physics)."""
+def surrogate_j(
+    scn: Seed004Scenario, seed: int, gains: CmnfGains
+) -> tuple[float | None, float | None]:
+    """The CMNF's J-bar (``max_k``) and time-mean J (``mean_k`` of ``E||X°_k - X_k||^2``) on
+    fresh surrogate paths, m^2 (the definitions used on physics; ``None`` if a path diverged)."""
+
+    from tasks.paper004.sim import fly as fly_surrogate
+
     s = surrogate(scn)
     n = scn.seed004.surrogate_test_paths
     runs = tuple(range(SURROGATE_RUN_OFFSET, SURROGATE_RUN_OFFSET + n))
     sums = fly_surrogate(s, seed, runs, gains, filters=("CMNF",), sample_runs=0)
     ok = sums.count[0] > 0
     if not ok.all():
-        return None
-    return float(np.max(sums.j[0] / sums.count[0]))
+        return None, None
+    j = sums.j[0] / sums.count[0]
+    return float(np.max(j)), float(np.mean(j))
 
 
 @dataclass(frozen=True)
@@ -560,6 +616,12 @@ class Seed004Experiment(MissionExperiment):
     def filters(self, scn: Seed004Scenario) -> tuple[str, ...]:
         f = scn.navigation.filter
         return FILTERS if f == "all" else (f,)
+
+    def flight(self, scenario: Seed004Scenario, seed: int, run: int):
+        """The flight of the first filter of ``navigation.filter`` (:meth:`run_block` flies
+        each)."""
+        f = self.filters(scenario)[0]
+        return Seed004Mission(f, gains_for(scenario, seed) if f == "cmnf" else None), scenario
 
     def check(self, scenario: Seed004Scenario, n_runs: int) -> None:
         super().check(scenario, n_runs)
@@ -581,11 +643,6 @@ class Seed004Experiment(MissionExperiment):
             raise ConfigError(
                 f"seed004.dt_s = {c.dt_s:g}: must be a multiple of timing.control_tick_s = "
                 f"{scenario.timing.control_tick_s:g}"
-            )
-        if scenario.timing.max_duration_s < c.duration_s:
-            raise ConfigError(
-                f"timing.max_duration_s = {scenario.timing.max_duration_s:g}: must be >= "
-                f"seed004.duration_s = {c.duration_s:g}"
             )
         bed = seabed.generate(scenario.seabed)
         for i, (e, n, z) in enumerate(path_config(scenario).path()):
@@ -628,14 +685,14 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
     names = exp.filters(scn)
     summ = {f: summarise_filter(results, f) for f in names}
     files: list[str] = []
-    j_sur = j_phys = gap = None
+    j_sur = j_phys = gap = m_sur = m_phys = m_gap = None
     if "cmnf" in names:
         gains = gains_for(scn, ctx.seed)
         files.append(gains.save(ctx.out_dir / "cmnf-gains.npz").name)
-        j_sur = surrogate_j_bar(scn, ctx.seed, gains)
-        j_phys = summ["cmnf"].j_bar_m2
+        j_sur, m_sur = surrogate_j(scn, ctx.seed, gains)
+        j_phys, m_phys = summ["cmnf"].j_bar_m2, summ["cmnf"].j_mean_m2
         if j_sur is not None and j_phys is not None:
-            gap = j_phys - j_sur
+            gap, m_gap = j_phys - j_sur, m_phys - m_sur
     failures = [f"{f}: {m}" for r in results for f, m in r.failed.items() if m]
     warnings = []
     for f in names:
@@ -651,6 +708,9 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
         cmnf_j_bar_surrogate_m2=j_sur,
         cmnf_j_bar_physics_m2=j_phys,
         cmnf_gap_m2=gap,
+        cmnf_j_mean_surrogate_m2=m_sur,
+        cmnf_j_mean_physics_m2=m_phys,
+        cmnf_j_mean_gap_m2=m_gap,
         cmnf_train_paths=scn.seed004.train_paths,
         failures=failures,
         warnings=warnings,
@@ -669,6 +729,7 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
             "Est. RMSE (m)",
             "Est. max (m)",
             "J-bar physics (m^2)",
+            "Mean J physics (m^2)",
         ],
         [
             [
@@ -680,6 +741,7 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
                 s.est_rmse_m,
                 s.est_max_m,
                 s.j_bar_m2,
+                s.j_mean_m2,
             ]
             for f, s in summ.items()
         ],
@@ -687,7 +749,8 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
         slug="filters",
         note=(
             f"CMNF J-bar: surrogate {_fmt(j_sur)} m^2, physics {_fmt(j_phys)} m^2, gap "
-            f"{_fmt(gap)} m^2 (gains from {c.train_paths} surrogate paths, J-bar on "
+            f"{_fmt(gap)} m^2; mean J: surrogate {_fmt(m_sur)}, physics {_fmt(m_phys)}, gap "
+            f"{_fmt(m_gap)} m^2 (gains from {c.train_paths} surrogate paths, J on "
             f"{c.surrogate_test_paths} fresh ones)."
             if "cmnf" in names
             else "No CMNF flown."
