@@ -466,6 +466,7 @@ def flight_metrics(run: MissionRun, nominal: Array, dt: float) -> dict[str, Any]
         (per axis, of ``X_{k+1} - X_k - V(u_k) dt``), ``steps`` reached.
     """
     v = run.lead
+    seen = {k: int(v.outcome.get(k, 0)) for k in ("absent_pairs", "missing_sets")}
     c = v.ticks
     x = np.asarray(c["truth_pos"].values, float)
     xh = np.asarray(c["ekf_pos"].values, float)
@@ -474,7 +475,7 @@ def flight_metrics(run: MissionRun, nominal: Array, dt: float) -> dict[str, Any]
     sel = np.flatnonzero(k >= 0)
     ks = k[sel].astype(int)
     if len(x) < 2 or len(sel) < 2:
-        return {"steps": int(ks.max()) if len(ks) else 0}
+        return {"steps": int(ks.max()) if len(ks) else 0, **seen}
     d = distance_to_polyline(x, nominal)
     xk = x[sel]
     e = np.linalg.norm(xk - xh[sel], axis=1)
@@ -492,6 +493,7 @@ def flight_metrics(run: MissionRun, nominal: Array, dt: float) -> dict[str, Any]
         "residual_std_m": [float(a) for a in res.std(axis=0)],
         "residual_mean_m": [float(a) for a in res.mean(axis=0)],
         "track": xk.astype(np.float32),
+        **seen,
     }
 
 
@@ -696,6 +698,15 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
     failures = [f"{f}: {m}" for r in results for f, m in r.failed.items() if m]
     warnings = []
     for f in names:
+        gaps = [(r.run, r.metrics[f]) for r in results if f in r.metrics]
+        absent = sum(m.get("absent_pairs", 0) for _, m in gaps)
+        missing = sum(m.get("missing_sets", 0) for _, m in gaps)
+        if absent:
+            warnings.append(
+                f"{f}: {absent} bearing pairs absent (beacon overhead, tangent beyond "
+                f"doa.max_tangent, out of range or dropped), {missing} filter steps without any "
+                "bearing (prediction only)"
+            )
         if summ[f].runs_ok < ctx.n_runs:
             warnings.append(
                 f"{f}: {ctx.n_runs - summ[f].runs_ok} of {ctx.n_runs} runs have no data"

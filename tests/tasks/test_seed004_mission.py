@@ -17,7 +17,12 @@ import pytest
 from bauv_sim.build import build_physics
 from tasks.core import registry
 from tasks.core.runner import plan_batch, run
-from tasks.missions.seed004 import Seed004Mission, beacons_world, distance_to_polyline
+from tasks.missions.seed004 import (
+    Seed004Mission,
+    beacons_world,
+    depth_setpoint,
+    distance_to_polyline,
+)
 
 NAME = "mission/seed004"
 FAST = [
@@ -126,3 +131,30 @@ def test_bad_input_is_one_line_exit_2(tmp_path, args, pattern):
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
     assert not out.exists()
+
+
+def test_lost_bearings_degrade_with_a_warning_and_no_nan(tmp_path):
+    out = tmp_path / "drop"
+    over = [*FAST, "doa.dropout_probability=0.5", "navigation.filter=upmf"]
+    run(NAME, n_runs=1, seed=3, out_dir=out, overrides=over, progress=False)
+    m = _metrics(out)
+    assert len(m["warnings"]) == 1 and "bearing pairs absent" in m["warnings"][0]
+    s = m["filters"]["upmf"]
+    assert s["runs_ok"] == 1 and math.isfinite(s["est_rmse_m"])
+
+
+@pytest.mark.parametrize("gamma_deg, v", [(5.0, 1.0), (-8.0, 0.7), (2.0, 1.3)])
+def test_depth_setpoint_makes_the_depth_loop_fly_the_pitch(gamma_deg, v):
+    """The autopilot's own depth PD (integral off) at the set-point, climbing at the commanded
+    rate w = V sin(gamma), asks for the pitch that holds that rate (V sin(pitch) = w, to the
+    small-angle order the loop's linear law has)."""
+    from bauv_sim.autopilot import PID, AutopilotConfig
+
+    ap = AutopilotConfig()
+    u = np.array([math.radians(gamma_deg), 0.3, v])
+    depth = 2.0
+    sp = depth_setpoint(depth, u, ap)
+    w_up = v * math.sin(u[0])
+    pid = PID(ap.depth_kp, 0.0, ap.depth_kd, -1.0, 1.0)
+    pitch = -pid.step(sp - depth, -w_up, 0.2)  # as the autopilot: depth error, depth rate
+    assert v * pitch == pytest.approx(w_up, rel=1e-9)
