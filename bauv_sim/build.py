@@ -201,13 +201,17 @@ def initial_velocities(config: SceneConfig) -> dict[str, np.ndarray]:
 
 
 def build_physics(
-    config: SceneConfig | None = None, control_tick_s: float = DEFAULT_CONTROL_TICK_S
+    config: SceneConfig | None = None,
+    control_tick_s: float = DEFAULT_CONTROL_TICK_S,
+    timestep_s: float | None = None,
 ) -> BauvPhysics:
     """Assemble, compile and initialise a scene.
 
     Args:
         config: the scene (default: :class:`SceneConfig` defaults).
-        control_tick_s: control tick, s (an integer multiple of the 2 ms timestep).
+        control_tick_s: control tick, s (an integer multiple of the timestep).
+        timestep_s: physics timestep, s; None keeps the model file's 2 ms
+            (:meth:`BauvPhysics.set_timestep`).
 
     Returns:
         The physics with every vehicle at its initial pose and speed, all commands zero.
@@ -215,7 +219,10 @@ def build_physics(
     cfg = config or SceneConfig()
     root, _ = build_scene(cfg)
     phys = BauvPhysics.from_mjcf_model(root)
-    phys.set_control_tick(control_tick_s)
+    if timestep_s is not None:
+        phys.set_timestep(timestep_s, control_tick_s)
+    else:
+        phys.set_control_tick(control_tick_s)
     vel = initial_velocities(cfg)
     for v in cfg.vehicles:
         phys.set_pose(

@@ -138,6 +138,7 @@ class BauvPhysics(mjcf.Physics):
     """
 
     _control_tick_s: float = DEFAULT_CONTROL_TICK_S
+    _timestep_s: float | None = None
     _sea: Sea = Sea()
     _sea_applied: bool = False
     _track_energy: bool = False
@@ -147,13 +148,17 @@ class BauvPhysics(mjcf.Physics):
 
     @classmethod
     def from_scene_xml(
-        cls, path: str | Path | None = None, control_tick_s: float = DEFAULT_CONTROL_TICK_S
+        cls,
+        path: str | Path | None = None,
+        control_tick_s: float = DEFAULT_CONTROL_TICK_S,
+        timestep_s: float | None = None,
     ) -> BauvPhysics:
         """Load a scene file (default ``models/bauv/scene.xml``) with plain MuJoCo.
 
         Args:
             path: MJCF file.
-            control_tick_s: control tick, s (an integer multiple of the model's timestep).
+            control_tick_s: control tick, s (an integer multiple of the timestep).
+            timestep_s: physics timestep, s; None keeps the model file's (2 ms).
 
         Returns:
             The physics, reset to the model's defaults.
@@ -161,7 +166,10 @@ class BauvPhysics(mjcf.Physics):
         from bauv_sim.hull import MODEL_DIR
 
         phys = cls.from_xml_path(str(path if path is not None else MODEL_DIR / "scene.xml"))
-        phys.set_control_tick(control_tick_s)
+        if timestep_s is not None:
+            phys.set_timestep(timestep_s, control_tick_s)
+        else:
+            phys.set_control_tick(control_tick_s)
         return phys
 
     def _reload_from_data(self, data) -> None:
@@ -176,6 +184,8 @@ class BauvPhysics(mjcf.Physics):
         self._state_buf = np.empty(
             mujoco.mj_stateSize(self.model.ptr, mujoco.mjtState.mjSTATE_INTEGRATION)
         )
+        if self._timestep_s is not None:
+            self.model.ptr.opt.timestep = self._timestep_s
         self.set_control_tick(self._control_tick_s)
 
     def _check_options(self) -> None:
@@ -273,6 +283,36 @@ class BauvPhysics(mjcf.Physics):
             )
         self._control_tick_s = float(control_tick_s)
         self._steps_per_tick = int(n)
+
+    def set_timestep(self, timestep_s: float, control_tick_s: float | None = None) -> None:
+        """Set the physics timestep (``option timestep``), kept over model reloads.
+
+        The presets validated against 1 ms on cruise speed, turn rate and depth response are in
+        ``models/bauv/README.md`` ("Timestep presets", ``python -m tasks.vehicle.timestep``).
+        Call it before stepping: it does not rescale anything already integrated.
+
+        Args:
+            timestep_s: timestep, s (> 0).
+            control_tick_s: control tick, s, to set with it (None keeps the current one); it must
+                be a positive integer multiple of the new timestep.
+
+        Raises:
+            ConfigError: if the timestep is not finite and positive, or the tick is not a multiple
+                of it (the timestep is then left as it was).
+        """
+        if not (math.isfinite(timestep_s) and timestep_s > 0):
+            raise ConfigError(f"timestep = {timestep_s!r} s: must be finite and > 0")
+        m = self.model.ptr
+        old = float(m.opt.timestep)
+        m.opt.timestep = float(timestep_s)
+        try:
+            self.set_control_tick(
+                self._control_tick_s if control_tick_s is None else control_tick_s
+            )
+        except ConfigError:
+            m.opt.timestep = old
+            raise
+        self._timestep_s = float(timestep_s)
 
     @property
     def control_tick_s(self) -> float:

@@ -24,8 +24,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+for _p in (str(ROOT), str(ROOT / "benchmarks")):
+    if _p not in sys.path:
+        sys.path.insert(0, _p)
 
 import mujoco  # noqa: E402
 import mujoco.batch  # noqa: E402
@@ -57,15 +58,25 @@ CPU_PER_WALL: dict[str, float] = {}
 """Process CPU time over wall time of the last timing of each measurement (threads in use)."""
 
 
+RATE_PER_CORE: dict[str, float] = {}
+"""Median over repeats of each repeat's steps per CPU second (its rate over its own CPU/wall)."""
+
+
 def _median_rate(fn: Callable[[], int], repeats: int, label: str = "") -> float:
-    """Median of ``steps / seconds`` over repeats of ``fn`` (which returns the steps it took)."""
-    rates = []
+    """Median of ``steps / seconds`` over repeats of ``fn`` (which returns the steps it took);
+    the median CPU/wall and the median of each repeat's steps per CPU second go into
+    :data:`CPU_PER_WALL` and :data:`RATE_PER_CORE` (each repeat's CPU paired with its own wall)."""
+    rates, cpw, per_core = [], [], []
     for _ in range(repeats):
         t0, c0 = time.perf_counter(), time.process_time()
         n = fn()
         wall = time.perf_counter() - t0
+        cpu = time.process_time() - c0
         rates.append(n / wall)
-        CPU_PER_WALL[label] = (time.process_time() - c0) / wall
+        cpw.append(cpu / wall)
+        per_core.append(n / max(cpu, 1e-9))
+    CPU_PER_WALL[label] = statistics.median(cpw)
+    RATE_PER_CORE[label] = statistics.median(per_core)
     return statistics.median(rates)
 
 
@@ -195,13 +206,163 @@ def timestep_preset(dt: float, seconds: float = 40.0) -> tuple[float, float]:
     return seconds / wall, u
 
 
+REMOVED_SENSORS = """  <sensor>
+    <framepos name="ins_pos" objtype="site" objname="ins"/>
+    <framequat name="ins_quat" objtype="site" objname="ins"/>
+    <gyro name="ins_gyro" site="ins"/>
+    <accelerometer name="ins_accel" site="ins"/>
+    <velocimeter name="ins_velocity" site="ins"/>
+    <jointpos name="tail_angle" joint="tail_yaw"/>
+    <jointpos name="caudal_fin_angle" joint="caudal_fin_yaw"/>
+    <jointvel name="crank_speed" joint="crank"/>
+    <actuatorfrc name="motor_torque" actuator="motor"/>
+  </sensor>
+"""
+"""The nine MuJoCo sensors ``models/bauv/bauv.xml`` had until issue 13 (nothing read them)."""
+
+
+def _vehicle(sensors: bool) -> mujoco.MjModel:
+    """``bauv.xml`` as it is, or with :data:`REMOVED_SENSORS` put back; both compiled the same way
+    (from the file's text, with the model folder's assets)."""
+    xml = (MODEL_DIR / "bauv.xml").read_text()
+    if sensors:
+        xml = xml.replace("  <keyframe>", REMOVED_SENSORS + "  <keyframe>")
+    assets = {
+        f"assets/{f.name}": f.read_bytes() for f in (MODEL_DIR / "assets").iterdir() if f.is_file()
+    }
+    m = mujoco.MjSpec.from_string(xml, assets=assets).compile()
+    hydro.prepare_model(m)
+    return m
+
+
+def harness_presets(repeats: int, nstep: int, survey_s: float, sensors_only: bool = False) -> str:
+    """The harness's interleaved timings of what issue 13 changed in the physics: the removed
+    sensors, the raw step at 1, 2 and 4 ms, and ``mission/survey`` at 1, 2 and 4 ms.
+
+    Args:
+        repeats: interleaved timed repeats of each variant (after one warm-up).
+        nstep: physics steps per raw timing.
+        survey_s: simulated seconds of ``mission/survey`` per timing (its first part).
+        sensors_only: time the sensors alone.
+
+    Returns:
+        The Markdown section.
+    """
+    from harness import machine, measure, table
+
+    from tasks.closed_loop.world import fly
+    from tasks.core import registry
+    from tasks.core.runner import plan_batch
+
+    out = [f"Measured by `python benchmarks/bench_physics.py --presets` on {machine()}.", ""]
+    # 1. the sensors: the vehicle alone (bauv.xml), with and without them, 2 ms; short calls and
+    # many repeats, since the difference is a few per cent
+    with_s, without = _vehicle(True), _vehicle(False)
+    assert with_s.nsensor == 9 and without.nsensor == 0
+    datas = {
+        "with the 9 sensors": (with_s, _cruising(with_s)),
+        "no sensors": (without, _cruising(without)),
+    }
+    ns, rs = max(1, nstep // 4), 6 * repeats
+    res = measure(
+        {k: (lambda m=m, d=d: mujoco.mj_step(m, d, ns)) for k, (m, d) in datas.items()},
+        repeats=rs,
+        per={k: ns for k in datas},
+    )
+    out += [
+        f"The vehicle alone (`bauv.xml`), cruising from `trim`, 2 ms, `mj_step(m, d, {ns})`; "
+        "time per step:",
+        "",
+        table(res, reference="with the 9 sensors", unit="us", scale=1e6),
+        "",
+    ]
+    if sensors_only:
+        return "\n".join(out)
+    # 2. raw steps at each timestep: time per simulated second
+    raw = {}
+    for dt in (0.001, 0.002, 0.004):
+        m = _model()
+        m.opt.timestep = dt
+        raw[f"{dt * 1000:g} ms"] = (m, _cruising(m), round(1.0 / dt))
+    res = measure(
+        {k: (lambda m=m, d=d, n=n: mujoco.mj_step(m, d, 10 * n)) for k, (m, d, n) in raw.items()},
+        repeats=repeats,
+        per={k: 10.0 for k in raw},
+    )
+    out += [
+        "The scene (`scene.xml`), cruising, 10 s simulated per call; wall seconds per simulated "
+        "second (the real-time factor is its inverse):",
+        "",
+        table(res, reference="1 ms", unit="s per simulated s"),
+        "",
+        "Real-time factor (median): "
+        + ", ".join(f"{k} {1 / r.median:.0f}x" for k, r in res.items())
+        + ".",
+        "",
+    ]
+    # 3. mission/survey, its first survey_s seconds, in process (sensors, navigation, guidance)
+    exp = registry.get("mission/survey")
+    flights = {}
+    for dt in (0.001, 0.002, 0.004):
+        scn = plan_batch(
+            "mission/survey",
+            overrides=[f"timing.physics_timestep_s={dt}", f"timing.max_duration_s={survey_s}"],
+        ).scenario
+        flights[f"{dt * 1000:g} ms"] = exp.flight(scn, 0, 0)
+    res = measure(
+        {k: (lambda f=f: fly(f[0], f[1], 0, 0)) for k, f in flights.items()},
+        repeats=repeats,
+        per={k: survey_s for k in flights},
+    )
+    out += [
+        f"`mission/survey` (seed 0), its first {survey_s:g} s through "
+        "`tasks.closed_loop.world.fly` (physics, sea, sensor rig, EKF navigation, guidance, "
+        "autopilot; no report): wall seconds per simulated second:",
+        "",
+        table(res, reference="1 ms", unit="s per simulated s"),
+        "",
+        "Real-time factor (median): "
+        + ", ".join(f"{k} {1 / r.median:.0f}x" for k, r in res.items())
+        + ".",
+    ]
+    return "\n".join(out)
+
+
+def _write_block(name: str, report: str) -> None:
+    text = README.read_text() if README.exists() else "# Benchmarks\n"
+    block = f"<!-- BEGIN {name} -->\n{report}\n<!-- END {name} -->"
+    if f"<!-- BEGIN {name} -->" in text:
+        text = re.sub(
+            rf"<!-- BEGIN {name} -->.*?<!-- END {name} -->", lambda _: block, text, flags=re.S
+        )
+    else:
+        text += "\n" + block + "\n"
+    README.write_text(text)
+
+
 def main(argv: list[str] | None = None) -> str:
     """Run the benchmarks, print the report and (unless ``--no-write``) put it in the README."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--nstep", type=int, default=20000)
     ap.add_argument("--no-write", action="store_true")
+    ap.add_argument(
+        "--presets",
+        action="store_true",
+        help="only the harness's timings of the removed sensors, the raw step and mission/survey "
+        "at 1, 2, 4 ms (block 'physics-presets')",
+    )
+    ap.add_argument("--survey-s", type=float, default=300.0, help="with --presets, s")
+    ap.add_argument(
+        "--sensors-only", action="store_true", help="with --presets: the sensor timing alone"
+    )
     args = ap.parse_args(argv)
+    if args.presets:
+        report = harness_presets(args.repeats, args.nstep, args.survey_s, args.sensors_only)
+        print(report)
+        if not args.no_write:
+            _write_block("physics-presets", report)
+        return report
     m = _model()
     dt = m.opt.timestep
     load = os.getloadavg()[0]
@@ -210,7 +371,7 @@ def main(argv: list[str] | None = None) -> str:
     fac_e = facade_steps_per_s(20.0, args.repeats, energy=True)
     b1 = batch_steps_per_s(m, 16, 1, 2000, args.repeats)
     b2 = batch_steps_per_s(m, 16, 2, 2000, args.repeats)
-    b2_per_core = b2 / max(CPU_PER_WALL["batch2"], 1e-9)
+    b2_per_core = RATE_PER_CORE["batch2"]
     abl = ablations(args.nstep // 2, args.repeats)
     presets = [(x, *timestep_preset(x)) for x in (0.001, 0.002, 0.004)]
     cpu = platform.processor() or platform.machine()
@@ -261,15 +422,7 @@ def main(argv: list[str] | None = None) -> str:
     report = "\n".join(lines)
     print(report)
     if not args.no_write:
-        text = README.read_text() if README.exists() else "# Benchmarks\n"
-        block = f"<!-- BEGIN physics -->\n{report}\n<!-- END physics -->"
-        if "<!-- BEGIN physics -->" in text:
-            text = re.sub(
-                r"<!-- BEGIN physics -->.*?<!-- END physics -->", lambda _: block, text, flags=re.S
-            )
-        else:
-            text += "\n" + block + "\n"
-        README.write_text(text)
+        _write_block("physics", report)
     return report
 
 

@@ -408,7 +408,11 @@ def build_environment(
     design: P.MissionDesign, scenario: Any, seed: int, run: int
 ) -> control.Environment:
     """The physics, the world and the dm_control environment of one run."""
-    physics = build_physics(design.scene(scenario), control_tick_s=scenario.timing.control_tick_s)
+    physics = build_physics(
+        design.scene(scenario),
+        control_tick_s=scenario.timing.control_tick_s,
+        timestep_s=scenario.timing.physics_timestep_s,
+    )
     world = MissionWorld(design, scenario, seed, run)
     return control.Environment(
         physics,

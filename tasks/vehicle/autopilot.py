@@ -36,7 +36,13 @@ class AutopilotTrialsScenario(Config):
     """Trials and gains."""
 
     autopilot: AutopilotConfig = Field(default_factory=AutopilotConfig)
-    control_tick_s: float = Field(0.2, gt=0, description="s, a multiple of the 2 ms timestep")
+    control_tick_s: float = Field(0.2, gt=0, description="s, a multiple of the physics timestep")
+    physics_timestep_s: float = Field(
+        0.002,
+        gt=0,
+        le=0.004,
+        description="MuJoCo timestep, s (presets validated against 1 ms in models/bauv/README.md)",
+    )
     depth_m: float = Field(10.0, gt=0, description="trial depth, m")
     seabed_depth_m: float = Field(40.0, gt=0, description="depth of the trial area, m")
     heading_step_deg: float = Field(90.0, gt=0, le=180)
@@ -62,7 +68,7 @@ class Trace:
     fin_deg: NDArray[np.float64]
 
 
-def _fly(
+def fly_trial(
     s: AutopilotTrialsScenario,
     duration_s: float,
     course: Callable[[float], float],
@@ -71,6 +77,22 @@ def _fly(
     current_north_m_s: float = 0.0,
     heading0_rad: float = 0.0,
 ) -> dict[str, NDArray]:
+    """Fly one trial with the autopilot from noise-free measurements, in a deep scene.
+
+    Args:
+        s: the trials' scenario (gains, control tick, physics timestep, depth, seabed).
+        duration_s: length of the trial, s.
+        course: set course at time t, rad (clockwise from north).
+        depth: set depth at time t, m.
+        speed: set speed through water at time t, m/s.
+        current_north_m_s: uniform current setting north, m/s.
+        heading0_rad: initial heading, rad (clockwise from north).
+
+    Returns:
+        Per control tick, each shape (n,): ``t`` (s), ``heading`` (rad), ``depth`` (m),
+        ``speed`` (m/s through water along the hull), ``pitch`` (rad), ``bias`` (tail bias
+        command, rad), ``fin`` (port fin command, rad); sampled before each tick's step.
+    """
     from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
     from bauv_sim.currents import UniformCurrent
     from bauv_sim.design.speed_table import load_speed_table
@@ -83,7 +105,7 @@ def _fly(
             depth_at_origin_m=s.seabed_depth_m, min_depth_m=0.75 * s.seabed_depth_m
         ),
     )
-    p = build_physics(scene, control_tick_s=s.control_tick_s)
+    p = build_physics(scene, control_tick_s=s.control_tick_s, timestep_s=s.physics_timestep_s)
     p.set_pose(
         [0.0, 0.0, -s.depth_m],
         [0.0, 0.0, heading0_rad],
@@ -204,28 +226,28 @@ class AutopilotTrials(Experiment):
         t_step = 10.0
         step_h = math.radians(s.heading_step_deg)
         return {
-            "heading": _fly(
+            "heading": fly_trial(
                 s,
                 80.0,
                 lambda t: 0.0 if t < t_step else step_h,
                 lambda t: s.depth_m,
                 lambda t: s.speed_to_m_s,
             ),
-            "depth": _fly(
+            "depth": fly_trial(
                 s,
                 100.0,
                 lambda t: 0.0,
                 lambda t: s.depth_m if t < t_step else s.depth_m + s.depth_step_m,
                 lambda t: s.speed_to_m_s,
             ),
-            "speed": _fly(
+            "speed": fly_trial(
                 s,
                 60.0,
                 lambda t: 0.0,
                 lambda t: s.depth_m,
                 lambda t: s.speed_from_m_s if t < t_step else s.speed_to_m_s,
             ),
-            "current": _fly(
+            "current": fly_trial(
                 s,
                 120.0,
                 lambda t: math.pi / 2,

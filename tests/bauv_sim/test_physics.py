@@ -316,3 +316,47 @@ def test_truth_attitude_equals_the_frames_conversion():
             atol=1e-12,
         )
         assert np.allclose(vt.roll_pitch_heading_rad, rph, atol=1e-9)
+
+
+def test_set_timestep_sets_the_step_and_keeps_the_tick_a_multiple(phys):
+    phys.set_timestep(0.004)
+    assert phys.timestep() == pytest.approx(0.004)
+    assert phys.steps_per_tick == 25  # 0.1 s tick
+    phys.advance(0.3)
+    assert phys.time_s() == pytest.approx(0.3)
+    assert phys.data.time == pytest.approx(75 * 0.004)
+    with pytest.raises(ConfigError, match=r"multiple of the physics timestep 0\.008"):
+        phys.set_timestep(0.008)  # 0.1 s is not a multiple of 8 ms
+    assert phys.timestep() == pytest.approx(0.004) and phys.steps_per_tick == 25
+    phys.set_timestep(0.008, control_tick_s=0.2)
+    assert phys.steps_per_tick == 25 and phys.control_tick_s == pytest.approx(0.2)
+    for bad in (0.0, -0.001, math.nan, math.inf):
+        with pytest.raises(ConfigError, match="timestep"):
+            phys.set_timestep(bad)
+
+
+def test_the_timestep_is_kept_when_the_model_is_reloaded():
+    from bauv_sim.build import build_scene
+
+    root, _ = build_scene()
+    phys = BauvPhysics.from_mjcf_model(root)
+    phys.set_timestep(0.004, control_tick_s=0.2)
+    phys.reload_from_mjcf_model(root)  # compiles the model file's 2 ms again
+    assert phys.timestep() == pytest.approx(0.004) and phys.steps_per_tick == 50
+
+
+def test_the_4ms_preset_swims_at_the_1ms_cruise_speed():
+    """The missions' 4 ms step against 1 ms over a short swim from the same start at the cruise
+    frequency (models/bauv/README.md, Timestep presets: +0.37 % over the long swim)."""
+    from bauv_sim.manoeuvres import open_water_scene, straight_swim
+
+    speeds = {}
+    for dt in (0.001, 0.004):
+        p = open_water_scene(speed_m_s=1.0)
+        p.set_timestep(dt)
+        assert p.timestep() == pytest.approx(dt)
+        r = straight_swim(p, 1.21, settle_s=10.0, measure_s=5.0)
+        assert p.time_s() == pytest.approx(10.0 + r.window_s)
+        speeds[dt] = r.speed_through_water_m_s
+    assert speeds[0.001] == pytest.approx(1.0, abs=0.05)  # it cruises
+    assert speeds[0.004] == pytest.approx(speeds[0.001], rel=0.01)

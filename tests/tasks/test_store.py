@@ -555,6 +555,12 @@ def test_paper003_block():
     same(roundtrip(block).value, block)
 
 
+@pytest.mark.parametrize("name", ["paper-004/table-1", "paper-004/near-beacon"])
+def test_paper004_block(name):
+    block = _block(name, (0, 1), "path.duration_s=20.0", "filters.train_paths=200")
+    same(roundtrip(block).value, block)
+
+
 def test_accuracy_block():
     assert _block("paper-000/accuracy", (0,)) is None
     assert roundtrip(None).value is None
@@ -564,7 +570,7 @@ def test_autopilot_block():
     from tasks.vehicle import autopilot as va
 
     scn = plan_batch("vehicle/autopilot").scenario
-    trial = va._fly(scn, 1.0, lambda t: 0.0, lambda t: scn.depth_m, lambda t: scn.speed_to_m_s)
+    trial = va.fly_trial(scn, 1.0, lambda t: 0.0, lambda t: scn.depth_m, lambda t: scn.speed_to_m_s)
     block = {name: trial for name in ("heading", "depth", "speed", "current")}
     same(roundtrip(block).value, block)
 
@@ -588,5 +594,6 @@ def test_every_experiment_class_has_a_block_test_above():
         "CorrectionExperiment",
         "SwarmExperiment",
         "SquareExperiment",
+        "Paper004Experiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
