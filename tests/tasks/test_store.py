@@ -584,6 +584,19 @@ def test_mission_blocks(name):
     same(got, block)
 
 
+def test_seed004_mission_block():
+    block = _block(
+        "mission/seed004",
+        (0,),
+        "timing.max_duration_s=10",
+        "seed004.duration_s=10",
+        "seed004.train_paths=200",
+        "navigation.filter=cmnf",
+    )
+    assert block[0].metrics["cmnf"]["j_k"] and block[0].failed == {"cmnf": None}
+    same(roundtrip(block).value, block)
+
+
 def test_every_experiment_class_has_a_block_test_above():
     tested = {
         "StraightPassageExperiment",
@@ -595,5 +608,6 @@ def test_every_experiment_class_has_a_block_test_above():
         "SwarmExperiment",
         "SquareExperiment",
         "Paper004Experiment",
+        "Seed004Experiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
