@@ -152,6 +152,25 @@ class Experiment:
         raise NotImplementedError
 
 
+MAX_BLOCK_RUNS = 100_000
+"""The largest block any experiment's ``runner.block_size`` accepts."""
+
+
+def block_by_work(block_size: int | None, steps_per_run: int, steps_per_block: int) -> int:
+    """Runs per block sized by work: ``block_size`` when the scenario sets one, else as many runs
+    as make ``steps_per_block`` run-steps (at least 1, at most :data:`MAX_BLOCK_RUNS`); a
+    function of the scenario only, so the layout never depends on the worker count.
+
+    Args:
+        block_size: the scenario's ``runner.block_size``, or None for the default.
+        steps_per_run: time steps of one run.
+        steps_per_block: the work of a default block, run-steps.
+    """
+    if block_size is not None:
+        return block_size
+    return max(1, min(MAX_BLOCK_RUNS, steps_per_block // max(1, steps_per_run)))
+
+
 def register(experiment: Experiment) -> Experiment:
     """Add an experiment to the registry.
 

@@ -74,7 +74,14 @@ from nav.models import TIME_CHUNK, CourseSpeedDepthMotion, UsblMeasurement
 from nav.track_ekf import Tracks, ekf_tracks, nees_packed, unpack
 from tasks.core import figures, store
 from tasks.core.recording import COLORS, Recording
-from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary, register
+from tasks.core.registry import (
+    Experiment,
+    MemoryTerm,
+    ReportContext,
+    ReportSummary,
+    block_by_work,
+    register,
+)
 from tasks.core.report import Table, write_metrics, write_tables
 
 METHODS = ("EKF", "DR", "USBL")
@@ -232,9 +239,7 @@ BLOCK_PASSAGE_TICKS = 600_000
 
 def block_passages(scn: Paper000Scenario) -> int:
     """Passages per block: ``runner.block_size``, or by work (:data:`BLOCK_PASSAGE_TICKS`)."""
-    if scn.runner.block_size is not None:
-        return scn.runner.block_size
-    return max(1, min(100_000, BLOCK_PASSAGE_TICKS // max(1, scn.passage.n_ticks - 1)))
+    return block_by_work(scn.runner.block_size, scn.passage.n_ticks - 1, BLOCK_PASSAGE_TICKS)
 
 
 class RunnerConfig(Config):

@@ -61,7 +61,7 @@ from nav.metrics import nees_band
 from nav.relative import GaOptions, dr_increment_covariance, dr_step, ga_fix, hdop, range_update
 from tasks.core import export, figures, store
 from tasks.core.recording import COLORS, Recording
-from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
+from tasks.core.registry import Experiment, ReportContext, ReportSummary, block_by_work, register
 from tasks.core.report import Table, write_metrics, write_tables
 
 Array = NDArray[np.float64]
@@ -222,9 +222,7 @@ class RunnerConfig(Config):
 
 def block_runs(scn: Paper003Scenario) -> int:
     """Runs per block: ``runner.block_size``, or by work (:data:`BLOCK_RUN_TICKS`)."""
-    if scn.runner.block_size is not None:
-        return scn.runner.block_size
-    return max(1, min(100_000, BLOCK_RUN_TICKS // max(1, scn.path.n_ticks - 1)))
+    return block_by_work(scn.runner.block_size, scn.path.n_ticks - 1, BLOCK_RUN_TICKS)
 
 
 class Paper003Scenario(Config):
