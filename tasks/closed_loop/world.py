@@ -35,7 +35,7 @@ from dm_control.rl import control
 from numpy.typing import NDArray
 
 from bauv_sim import rng as rng_mod
-from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
+from bauv_sim.build import BeaconSpec, SceneConfig, VehicleSpec, build_physics
 from bauv_sim.currents import make_current
 from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import BauvSimError, PhysicsError
@@ -158,6 +158,31 @@ def scenario_sea(scn, seed: int, run: int) -> Sea:
     return Sea(make_current(scn.current, rng_mod.generator(seed, run, "current")))
 
 
+def single_vehicle_scene(
+    scenario: MissionScenario, beacons: tuple[BeaconSpec, ...] | None = None
+) -> SceneConfig:
+    """The scene of a one-vehicle mission: the BAUV named ``bauv`` at the scenario's start, its
+    seabed and transceiver, and the given beacons (default: the scene's own,
+    :data:`bauv_sim.build.DEFAULT_BEACONS`)."""
+    st = scenario.start
+    extra = {} if beacons is None else {"beacons": tuple(beacons)}
+    return SceneConfig(
+        vehicles=(
+            VehicleSpec(
+                name="bauv",
+                east_m=st.east_m,
+                north_m=st.north_m,
+                depth_m=st.depth_m,
+                heading_deg=st.heading_deg,
+            ),
+        ),
+        seabed=scenario.seabed,
+        transceiver_east_m=scenario.transceiver_east_m,
+        transceiver_north_m=scenario.transceiver_north_m,
+        **extra,
+    )
+
+
 @dataclass(frozen=True)
 class WaypointMission:
     """The standard design: one vehicle (``bauv``) flying the scenario's way-points, steering on
@@ -173,21 +198,7 @@ class WaypointMission:
         return ("bauv",)
 
     def scene(self, scenario: MissionScenario) -> SceneConfig:
-        st = scenario.start
-        return SceneConfig(
-            vehicles=(
-                VehicleSpec(
-                    name="bauv",
-                    east_m=st.east_m,
-                    north_m=st.north_m,
-                    depth_m=st.depth_m,
-                    heading_deg=st.heading_deg,
-                ),
-            ),
-            seabed=scenario.seabed,
-            transceiver_east_m=scenario.transceiver_east_m,
-            transceiver_north_m=scenario.transceiver_north_m,
-        )
+        return single_vehicle_scene(scenario)
 
     def build(self, scenario: MissionScenario, seed: int, run: int, physics) -> P.MissionParts:
         v = standard_vehicle(scenario, seed, run, physics)

@@ -49,7 +49,7 @@ from pydantic import BaseModel, Field
 
 from bauv_sim import rng as rng_mod
 from bauv_sim import seabed
-from bauv_sim.build import BeaconSpec, SceneConfig, VehicleSpec
+from bauv_sim.build import BeaconSpec, SceneConfig
 from bauv_sim.config import Config
 from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import ConfigError, GeometryError
@@ -66,7 +66,7 @@ from tasks.closed_loop.experiment import MissionExperiment
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance
 from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario, NavigationConfig
-from tasks.closed_loop.world import fly, place_vehicle, scenario_sea, streams
+from tasks.closed_loop.world import fly, place_vehicle, scenario_sea, single_vehicle_scene, streams
 from tasks.core import store
 from tasks.core.registry import ReportContext, ReportSummary, register
 
@@ -397,22 +397,7 @@ class Seed004Mission:
         return ("bauv",)
 
     def scene(self, scenario: Seed004Scenario) -> SceneConfig:
-        st = scenario.start
-        return SceneConfig(
-            vehicles=(
-                VehicleSpec(
-                    name="bauv",
-                    east_m=st.east_m,
-                    north_m=st.north_m,
-                    depth_m=st.depth_m,
-                    heading_deg=st.heading_deg,
-                ),
-            ),
-            seabed=scenario.seabed,
-            transceiver_east_m=scenario.transceiver_east_m,
-            transceiver_north_m=scenario.transceiver_north_m,
-            beacons=beacon_specs(scenario),
-        )
+        return single_vehicle_scene(scenario, beacon_specs(scenario))
 
     def build(self, scn: Seed004Scenario, seed: int, run: int, physics) -> P.MissionParts:
         table = load_speed_table()
