@@ -161,12 +161,9 @@ def inverse_spd_small(S: Array) -> Array:
         out[..., 0, 0], out[..., 1, 1] = d / det, a / det
         out[..., 0, 1] = out[..., 1, 0] = -b / det
         return out
-    a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 0, 2]
-    d, e, f = S[..., 1, 1], S[..., 1, 2], S[..., 2, 2]
-    c00 = d * f - e * e
-    c01 = c * e - b * f
-    c02 = b * e - c * d
-    det = a * c00 + b * c01 + c * c02
+    (c00, c01, c02, c11, c12, c22), det = adjugate_sym3(
+        S[..., 0, 0], S[..., 0, 1], S[..., 0, 2], S[..., 1, 1], S[..., 1, 2], S[..., 2, 2]
+    )
     if np.any(det <= 0):
         raise NavInputError("innovation covariance is not positive definite")
     inv_det = 1.0 / det
@@ -174,10 +171,25 @@ def inverse_spd_small(S: Array) -> Array:
     out[..., 0, 0] = c00 * inv_det
     out[..., 0, 1] = out[..., 1, 0] = c01 * inv_det
     out[..., 0, 2] = out[..., 2, 0] = c02 * inv_det
-    out[..., 1, 1] = (a * f - c * c) * inv_det
-    out[..., 1, 2] = out[..., 2, 1] = (b * c - a * e) * inv_det
-    out[..., 2, 2] = (a * d - b * b) * inv_det
+    out[..., 1, 1] = c11 * inv_det
+    out[..., 1, 2] = out[..., 2, 1] = c12 * inv_det
+    out[..., 2, 2] = c22 * inv_det
     return out
+
+
+def adjugate_sym3(
+    a: Array, b: Array, c: Array, d: Array, e: Array, f: Array
+) -> tuple[tuple[Array, ...], Array]:
+    """Adjugate and determinant of symmetric 3 x 3 matrices given by their upper triangles
+    ``[[a, b, c], [b, d, e], [c, e, f]]`` (any shapes that broadcast).
+
+    Returns:
+        ``((c00, c01, c02, c11, c12, c22), det)``: the adjugate's upper triangle (the inverse is
+        it divided by ``det``) and the determinant.
+    """
+    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
+    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
+    return (c00, c01, c02, c11, c12, c22), a * c00 + b * c01 + c * c02
 
 
 def update(

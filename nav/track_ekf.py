@@ -27,6 +27,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from nav.ekf import adjugate_sym3
 from nav.errors import FilterDivergedError, NavInputError
 
 Array = NDArray[np.float64]
@@ -97,10 +98,7 @@ def nees_packed(err: Array, Pp: Array) -> Array:
     Returns:
         Shape (...). Tested against ``numpy.linalg.solve``.
     """
-    a, b, c, d, e, f = Pp
-    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
-    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
-    det = a * c00 + b * c01 + c * c02
+    (c00, c01, c02, c11, c12, c22), det = adjugate_sym3(*Pp)
     x, y, z = err
     q = c00 * x * x + c11 * y * y + c22 * z * z + 2.0 * (c01 * x * y + c02 * x * z + c12 * y * z)
     return q / det
@@ -211,10 +209,7 @@ def _update(
         S[a, b] = H[a][0] * PHt[0][b] + H[a][1] * PHt[1][b] + H[a][2] * PHt[2][b]
         if a == b:
             S[a, b] = S[a, b] + r[a]
-    s00, s01, s02, s11, s12, s22 = (S[ab] for ab in SYM)
-    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
+    (c00, c01, c02, c11, c12, c22), det = adjugate_sym3(*(S[ab] for ab in SYM))
     if np.any(det <= 0):
         raise NavInputError("innovation covariance is not positive definite")
     inv_det = 1.0 / det
