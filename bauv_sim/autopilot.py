@@ -113,8 +113,13 @@ class AutopilotConfig(Config):
     roll_kd: float = Field(0.3, ge=0, description="differential fin per roll rate")
     fin_max_deg: float = Field(25.0, gt=0, le=45, description="lateral fin limit, deg")
 
-    speed_kp: float = Field(0.5, ge=0, description="tail-beat frequency per speed error, Hz/(m/s)")
-    speed_ki: float = Field(0.05, ge=0, description="per s")
+    speed_kp: float = Field(
+        0.35,
+        ge=0,
+        description="tail-beat frequency per speed error, Hz/(m/s) (the speed table's slope at "
+        "cruise is 1.2 m/s per Hz: a loop gain of 0.4)",
+    )
+    speed_ki: float = Field(0.035, ge=0, description="per s")
     frequency_max_hz: float = Field(3.0, gt=0, description="tail-beat frequency limit, Hz")
 
     trim_gain_m_per_rad_s: float = Field(

@@ -27,7 +27,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 from nav.angles import (
     TWO_PI,
@@ -167,6 +166,8 @@ def quat_wxyz_from_R(R: ArrayLike) -> NDArray[np.float64]:
     Returns:
         Quaternion (w, x, y, z), shape (..., 4).
     """
+    from scipy.spatial.transform import Rotation  # on first use: scipy.spatial costs ~0.5 s
+
     M = np.asarray(R, dtype=float)
     flat = Rotation.from_matrix(M.reshape(-1, 3, 3)).as_quat(scalar_first=True)
     flat = np.where(flat[:, :1] < 0, -flat, flat)

@@ -1,16 +1,19 @@
 """Run-time hydrodynamics and hydrostatics of the BAUV's compiled MuJoCo model.
 
-MuJoCo has no buoyancy and applies only part of the added mass (see
-``../shared/notes/mujoco-and-rerun.md``). This module holds what a compiled model needs beyond
-plain MuJoCo, and what the facade (:mod:`bauv_sim.physics`) uses to measure it:
+MuJoCo's ellipsoid fluid model gives each part's drag; it has no buoyancy, applies only the
+velocity terms of added mass, no crossflow drag across a streamlined hull, a Kutta lift whose
+slope near zero angle grows with the chord/thickness ratio, and no reaction to an accelerating
+current (``../shared/notes/hydrodynamics.md``). This module holds what a compiled model needs
+beyond plain MuJoCo:
 
-* **Added mass**: MuJoCo's ellipsoid model drops the acceleration term of added mass but keeps its
-  gyroscopic cross terms, which give an oscillating fin a spurious mean force (a fish swam
-  backwards). :func:`prepare_model` zeroes the virtual mass and inertia of the geoms that need it;
-  ``mj_setConst`` restores them, so call :func:`prepare_model` again after it.
-* **Water velocity**: ``option wind`` is the velocity of the medium in MuJoCo's fluid forces, i.e.
-  the current. :func:`set_water_velocity` sets it; :mod:`bauv_sim.sea` evaluates the current field
-  at every vehicle at every control tick and sets it through the facade.
+* **The engine plugin** ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``, compiled at install): added
+  mass in the mass matrix, the hull's Munk coupling with separation, crossflow drag, slender-body
+  and thin-plate lift, water acceleration, each vehicle's own water. :func:`load_plugin` registers
+  it (at import), :func:`load_model` compiles a model file with it (the one line a plain-MuJoCo
+  user needs), :func:`set_water` and :func:`water` hold each vehicle's water in the plugin's
+  state, :func:`plugin_force` reads what it applied.
+* **Water velocity**: ``option wind`` is the water velocity of MuJoCo's fluid forces;
+  :func:`set_water_velocity` sets it (the facade keeps it equal to the first vehicle's water).
 * **Fluid coefficients** of a compiled model can be read and replaced (calibration experiments);
   the values in the model file are derived in :mod:`bauv_sim.design.fluid`.
 * **Buoyancy** is in the model file: the hull's displacement rho V g acts at the centre of buoyancy
@@ -18,16 +21,19 @@ plain MuJoCo, and what the facade (:mod:`bauv_sim.physics`) uses to measure it:
   segments and lateral fins are neutral by themselves (``gravcomp = 1``). :func:`hydrostatics`
   measures the result (net force, centres, BG) from the bodies' arrays; the ballast that makes it
   neutral and level is :func:`bauv_sim.design.ballast.solve_ballast`.
+* **Added-mass algebra** used by the design-time tables and the tests: the rigid transfer of an
+  ellipsoid's added mass (:func:`rigid_added_mass`), Kirchhoff's velocity coupling
+  (:func:`coriolis_added_mass`), MuJoCo's ellipsoid drag (:func:`ellipsoid_drag`).
 
-These functions write into an ``MjModel`` at model preparation (and the water velocity once per
-control tick, called by the facade): the one exception to "only :mod:`bauv_sim.physics` indexes
-MuJoCo arrays". All vectors are in the world frame (ENU, m, m/s, N) unless the name says otherwise.
+These functions write into an ``MjModel``/``MjData`` only where the facade calls them (the water):
+the one exception to "only :mod:`bauv_sim.physics` indexes MuJoCo arrays". All vectors are in
+the world frame (ENU, m, m/s, N) unless the name says otherwise.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -43,11 +49,8 @@ FLUID_SLICE_COEFS = slice(1, 6)
 """Columns of ``MjModel.geom_fluid`` holding ``fluidcoef`` (blunt drag, slender drag, angular
 drag, Kutta lift, Magnus lift)."""
 
-KEEP_ADDED_MASS_GEOMS: tuple[str, ...] = ()
-"""Geoms (unprefixed names) whose added-mass cross terms are kept. None: with the acceleration
-term missing, the cross terms alone are not the physics of added mass on any part of this vehicle
-(on the hull they would add a Munk moment without the inertia that goes with it). Measured effect
-of keeping them on the hull: README.md, "Added mass"."""
+FLUID_SLICE_KUTTA = 4
+"""Column of ``MjModel.geom_fluid`` holding the Kutta lift coefficient."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -66,48 +69,144 @@ def fluid_geoms(model: mujoco.MjModel) -> NDArray[np.int_]:
     return np.flatnonzero(model.geom_fluid[:, 0] > 0)
 
 
-def _geom_name(model: mujoco.MjModel, g: int) -> str:
-    return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) or ""
+def added_mass_removed(model: mujoco.MjModel) -> bool:
+    """Whether no fluid geom has MuJoCo virtual mass left (the plugin zeroes them when it starts on
+    a data, and again at every step)."""
+    return not np.any(model.geom_fluid[fluid_geoms(model), FLUID_SLICE_VIRTUAL] != 0.0)
 
 
-def prepare_model(
-    model: mujoco.MjModel, keep_added_mass: Iterable[str] = KEEP_ADDED_MASS_GEOMS
-) -> NDArray[np.int_]:
-    """Remove the added-mass artefact of the ellipsoid fluid model, in place.
+# --------------------------------------------------------------------------------------------
+# The engine plugin bauv.hydro
 
-    Zeroes the virtual mass and virtual inertia (``geom_fluid[:, 6:12]``) of every fluid geom
-    except those whose name, after any ``prefix/`` from :mod:`dm_control.mjcf` attachment, is in
-    ``keep_added_mass``. Call again after ``mj_setConst`` (which recomputes them).
+PLUGIN_NAME = "bauv.hydro"
+"""Name of the engine plugin (``bauv_sim/plugin/hydro.c``) that applies the run-time
+hydrodynamics; one instance per vehicle, named ``<prefix>hydro``."""
+
+PLUGIN_BUILT_FOR = "3.17.0"
+"""The MuJoCo release the plugin is compiled against (``pyproject.toml`` pins it)."""
+
+WATER_STATE_SIZE = 7
+"""Numbers of the plugin's state per instance: water velocity ``w0`` (3, m/s, world), its rate
+``a`` (3, m/s^2, world) and the time ``t0`` (s) of ``w0``: ``w(t) = w0 + a (t - t0)``."""
+
+_PLUGIN_LOADED = False
+
+
+def plugin_path() -> Path:
+    """Path of the compiled plugin library (built by ``pip install``, see ``setup.py``).
+
+    Raises:
+        ConfigError: if it was not built.
+    """
+    found = sorted((Path(__file__).parent / "plugin").glob("_bauv_hydro*.so"))
+    if not found:
+        raise ConfigError(
+            "the hydrodynamics plugin bauv_sim/plugin/_bauv_hydro*.so is not built: "
+            "reinstall the package (pip install -e .)"
+        )
+    return found[-1]
+
+
+def load_plugin() -> None:
+    """Register the plugin ``bauv.hydro`` with MuJoCo (once per process).
+
+    Raises:
+        ConfigError: if the installed MuJoCo is not the release the plugin was built for, or the
+            library is missing.
+    """
+    global _PLUGIN_LOADED
+    if _PLUGIN_LOADED:
+        return
+    if mujoco.__version__ != PLUGIN_BUILT_FOR:
+        raise ConfigError(
+            f"mujoco {mujoco.__version__} is installed, but the hydrodynamics plugin is built "
+            f"for {PLUGIN_BUILT_FOR}: install mujoco=={PLUGIN_BUILT_FOR}"
+        )
+    mujoco.mj_loadPluginLibrary(str(plugin_path()))
+    _PLUGIN_LOADED = True
+
+
+def load_model(path: str | Path) -> mujoco.MjModel:
+    """Compile a model file with the plugin registered: the one line a plain-MuJoCo user needs,
+    ``m = bauv_sim.hydro.load_model("models/bauv/scene.xml")`` (or
+    ``mujoco.mj_loadPluginLibrary(str(bauv_sim.hydro.plugin_path()))`` before their own load).
 
     Args:
-        model: compiled model (modified in place).
-        keep_added_mass: unprefixed geom names to leave untouched.
+        path: MJCF file.
 
     Returns:
-        Ids of the geoms that were zeroed, shape (n,).
-
-    References:
-        MuJoCo ``engine_passive.c``, ``mj_addedMassForces``: the term with the accelerations is
-        "disabled due to dependency on qacc"; the cross terms are applied.
+        The compiled model.
     """
-    keep = set(keep_added_mass)
-    ids = [g for g in fluid_geoms(model) if _geom_name(model, g).rsplit("/", 1)[-1] not in keep]
-    idx = np.asarray(ids, dtype=int)
-    model.geom_fluid[idx, FLUID_SLICE_VIRTUAL] = 0.0
-    return idx
+    load_plugin()
+    return mujoco.MjModel.from_xml_path(str(path))
 
 
-def added_mass_removed(
-    model: mujoco.MjModel, keep_added_mass: Iterable[str] = KEEP_ADDED_MASS_GEOMS
-) -> bool:
-    """Whether :func:`prepare_model` is in effect (non-kept fluid geoms have no virtual mass)."""
-    keep = set(keep_added_mass)
-    for g in fluid_geoms(model):
-        if _geom_name(model, g).rsplit("/", 1)[-1] in keep:
-            continue
-        if np.any(model.geom_fluid[g, FLUID_SLICE_VIRTUAL] != 0.0):
-            return False
-    return True
+def plugin_instances(model: mujoco.MjModel) -> dict[str, int]:
+    """The model's ``bauv.hydro`` instances by vehicle prefix (``""`` or ``"leader/"``)."""
+    out = {}
+    for i in range(model.nplugin):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PLUGIN, i) or ""
+        if name.endswith("hydro"):
+            out[name[: -len("hydro")]] = i
+    return out
+
+
+def set_water(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    instance: int,
+    velocity_world_m_s: ArrayLike,
+    accel_world_m_s2: ArrayLike = (0.0, 0.0, 0.0),
+    t0_s: float | None = None,
+) -> None:
+    """Set the water the plugin applies to one vehicle: ``w(t) = w0 + a (t - t0)``.
+
+    It drives the plugin's forces (for a vehicle other than the one whose water is MuJoCo's
+    ``option wind``, the change of MuJoCo's drag too); MuJoCo's own fluid forces see
+    ``option wind`` (:func:`set_water_velocity`), which the caller keeps equal to the first
+    vehicle's water.
+
+    Args:
+        model: compiled model.
+        data: its data.
+        instance: plugin instance of the vehicle (:func:`plugin_instances`).
+        velocity_world_m_s: ``w0``, shape (3,), m/s, world.
+        accel_world_m_s2: ``a``, shape (3,), m/s^2, world.
+        t0_s: time of ``w0``, s (default: the data's time).
+    """
+    a = int(model.plugin_stateadr[instance])
+    st = data.plugin_state
+    st[a : a + 3] = velocity_world_m_s
+    st[a + 3 : a + 6] = accel_world_m_s2
+    st[a + 6] = float(data.time) if t0_s is None else float(t0_s)
+
+
+def water(
+    model: mujoco.MjModel, data: mujoco.MjData, instance: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The water at a vehicle now (:func:`set_water`): velocity (m/s) and its rate (m/s^2), world,
+    shape (3,) each."""
+    a = int(model.plugin_stateadr[instance])
+    st = data.plugin_state[a : a + WATER_STATE_SIZE]
+    return st[:3] + st[3:6] * (float(data.time) - st[6]), np.array(st[3:6])
+
+
+def plugin_force(data: mujoco.MjData, dofs: ArrayLike) -> NDArray[np.float64]:
+    """The generalized force the plugin added at the last evaluation of the passive forces, over
+    given degrees of freedom: ``qfrc_passive`` less MuJoCo's springs, dampers, gravity
+    compensation, fluid forces and adhesion (the model has no other plugin or passive callback).
+
+    Args:
+        data: the data.
+        dofs: degree-of-freedom indices, (n,).
+
+    Returns:
+        Generalized force, (n,) (a free joint: force N world, moment N m body).
+    """
+    i = np.asarray(dofs, dtype=int)
+    d = data
+    other = d.qfrc_spring[i] + d.qfrc_damper[i] + d.qfrc_gravcomp[i] + d.qfrc_fluid[i]
+    return d.qfrc_passive[i] - other - d.qfrc_adhesion[i]
 
 
 def set_water_velocity(model: mujoco.MjModel, vel_world_m_s: ArrayLike) -> None:
@@ -235,3 +334,106 @@ def hydrostatics(
     # origin when the vehicle is neutral; subtract the net-force part otherwise
     bg = bg - ((gc - 1.0) * m).sum() / m.sum() * cg
     return Hydrostatics(weight, buoy, buoy - weight, cg, cb, bg)
+
+
+# --------------------------------------------------------------------------------------------
+# Added-mass algebra
+
+def _skew(r: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def rigid_added_mass(
+    m_lin: ArrayLike, m_rot: ArrayLike, R_ref_from_geom: ArrayLike, r_ref_m: ArrayLike
+) -> NDArray[np.float64]:
+    """The added-mass matrix of an ellipsoid with diagonal added mass in its own frame, about
+    another reference point and in another frame of the same rigid body.
+
+    With ``H`` the map from the reference frame's velocity ``(v, w)`` at the reference point to the
+    ellipsoid frame's ``(v_g, w_g)`` at its centre (``v_g = R^T (v + w x r)``, ``w_g = R^T w``),
+    the kinetic energy ``1/2 nu_g^T M_g nu_g`` is ``1/2 nu^T (H^T M_g H) nu`` (Fossen 2021, sec.
+    3.3, the system transformation matrix).
+
+    Args:
+        m_lin: added masses along the ellipsoid's axes, shape (3,), kg.
+        m_rot: added moments of inertia about its axes, shape (3,), kg m^2.
+        R_ref_from_geom: rotation, columns are the ellipsoid axes in the reference frame, (3, 3).
+        r_ref_m: ellipsoid centre in the reference frame, shape (3,), m.
+
+    Returns:
+        6 x 6 added-mass matrix about the reference point, order (v, w), reference frame.
+    """
+    R = np.asarray(R_ref_from_geom, dtype=float)
+    H = np.zeros((6, 6))
+    H[:3, :3] = R.T
+    H[:3, 3:] = -R.T @ _skew(np.asarray(r_ref_m, dtype=float))
+    H[3:, 3:] = R.T
+    Mg = np.diag(np.r_[np.asarray(m_lin, dtype=float), np.asarray(m_rot, dtype=float)])
+    return H.T @ Mg @ H
+
+
+def coriolis_added_mass(M_A: ArrayLike, nu: ArrayLike) -> NDArray[np.float64]:
+    """The velocity part of the fluid's reaction, ``-C_A(nu) nu``, for any symmetric added-mass
+    matrix (Kirchhoff's equations).
+
+    With ``p = A11 v + A12 w`` and ``L = A21 v + A22 w``: force ``p x w``, moment
+    ``p x v + L x w`` (Fossen 2021, eq. 6.43; Lamb 1932, sec. 124). Its yaw part for a body moving
+    at (u, v) with ``A22 > A11`` is the destabilising Munk moment ``(A22 - A11) u v``.
+
+    Args:
+        M_A: added-mass matrix, (6, 6), order (v, w).
+        nu: velocity relative to the water, shape (6,): linear (m/s) then angular (rad/s), body
+            frame.
+
+    Returns:
+        Force (N) then moment (N m), shape (6,), body frame, about the reference point of ``M_A``.
+    """
+    A = np.asarray(M_A, dtype=float)
+    n = np.asarray(nu, dtype=float)
+    p = A[:3] @ n
+    L = A[3:] @ n
+    return np.r_[np.cross(p, n[3:]), np.cross(p, n[:3]) + np.cross(L, n[3:])]
+
+
+def ellipsoid_drag(
+    u_local: NDArray[np.float64],
+    semi_axes: NDArray[np.float64],
+    blunt: NDArray[np.float64],
+    slender: NDArray[np.float64],
+    density: float,
+    viscosity: float,
+) -> NDArray[np.float64]:
+    """MuJoCo's translational drag of ellipsoids (``engine_passive.c``, documented in
+    ``doc/computation/fluid.rst``): ``-rho (C_b A_proj + C_s (A_max - A_proj)) |u| u`` with the
+    projected area of the lemma and ``A_max = pi r_max r_mid``, plus Stokes' ``-6 pi r_D beta u``.
+
+    Args:
+        u_local: velocity of each ellipsoid's centre relative to the water, (n, 3), m/s, its frame.
+        semi_axes: (n, 3), m.
+        blunt: blunt-drag coefficients, (n,).
+        slender: slender-drag coefficients, (n,).
+        density: fluid density, kg/m^3.
+        viscosity: MuJoCo ``option viscosity``, Pa s.
+
+    Returns:
+        Forces, (n, 3), N, ellipsoid frames.
+    """
+    r = semi_axes
+    speed = np.sqrt(np.einsum("ij,ij->i", u_local, u_local))
+    safe = np.where(speed > 0.0, speed, 1.0)
+    uh2 = (u_local / safe[:, None]) ** 2
+    r2 = r * r
+    r4 = r2 * r2
+    num = r4[:, 1] * r4[:, 2] * uh2[:, 0] + r4[:, 2] * r4[:, 0] * uh2[:, 1]
+    num = num + r4[:, 0] * r4[:, 1] * uh2[:, 2]
+    den = r2[:, 1] * r2[:, 2] * uh2[:, 0] + r2[:, 2] * r2[:, 0] * uh2[:, 1]
+    den = den + r2[:, 0] * r2[:, 1] * uh2[:, 2]
+    a_proj = np.pi * np.sqrt(num / np.where(den > 0.0, den, 1.0))
+    rs = np.sort(r, axis=1)
+    a_max = np.pi * rs[:, 2] * rs[:, 1]
+    c = -density * (blunt * a_proj + slender * (a_max - a_proj)) * speed
+    stokes = -6.0 * np.pi * r.mean(axis=1) * viscosity
+    return (c + stokes)[:, None] * u_local
+
+
+load_plugin()

@@ -339,6 +339,8 @@ class TurnResult:
         time_to_90deg_s: time from applying the bias until the heading changed by 90 deg, s.
         mean_roll_rad: mean roll in the turn, rad.
         depth_change_m: depth change over the whole manoeuvre, m.
+        drift_angle_rad: mean of course over ground minus heading over the fitted half, rad
+            (positive: moving to starboard of the heading).
     """
 
     frequency_hz: float
@@ -349,6 +351,7 @@ class TurnResult:
     time_to_90deg_s: float
     mean_roll_rad: float
     depth_change_m: float
+    drift_angle_rad: float = 0.0
 
 
 def heading_change(
@@ -385,12 +388,14 @@ def heading_change(
                 physics.set_lateral_fins_rad(a, a)
             physics.advance(tick)
             if log is not None:
+                vel = physics.velocity_world()
                 log.append(
                     (
                         physics.time_s(),
                         physics.position_world(),
                         physics.heading_rad(),
                         float(physics.roll_pitch_heading()[0]),
+                        math.atan2(vel[0], vel[1]),
                     )
                 )
 
@@ -412,6 +417,8 @@ def heading_change(
     radius = _fit_circle_radius(pos[half, :2])
     dist = np.sum(np.linalg.norm(np.diff(pos[half], axis=0), axis=1))
     speed = float(dist / (t[half][-1] - t[half][0]))
+    course = np.unwrap(np.r_[h0, [r[4] for r in log]])[1:]
+    drift = float(np.mean(np.angle(np.exp(1j * (course[half] - head[half])))))
     return TurnResult(
         frequency_hz,
         bias_rad,
@@ -421,6 +428,7 @@ def heading_change(
         t90,
         float(np.mean(roll[half])),
         physics.depth_m() - z0,
+        drift,
     )
 
 

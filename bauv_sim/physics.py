@@ -123,7 +123,9 @@ class _Vehicle:
     sites: dict[str, int]
     lever_m: float
     crank_m: float
-    current_world: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    free_body: int = -1
+    hydro_instance: int = 0
+    first: bool = False
     float_bodies: NDArray[np.int_] = field(default_factory=lambda: np.zeros(0, dtype=int))
     float_gravcomp: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     buoyancy_scale: float = 1.0
@@ -173,11 +175,19 @@ class BauvPhysics(mjcf.Physics):
         return phys
 
     def _reload_from_data(self, data) -> None:
-        hydro.prepare_model(data.model.ptr)
         self._sea_applied = False
         self._vehicles: dict[str, _Vehicle] = {}
         super()._reload_from_data(data)
         self._index_vehicles()
+        instances = hydro.plugin_instances(self.model.ptr)
+        for k, v in enumerate(self._vehicles.values()):
+            if v.prefix not in instances:
+                raise ConfigError(
+                    f"vehicle {v.name!r}: no {hydro.PLUGIN_NAME} plugin instance "
+                    f"{v.prefix + 'hydro'!r} (the vehicle's hydrodynamics)"
+                )
+            v.hydro_instance = instances[v.prefix]
+            v.first = k == 0
         self._check_options()
         self._energy_j = {name: 0.0 for name in self._vehicles}
         self._energy_window_s = 0.0
@@ -261,6 +271,7 @@ class BauvPhysics(mjcf.Physics):
             sites,
             lever,
             crank,
+            free_body=int(free_body),
             float_bodies=bodies[m.body_gravcomp[bodies] > 0].copy(),
             float_gravcomp=m.body_gravcomp[bodies][m.body_gravcomp[bodies] > 0].copy(),
         )
@@ -339,9 +350,9 @@ class BauvPhysics(mjcf.Physics):
             ) from None
 
     def set_const(self) -> None:
-        """Run ``mj_setConst``, then re-apply :func:`hydro.prepare_model` (which it undoes)."""
+        """Run ``mj_setConst`` (the plugin zeroes the virtual masses it recomputes again at the next
+        step)."""
         mujoco.mj_setConst(self.model.ptr, self.data.ptr)
-        hydro.prepare_model(self.model.ptr)
 
     # ----------------------------------------------------------------------------------------
     # pose and motion of the vehicle
@@ -383,11 +394,6 @@ class BauvPhysics(mjcf.Physics):
     def velocity_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Velocity over ground of the reference point, shape (3,), m/s, body FLU."""
         return frames.body_from_world(self.R_world_from_body(vehicle), self.velocity_world(vehicle))
-
-    def current_at_vehicle_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
-        """Water velocity applied to the vehicle during the current control tick (the sea's current
-        evaluated at the vehicle at the start of the tick), shape (3,), m/s, world ENU."""
-        return self._v(vehicle).current_world.copy()
 
     def velocity_through_water_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Velocity of the reference point relative to the water, shape (3,), m/s, world ENU."""
@@ -518,7 +524,7 @@ class BauvPhysics(mjcf.Physics):
         x, y, z, qw, qx, qy, qz = d.qpos[v.qpos_adr : v.qpos_adr + 7].tolist()
         vx, vy, vz, wx, wy, wz = d.qvel[v.dof_adr : v.dof_adr + 6].tolist()
         quat, rph = frames.attitude_from_quat_wxyz_scalar(qw, qx, qy, qz)
-        cur = v.current_world.copy()
+        cur = hydro.water(self.model.ptr, d, v.hydro_instance)[0]
         vel = np.array([vx, vy, vz])
         return VehicleTruth(
             float(d.time),
@@ -544,6 +550,109 @@ class BauvPhysics(mjcf.Physics):
             float(np.linalg.norm(m.opt.gravity)),
         )
 
+    def set_mocap_pose_world(
+        self, body: str, position_world_m: ArrayLike, quat_wxyz: ArrayLike
+    ) -> None:
+        """Place a mocap body of the scene (a captive-test carriage, for example).
+
+        Args:
+            body: the mocap body's name.
+            position_world_m: shape (3,), m, world ENU.
+            quat_wxyz: orientation, shape (4,).
+        """
+        m = self.model.ptr
+        b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
+        if b < 0 or m.body_mocapid[b] < 0:
+            raise ConfigError(f"body {body!r}: not a mocap body of the scene")
+        k = int(m.body_mocapid[b])
+        self.data.mocap_pos[k] = position_world_m
+        self.data.mocap_quat[k] = quat_wxyz
+
+    def constraint_wrench(
+        self, vehicle: str | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The constraint force on the vehicle's free joint at the last step (a carriage's weld:
+        the vehicle's internal constraints cancel there): force (3,), N, world ENU, and moment
+        about the reference point (3,), N m, body FLU."""
+        v = self._v(vehicle)
+        q = self.data.qfrc_constraint[v.dof_adr : v.dof_adr + 6]
+        return np.array(q[:3]), np.array(q[3:])
+
+    def set_joint_stiffness(self, joint: str, stiffness: float, vehicle: str | None = None) -> None:
+        """Change the stiffness of one of a vehicle's joints in the compiled model (experiments on
+        the design, e.g. the passive caudal spring).
+
+        Args:
+            joint: unprefixed joint name (``caudal_fin_yaw``).
+            stiffness: N m/rad (hinge) or N/m (slide), >= 0.
+            vehicle: vehicle name or None for the first.
+        """
+        v = self._v(vehicle)
+        if not (math.isfinite(stiffness) and stiffness >= 0.0):
+            raise ConfigError(f"stiffness = {stiffness!r}: must be finite and >= 0")
+        m = self.model.ptr
+        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, v.prefix + joint)
+        if j < 0:
+            raise ConfigError(f"joint {joint!r}: not a joint of vehicle {v.name!r}")
+        m.jnt_stiffness[j] = stiffness
+
+    def com_velocity_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Velocity of the vehicle's centre of mass (all its bodies), shape (3,), m/s, world."""
+        v = self._v(vehicle)
+        m, d = self.model.ptr, self.data.ptr
+        mujoco.mj_forward(m, d)
+        mujoco.mj_subtreeVel(m, d)
+        return np.array(d.subtree_linvel[v.free_body])
+
+    def apply_force_at_cg_world(
+        self,
+        force_world_n: ArrayLike,
+        vehicle: str | None = None,
+        moment_body_nm: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> None:
+        """Apply an external force at the vehicle's centre of gravity, and a moment, until
+        replaced (a test input: ``xfrc_applied`` of the hull body, with the moment that moves the
+        force to the CG).
+
+        Args:
+            force_world_n: force, shape (3,), N, world ENU; zeros to remove it.
+            vehicle: vehicle name or None for the first.
+            moment_body_nm: moment, shape (3,), N m, body FLU.
+        """
+        v = self._v(vehicle)
+        f = np.asarray(force_world_n, dtype=float)
+        n = np.asarray(moment_body_nm, dtype=float)
+        if f.shape != (3,) or n.shape != (3,) or not np.all(np.isfinite(np.r_[f, n])):
+            raise ConfigError(f"force, moment = {f!r}, {n!r}: expected 3 finite numbers each")
+        cg = self.hydrostatics(vehicle).cg_world_m
+        d = self.data.ptr
+        d.xfrc_applied[v.hull_body, :3] = f
+        moment = self.R_world_from_body(vehicle) @ n
+        d.xfrc_applied[v.hull_body, 3:] = np.cross(cg - d.xipos[v.hull_body], f) + moment
+
+    def added_mass_matrix(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """The vehicle's added mass (6 x 6, about the reference point, body FLU, order surge, sway,
+        heave, roll, pitch, yaw; kg, kg m, kg m^2), the model's ``hydro_added_mass``."""
+        v = self._v(vehicle)
+        m = self.model.ptr
+        i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, v.prefix + "hydro_added_mass")
+        a = int(m.numeric_adr[i])
+        return np.array(m.numeric_data[a : a + 36]).reshape(6, 6)
+
+    def rigid_inertia_matrix(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """The vehicle's rigid-body inertia with its joints held (6 x 6, about the reference point,
+        body FLU, order as :meth:`added_mass_matrix`; kg, kg m, kg m^2), from MuJoCo's mass matrix
+        without the added mass."""
+        v = self._v(vehicle)
+        m, d = self.model.ptr, self.data.ptr
+        mujoco.mj_forward(m, d)
+        full = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, full)
+        blk = full[v.dof_adr : v.dof_adr + 6, v.dof_adr : v.dof_adr + 6]
+        T = np.eye(6)
+        T[:3, :3] = self.R_world_from_body(vehicle)  # qvel (v_world, w) = T nu
+        return T.T @ blk @ T - self.added_mass_matrix(vehicle)
+
     def mass_kg(self, vehicle: str | None = None) -> float:
         """Total mass of a vehicle (all its bodies), kg."""
         return float(self.model.ptr.body_mass[self._v(vehicle).bodies].sum())
@@ -562,11 +671,23 @@ class BauvPhysics(mjcf.Physics):
         return int(self.data.ptr.warning.number.sum())
 
     def fluid_force_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
-        """Total fluid force on the vehicle (MuJoCo ``qfrc_fluid`` on the free joint's translation),
-        shape (3,), N, world ENU, at the current state (forward dynamics are recomputed)."""
+        """Total fluid force on the vehicle (MuJoCo's ``qfrc_fluid`` and the run-time
+        hydrodynamics of :mod:`bauv_sim.hydro` on the free joint's translation, without the
+        added mass's acceleration term, which is in the mass matrix), shape (3,), N, world ENU, at
+        the current state (forward dynamics are recomputed)."""
+        return self.fluid_wrench(vehicle)[0]
+
+    def fluid_wrench(
+        self, vehicle: str | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Total fluid force and moment on the vehicle as :meth:`fluid_force_world`: the force,
+        shape (3,), N, world ENU, and the moment about the reference point, shape (3,), N m, body
+        FLU, at the current state (forward dynamics are recomputed)."""
         v = self._v(vehicle)
         mujoco.mj_forward(self.model.ptr, self.data.ptr)
-        return np.array(self.data.qfrc_fluid[v.dof_adr : v.dof_adr + 3])
+        dofs = np.arange(v.dof_adr, v.dof_adr + 6)
+        gen = self.data.qfrc_fluid[dofs] + hydro.plugin_force(self.data.ptr, dofs)
+        return np.array(gen[:3]), np.array(gen[3:])
 
     # ----------------------------------------------------------------------------------------
     # fins, tail, motor, battery
@@ -775,6 +896,7 @@ class BauvPhysics(mjcf.Physics):
         roll_pitch_heading_rad: ArrayLike = (0, 0, 0),
         velocity_world_m_s: ArrayLike = (0, 0, 0),
         vehicle: str | None = None,
+        angular_velocity_body_rad_s: ArrayLike = (0, 0, 0),
     ) -> None:
         """Place a vehicle (its joints keep their state).
 
@@ -783,26 +905,29 @@ class BauvPhysics(mjcf.Physics):
             roll_pitch_heading_rad: attitude, shape (3,), rad.
             velocity_world_m_s: velocity over ground, shape (3,), m/s, world ENU.
             vehicle: vehicle name or None for the first.
+            angular_velocity_body_rad_s: angular velocity, shape (3,), rad/s, body FLU.
         """
         v = self._v(vehicle)
         p = np.asarray(position_world_m, dtype=float)
         a = np.asarray(roll_pitch_heading_rad, dtype=float)
         u = np.asarray(velocity_world_m_s, dtype=float)
+        w = np.asarray(angular_velocity_body_rad_s, dtype=float)
         if (
             p.shape != (3,)
             or a.shape != (3,)
             or u.shape != (3,)
-            or not np.all(np.isfinite(np.r_[p, a, u]))
+            or w.shape != (3,)
+            or not np.all(np.isfinite(np.r_[p, a, u, w]))
         ):
             raise ConfigError(
-                "set_pose: position, attitude and velocity must be 3 finite numbers each"
+                "set_pose: position, attitude and velocities must be 3 finite numbers each"
             )
         self.data.qpos[v.qpos_adr : v.qpos_adr + 3] = p
         self.data.qpos[v.qpos_adr + 3 : v.qpos_adr + 7] = frames.quat_wxyz_from_roll_pitch_heading(
             *a
         )
         self.data.qvel[v.dof_adr : v.dof_adr + 3] = u
-        self.data.qvel[v.dof_adr + 3 : v.dof_adr + 6] = 0.0
+        self.data.qvel[v.dof_adr + 3 : v.dof_adr + 6] = w
         mujoco.mj_forward(self.model.ptr, self.data.ptr)
         self._kinematics_stale = False
 
@@ -845,72 +970,45 @@ class BauvPhysics(mjcf.Physics):
         self._sea.apply(self, again=self._sea_applied)
         self._sea_applied = True
 
-    def set_water_velocity_world(self, velocity_world_m_s: ArrayLike) -> None:
-        """Set the velocity of the water in MuJoCo's fluid forces, one for the whole scene
-        (``option wind``; :func:`bauv_sim.hydro.set_water_velocity`).
+    def set_water_world(
+        self,
+        velocity_world_m_s: ArrayLike,
+        accel_world_m_s2: ArrayLike = (0.0, 0.0, 0.0),
+        vehicle: str | None = None,
+    ) -> None:
+        """Set the water around a vehicle from now on: velocity ``w0`` now, changing at the rate
+        ``a`` (``w(t) = w0 + a (t - now)``) until the next call. Every fluid force on the vehicle
+        sees it (MuJoCo's through ``option wind`` for the first vehicle, set at every step; the
+        others through :mod:`bauv_sim.hydro`), and so do :meth:`truth` and
+        :meth:`current_at_vehicle_world`; ``a`` also drives the Froude-Krylov force and the added
+        mass's reaction to the water's acceleration.
 
         Args:
-            velocity_world_m_s: water velocity, shape (3,), m/s, world ENU.
+            velocity_world_m_s: ``w0``, shape (3,), m/s, world ENU.
+            accel_world_m_s2: ``a``, shape (3,), m/s^2, world ENU.
+            vehicle: vehicle name or None for the first.
 
         Raises:
-            ConfigError: if it is not 3 finite numbers.
-        """
-        hydro.set_water_velocity(self.model.ptr, velocity_world_m_s)
-
-    def set_current_at_vehicle_world(
-        self, velocity_world_m_s: ArrayLike, vehicle: str | None = None
-    ) -> None:
-        """Record the water velocity at a vehicle for the current control tick (what
-        :meth:`current_at_vehicle_world`, :meth:`velocity_through_water_world` and :meth:`truth`
-        report). It changes no force: the sea sets the forces with :meth:`set_water_velocity_world`
-        and :meth:`hold_generalized_force`.
-
-        Args:
-            velocity_world_m_s: water velocity at the vehicle, shape (3,), m/s, world ENU.
-            vehicle: vehicle name or None for the first.
-        """
-        self._v(vehicle).current_world[:] = velocity_world_m_s
-
-    def fluid_force_change_generalized(
-        self, water_velocity_world_m_s: ArrayLike, vehicle: str | None = None
-    ) -> NDArray[np.float64]:
-        """How the fluid forces on a vehicle would change if its water moved at a given velocity
-        instead of the model's water velocity (``option wind``), at the current state.
-
-        Position and velocity dependent forces are recomputed (``mj_fwdPosition``,
-        ``mj_fwdVelocity``) with the given water velocity, then the velocity dependent ones again
-        with the model's, which is left as it was.
-
-        Args:
-            water_velocity_world_m_s: the vehicle's water velocity, shape (3,), m/s, world ENU.
-            vehicle: vehicle name or None for the first.
-
-        Returns:
-            Generalized fluid force (``qfrc_fluid``) in that water minus the one in the model's,
-            over the vehicle's degrees of freedom in MuJoCo's order (its free joint's 3
-            translations, N, and 3 rotations, N m, then its joints'), shape (n,).
+            ConfigError: if either is not 3 finite numbers.
         """
         v = self._v(vehicle)
-        m, d = self.model.ptr, self.data.ptr
-        wind = np.array(m.opt.wind)
-        hydro.set_water_velocity(m, water_velocity_world_m_s)
-        mujoco.mj_fwdPosition(m, d)
-        mujoco.mj_fwdVelocity(m, d)
-        own = np.array(d.qfrc_fluid[v.dofs])
-        hydro.set_water_velocity(m, wind)
-        mujoco.mj_fwdVelocity(m, d)
-        return own - d.qfrc_fluid[v.dofs]
+        w = np.asarray(velocity_world_m_s, dtype=float)
+        a = np.asarray(accel_world_m_s2, dtype=float)
+        for name, x in (("water velocity", w), ("water acceleration", a)):
+            if x.shape != (3,) or not np.all(np.isfinite(x)):
+                raise ConfigError(f"{name} = {x!r}: expected 3 finite numbers (SI, world)")
+        hydro.set_water(self.model.ptr, self.data.ptr, v.hydro_instance, w, a)
+        if v.first:
+            hydro.set_water_velocity(self.model.ptr, w)
 
-    def hold_generalized_force(self, force: ArrayLike, vehicle: str | None = None) -> None:
-        """Apply an external generalized force to a vehicle's degrees of freedom at every step
-        until it is replaced (``qfrc_applied``; :meth:`reset` clears it).
+    def current_at_vehicle_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Water velocity at the vehicle now (:meth:`set_water_world`), shape (3,), m/s, world."""
+        return hydro.water(self.model.ptr, self.data.ptr, self._v(vehicle).hydro_instance)[0]
 
-        Args:
-            force: over the vehicle's degrees of freedom in the order of
-                :meth:`fluid_force_change_generalized`, shape (n,), N and N m; or 0.0 for none.
-            vehicle: vehicle name or None for the first.
-        """
-        self.data.qfrc_applied[self._v(vehicle).dofs] = force
+    def water_acceleration_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
+        """Rate of change of the water velocity at the vehicle over the current tick
+        (:meth:`set_water_world`), shape (3,), m/s^2, world."""
+        return hydro.water(self.model.ptr, self.data.ptr, self._v(vehicle).hydro_instance)[1]
 
     def set_buoyancy_scale(self, scale: float, vehicle: str | None = None) -> None:
         """Scale a vehicle's buoyancy (the gravity compensation of its buoyant bodies) to ``scale``
@@ -956,14 +1054,21 @@ class BauvPhysics(mjcf.Physics):
         dt = float(m.opt.timestep)
         force, vel = d.actuator_force, d.actuator_velocity
         acc = [(v.name, v.act["motor"]) for v in self._vehicles.values()]
-        if self._track_energy:
+        w0, a0 = hydro.water(m, d, self._v(None).hydro_instance)
+        ramp = bool(np.any(a0 != 0.0))
+        if self._track_energy or ramp:
             energy = self._energy_j
             step = mujoco.mj_step
+            wind = m.opt.wind
             for _ in range(int(nstep)):
+                if ramp:  # MuJoCo's water is the first vehicle's, changing over the tick
+                    wind[:] = w0 + a0 * (float(d.time) - t0)
                 step(m, d)
-                for name, i in acc:
-                    energy[name] += force[i] * vel[i] * dt
-            self._energy_window_s += nstep * dt
+                if self._track_energy:
+                    for name, i in acc:
+                        energy[name] += force[i] * vel[i] * dt
+            if self._track_energy:
+                self._energy_window_s += nstep * dt
         else:
             mujoco.mj_step(m, d, int(nstep))
         self._kinematics_stale = True
@@ -974,10 +1079,17 @@ class BauvPhysics(mjcf.Physics):
             )
             or not d.time > t0
         ):
-            self._diagnose(t0, int(nstep), warn0.tolist())
+            self._diagnose(t0, int(nstep), warn0.tolist(), (w0, a0) if ramp else None)
 
-    def _diagnose(self, t0: float, nstep: int, warn0: list[int]) -> None:
-        """Replay the failed steps one by one from the saved state; raise at the first bad one."""
+    def _diagnose(
+        self,
+        t0: float,
+        nstep: int,
+        warn0: list[int],
+        ramp: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+    ) -> None:
+        """Replay the failed steps one by one from the saved state (the water ramped as
+        :meth:`step` ramped it); raise at the first bad one."""
         m, d = self.model.ptr, self.data.ptr
         ctrl = np.array(d.ctrl)
         mujoco.mj_setState(m, d, self._state_buf, mujoco.mjtState.mjSTATE_INTEGRATION)
@@ -986,6 +1098,8 @@ class BauvPhysics(mjcf.Physics):
             w.number = 0
         for k in range(nstep):
             t_before = float(d.time)
+            if ramp is not None:
+                m.opt.wind[:] = ramp[0] + ramp[1] * (t_before - t0)
             mujoco.mj_step(m, d)
             msgs = []
             for i, w in enumerate(d.warning):

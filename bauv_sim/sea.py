@@ -7,10 +7,13 @@ A :class:`Sea` makes up for both at the start of every control tick, acting on t
 through the facade's primitives (it indexes no MuJoCo array):
 
 * **current**: the current field (:mod:`bauv_sim.currents`) is evaluated at every vehicle's
-  reference point. The first vehicle's water velocity becomes the model's water velocity; every
-  other vehicle whose water differs gets the difference of the generalized fluid forces in its own
-  water and in the first vehicle's, computed now and held as an applied force for the tick. The
-  water velocity at each vehicle is recorded in the facade (truth, velocity through water).
+  reference point now and, at the position the vehicle will reach, at the end of the tick; the
+  water at the vehicle then changes linearly over the tick (a step of the field becomes a ramp
+  over one tick), and the facade applies it at every physics step
+  (:meth:`~bauv_sim.physics.BauvPhysics.set_water_world`): MuJoCo's water velocity for the first
+  vehicle, the change of the fluid forces in their own water for the others, and the
+  Froude-Krylov and added-mass reaction to the water's acceleration for all
+  (:mod:`bauv_sim.hydro`).
 * **free surface** at z = 0: each vehicle's buoyancy is scaled by the submerged fraction of its
   hull (:func:`submerged_fraction`), held for the tick.
 
@@ -96,29 +99,20 @@ class Sea:
         names = physics.vehicle_names()
         if self._current is None:
             for name in names:
-                physics.set_current_at_vehicle_world(np.zeros(3), name)
-            physics.set_water_velocity_world(np.zeros(3))
-            for name in names:
-                physics.hold_generalized_force(0.0, name)
+                physics.set_water_world(np.zeros(3), np.zeros(3), name)
             return
         t = physics.time_s()
-        water = {
-            name: np.asarray(
-                self._current.velocity_world(t, physics.position_world(name)), dtype=float
-            )
-            for name in names
-        }
+        tick = physics.control_tick_s
+        steady = getattr(self._current, "steady_uniform", False)
         for name in names:
-            physics.set_current_at_vehicle_world(water[name], name)
-        ref = water[names[0]]
-        physics.set_water_velocity_world(ref)
-        physics.hold_generalized_force(0.0, names[0])
-        # other vehicles in different water: the fluid force in their water minus the one in the
-        # reference water, held for the tick (MuJoCo's water velocity is one for the scene)
-        for name in names[1:]:
-            if np.array_equal(water[name], ref):
-                physics.hold_generalized_force(0.0, name)
+            p = physics.position_world(name)
+            w0 = np.asarray(self._current.velocity_world(t, p), dtype=float)
+            if steady:
+                a = np.zeros(3)
             else:
-                physics.hold_generalized_force(
-                    physics.fluid_force_change_generalized(water[name], name), name
-                )
+                # the water at the vehicle at the end of the tick, where it will be: the water
+                # changes linearly in between (a step of the field is spread over one tick)
+                p1 = p + physics.velocity_world(name) * tick
+                w1 = np.asarray(self._current.velocity_world(t + tick, p1), dtype=float)
+                a = (w1 - w0) / tick
+            physics.set_water_world(w0, a, name)

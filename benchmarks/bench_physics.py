@@ -37,13 +37,17 @@ from bauv_sim.hull import MODEL_DIR  # noqa: E402
 from bauv_sim.physics import BauvPhysics  # noqa: E402
 
 README = ROOT / "benchmarks" / "README.md"
-CRUISE_HZ = 1.21
+def _cruise_hz() -> float:
+    from bauv_sim.design.speed_table import load_speed_table
+
+    return float(load_speed_table().frequency_for(1.0))
+
+
+CRUISE_HZ = _cruise_hz()
 
 
 def _model(path: Path = MODEL_DIR / "scene.xml") -> mujoco.MjModel:
-    m = mujoco.MjModel.from_xml_path(str(path))
-    hydro.prepare_model(m)
-    return m
+    return hydro.load_model(path)
 
 
 def _cruising(m: mujoco.MjModel) -> mujoco.MjData:
@@ -231,13 +235,13 @@ def _vehicle(sensors: bool) -> mujoco.MjModel:
         f"assets/{f.name}": f.read_bytes() for f in (MODEL_DIR / "assets").iterdir() if f.is_file()
     }
     m = mujoco.MjSpec.from_string(xml, assets=assets).compile()
-    hydro.prepare_model(m)
     return m
 
 
 def harness_presets(repeats: int, nstep: int, survey_s: float, sensors_only: bool = False) -> str:
-    """The harness's interleaved timings of what issue 13 changed in the physics: the removed
-    sensors, the raw step at 1, 2 and 4 ms, and ``mission/survey`` at 1, 2 and 4 ms.
+    """The harness's interleaved timings of what issues 11 and 13 changed in the physics: the
+    removed sensors, the raw step at 1, 2 and 4 ms, the hydrodynamics plugin's cost, and
+    ``mission/survey`` at 1, 2 and 4 ms.
 
     Args:
         repeats: interleaved timed repeats of each variant (after one warm-up).
@@ -298,6 +302,38 @@ def harness_presets(repeats: int, nstep: int, survey_s: float, sensors_only: boo
         "Real-time factor (median): "
         + ", ".join(f"{k} {1 / r.median:.0f}x" for k, r in res.items())
         + ".",
+        "",
+    ]
+    # 2b. what the hydrodynamics plugin costs: mj_forward at the same cruising state of the scene
+    # with and without it (stepping each would compare different motions: without the plugin
+    # the vehicle has no lift and MuJoCo's virtual-mass artefact)
+    spec = mujoco.MjSpec.from_file(str(MODEL_DIR / "scene.xml"))
+    for plugin in list(spec.plugins):
+        spec.delete(plugin)
+    bare = spec.compile()
+    full = _model()
+    d_full = _cruising(full)
+    d_bare = mujoco.MjData(bare)
+    d_bare.qpos[:] = d_full.qpos
+    d_bare.qvel[:] = d_full.qvel
+    d_bare.act[:] = d_full.act
+    pair = {"with bauv.hydro": (full, d_full), "without it": (bare, d_bare)}
+    nf = max(1, nstep // 4)
+
+    def forward(m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        for _ in range(nf):
+            mujoco.mj_forward(m, d)
+
+    res = measure(
+        {k: (lambda m=m, d=d: forward(m, d)) for k, (m, d) in pair.items()},
+        repeats=repeats,
+        per={k: nf for k in pair},
+    )
+    out += [
+        "The plugin `bauv.hydro` (issue 11): `mj_forward` at the same cruising state of the scene "
+        f"with and without it, 2 ms, {nf} calls; time per call:",
+        "",
+        table(res, reference="without it", unit="us", scale=1e6),
         "",
     ]
     # 3. mission/survey, its first survey_s seconds, in process (sensors, navigation, guidance)

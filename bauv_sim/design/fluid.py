@@ -14,6 +14,7 @@ All quantities are SI (m, m^2, N, N m s^2); the frames are the vehicle's body fr
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -22,7 +23,6 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import hankel2
 
 from bauv_sim import hull
-from bauv_sim.errors import ConfigError
 
 CROSSFLOW_DRAG_COEFFICIENT = 1.2
 """Drag coefficient of a hull section or a fin plate in flow normal to it (Hoerner 1965,
@@ -262,14 +262,13 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
       (2 A_f); peduncle 0 (it is the aft body, in the hull's flow); fins = half the operating drag
       coefficient :data:`FIN_OPERATING_DRAG_COEFFICIENT` (the slender term then makes up the
       friction the edge-on blunt term leaves);
-    * Kutta lift = half the lift slope, C_K = C_La / 2, with Helmbold's slope at the effective
-      aspect ratio (hull: the mean of its side and top views; fins on the hull: doubled); the
-      oscillating tail (peduncle, caudal fin) is multiplied by Theodorsen's |C(k)| at the design
-      cruise point (:data:`TAIL_DESIGN_FREQUENCY_HZ`, :data:`DESIGN_SPEED_M_S`, k = pi f c / U),
-      since MuJoCo's model is quasi-steady;
-    * angular drag: 0 on the hull and peduncle (their rotational damping is the separate crossflow
-      damper, :func:`crossflow_damping_constants`); on the fins C_dc / (2 pi), the value that
-      reproduces strip-theory crossflow damping for an ellipse;
+    * Kutta lift 0: MuJoCo's Kutta lift of a thick ellipsoid has a slope near zero angle of
+      chord/thickness times the thin-plate law, and lifts along a plate's span too; the plugin
+      ``bauv.hydro`` computes the lift instead (the plates' slopes: :func:`foil_lift_slopes`; the
+      hull's: :func:`slender_lift_stations`);
+    * angular drag: 0 on the hull and peduncle (their rotational damping is the crossflow of the
+      strips, :func:`crossflow_elements`, applied by the plugin); on the fins C_dc / (2 pi), the
+      value that reproduces strip-theory crossflow damping for an ellipse;
     * Magnus lift 0 (:data:`MAGNUS_LIFT_COEFFICIENT`).
 
     Args:
@@ -287,9 +286,6 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
     af_h, amax_h = _ellipsoid_areas(hs)
     ps = peduncle_fluid_semi_axes()
     af_p, amax_p = _ellipsoid_areas(ps)
-    ar_side = h.max_height_m**2 / amax_h
-    ar_top = h.max_width_m**2 / (np.pi * hs[0] * hs[1])
-    ar_ped = (2.0 * ps[2]) ** 2 / amax_p
     c_ang_fin = CROSSFLOW_DRAG_COEFFICIENT / (2.0 * np.pi)
     out = {
         "hull_fluid": np.array(
@@ -297,18 +293,12 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
                 0.5 * cf * (ff - 1.0) * (s_hull + s_ped) / af_h,
                 0.5 * cf * s_hull / (amax_h - af_h),
                 0.0,
-                0.5 * lift_slope_per_rad(0.5 * (ar_side + ar_top)),
+                0.0,
                 MAGNUS_LIFT_COEFFICIENT,
             ]
         ),
         "peduncle_fluid": np.array(
-            [
-                0.0,
-                0.5 * cf * s_ped / (amax_p - af_p),
-                0.0,
-                0.5 * lift_slope_per_rad(ar_ped) * _tail_lift_factor(2.0 * ps[0]),
-                MAGNUS_LIFT_COEFFICIENT,
-            ]
+            [0.0, 0.5 * cf * s_ped / (amax_p - af_p), 0.0, 0.0, MAGNUS_LIFT_COEFFICIENT]
         ),
     }
     cb_fin = 0.5 * FIN_OPERATING_DRAG_COEFFICIENT
@@ -318,19 +308,57 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
         friction = cf_fin * foil_form_factor(fin.thickness_m / c) * fin.area_m2
         a_edge = np.pi * fin.semi_axes_m[1] * fin.semi_axes_m[2]
         a_plate = np.pi * fin.semi_axes_m[0] * fin.semi_axes_m[2]
-        lift = 0.5 * lift_slope_per_rad(fin.aspect_ratio)
-        if fin.geom == "caudal_fin_fluid":
-            lift *= _tail_lift_factor(c)
         out[fin.geom] = np.array(
             [
                 cb_fin,
                 max(0.0, (friction - cb_fin * a_edge) / (a_plate - a_edge)),
                 c_ang_fin,
-                lift,
+                0.0,
                 MAGNUS_LIFT_COEFFICIENT,
             ]
         )
     return out
+
+
+BODY_GEOMS = ("hull_fluid",)
+"""The non-lifting body among the fluid geoms (its potential coupling is applied, with the
+separation correction of :func:`slender_lift_stations`)."""
+
+FOIL_GEOMS = (
+    "dorsal_fin_fluid",
+    "fin_port_fluid",
+    "fin_starboard_fluid",
+    "peduncle_fluid",
+    "caudal_fin_fluid",
+)
+"""The lifting plates of the vehicle, in the order of the model's ``hydro_foils``."""
+
+
+def foil_lift_slopes() -> dict[str, float]:
+    """Lift-curve slope C_La (per rad) of every lifting plate, in the thin-plate law the plugin
+    applies, ``L = 1/2 rho S C_La sin(a) cos(a) |u|^2`` with S the plate's ellipse area.
+
+    Helmbold's slope (:func:`lift_slope_per_rad`) at the effective aspect ratio (fins on the hull:
+    doubled, the hull being a reflection plane); the oscillating tail (peduncle, caudal fin) is
+    multiplied by Theodorsen's |C(k)| at the design cruise point (:data:`TAIL_DESIGN_FREQUENCY_HZ`,
+    :data:`DESIGN_SPEED_M_S`, k = pi f c / U), since the law is quasi-steady. The peduncle, a thick
+    aft body, is a plate of its side view (aspect ratio height^2 / area).
+
+    Returns:
+        Mapping from fluid geom to C_La, in the order of :data:`FOIL_GEOMS`.
+    """
+    ps = peduncle_fluid_semi_axes()
+    _, amax_p = _ellipsoid_areas(ps)
+    slopes = {
+        "peduncle_fluid": lift_slope_per_rad((2.0 * ps[2]) ** 2 / amax_p)
+        * _tail_lift_factor(2.0 * ps[0])
+    }
+    for fin in plate_fins():
+        cla = lift_slope_per_rad(fin.aspect_ratio)
+        if fin.geom == "caudal_fin_fluid":
+            cla *= _tail_lift_factor(fin.mean_chord_m)
+        slopes[fin.geom] = cla
+    return {g: float(slopes[g]) for g in FOIL_GEOMS}
 
 
 def _tail_lift_factor(chord_m: float) -> float:
@@ -339,93 +367,251 @@ def _tail_lift_factor(chord_m: float) -> float:
     return theodorsen_magnitude(k)
 
 
-def crossflow_damping_constants(cg_hull_m: ArrayLike) -> NDArray[np.float64]:
-    """Quadratic rotational damping of the hull and its fixed fins from strip theory.
+CROSSFLOW_LENGTH_FACTOR = 0.75
+"""Ratio of the crossflow drag of the finite hull to that of its sections in 2-D flow, eta:
+0.74 at length/diameter 5 and 0.82 at 10 for cylinders in normal flow (Wieselsberger's data in
+Hoerner 1965, ch. 3, fig. 16); the Allen & Perkins factor for inclined bodies of fineness 5-7 is
+0.66-0.70 (NACA Report 1048). The BAUV's body (1.60 m, equivalent diameter 0.27 m) has
+fineness 5.9."""
 
-    MuJoCo's blunt-drag coefficient must be small for the hull (axial drag) and for the fins
-    (flapping at moderate angles of attack), so MuJoCo under-predicts the drag of flow *normal* to
-    hull sides and fin plates, which is what damps rotations. Strip theory with
-    :data:`CROSSFLOW_DRAG_COEFFICIENT` C_dc gives, about axes through the CG,
-    K = sum over strips of 1/2 rho dC_dc h |r|^3 dr, with dC_dc = C_dc - 2 C_blunt(MuJoCo) (only
-    the part MuJoCo misses):
+SECTION_DRAG_BY_FINENESS = ((0.5, 1.6), (1.0, 1.2), (2.0, 0.6))
+"""2-D drag coefficient of elliptic cylinders against their fineness (length along the flow over
+the width across it), subcritical: 1:2 ellipse broadside 1.6, circle 1.2, 2:1 ellipse 0.6
+(Delany & Sorensen 1953, NACA TN 3038; Hoerner 1965, ch. 3). Interpolated in log fineness."""
 
-    * yaw: hull strips of height 2 h(x) at lever x - x_cg, and the dorsal fin (lumped);
-    * pitch: hull strips of width 2 w(x), and the lateral fins (lumped);
-    * roll: the parts of each hull section beyond its inscribed circle (1/4 (h^4 - w^4) per
-      unit length), the dorsal fin, and the lateral fins.
 
-    The tail (peduncle, caudal fin) is left out: while it flaps, its crossflow is what the fluid
-    model's lift and drag of those geoms describe.
+def section_drag_coefficient(fineness: ArrayLike) -> NDArray[np.float64]:
+    """2-D crossflow drag coefficient of an elliptic section from :data:`SECTION_DRAG_BY_FINENESS`,
+    linear in log2(fineness), held at the end values outside 0.5-2.
 
     Args:
-        cg_hull_m: centre of gravity in the hull frame, shape (3,), m.
+        fineness: section length along the flow over its width across the flow, any shape.
 
     Returns:
-        ``(K_roll, K_pitch, K_yaw)``, shape (3,), N m s^2 (torque = -K w |w| about each axis).
+        C_d, same shape.
     """
-    rho = hull.SEAWATER_DENSITY_KG_M3
-    cg = np.asarray(cg_hull_m, dtype=float)
-    coefs = derived_fluid_coefficients()
+    f, c = np.array(SECTION_DRAG_BY_FINENESS).T
+    return np.interp(np.log2(np.asarray(fineness, dtype=float)), np.log2(f), c)
+
+N_HULL_STRIPS = 16
+"""Strips of the rigid hull in the crossflow model (midpoint rule; the crossflow integral of the
+smooth profile is within 1 % of a 400-strip sum)."""
+
+N_FIN_STRIPS = 6
+"""Span strips of each fixed fin in the crossflow model."""
+
+
+def hull_crossflow_strips(n: int = N_HULL_STRIPS) -> NDArray[np.float64]:
+    """Crossflow elements of the rigid hull (nose to tail hinge), by strip theory.
+
+    Each strip of length dx at station x is an elliptic section of half-height h(x) and
+    half-width w(x) (:class:`bauv_sim.hull.HullProfile`); in crossflow (v, w) it takes
+    ``f_y = -1/2 rho C a_y |c| c_y`` and ``f_z = -1/2 rho C a_z |c| c_z`` with the projected areas
+    ``a_y = 2 h dx`` (flow along y sees the height) and ``a_z = 2 w dx``, and per direction
+    ``C = eta C_2D - 2 C_blunt``: the 2-D coefficient of the elliptic section for that direction
+    (:func:`section_drag_coefficient`: fineness w/h across y, h/w across z) times the finite-length
+    factor :data:`CROSSFLOW_LENGTH_FACTOR`, less what MuJoCo's blunt drag of the hull ellipsoid
+    already applies to flow across it (its ``rho C_blunt A |v| v`` has no 1/2).
+
+    Args:
+        n: number of strips.
+
+    Returns:
+        Rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape (n, 7): station in the hull frame (m),
+        projected areas (m^2), coefficients.
+    """
     h = hull.HULL
-    x = np.linspace(h.hinge_x_m, h.nose_x_m, 4001)
-    dx = x[1] - x[0]
+    edges = np.linspace(h.hinge_x_m, h.nose_x_m, n + 1)
+    x = 0.5 * (edges[1:] + edges[:-1])
+    dx = np.diff(edges)
     s = h.s_of_x(x)
     hh, ww = h.half_height(s), h.half_width(s)
-    dc_hull = CROSSFLOW_DRAG_COEFFICIENT - 2.0 * coefs["hull_fluid"][0]
-    r = np.abs(x - cg[0])
-    k_yaw = float(np.sum(0.5 * rho * dc_hull * 2.0 * hh * r**3) * dx)
-    k_pitch = float(np.sum(0.5 * rho * dc_hull * 2.0 * ww * r**3) * dx)
-    k_roll = float(np.sum(0.5 * rho * dc_hull * 0.25 * (hh**4 - ww**4)) * dx)
-    # fins: strips along the span with the local chord
-    dc_fin = CROSSFLOW_DRAG_COEFFICIENT - FIN_OPERATING_DRAG_COEFFICIENT
-    rr, le, te = hull.DORSAL_FIN.edges(401)
-    chord = le - te
-    dr = rr[1] - rr[0]
-    z = hull.DORSAL_FIN_ROOT_M[2] + rr - cg[2]
-    k_roll += float(np.sum(0.5 * rho * dc_fin * chord * np.abs(z) ** 3) * dr)
-    # dorsal fin in yaw, lumped at its area centroid (it is compact compared with its lever)
-    xd = hull.DORSAL_FIN_ROOT_M[0] + float(hull.DORSAL_FIN.centroid_m()[0]) - cg[0]
-    k_yaw += 0.5 * rho * dc_fin * hull.DORSAL_FIN.area_m2() * abs(xd) ** 3
-    rr, le, te = hull.LATERAL_FIN.edges(401)
-    chord = le - te
-    dr = rr[1] - rr[0]
-    y = hull.LATERAL_FIN_PIVOT_M[1] + rr
-    k_roll += 2.0 * float(np.sum(0.5 * rho * dc_fin * chord * np.abs(y) ** 3) * dr)
-    area = hull.LATERAL_FIN.area_m2()
-    xl = (
-        hull.LATERAL_FIN_PIVOT_M[0]
-        + float(hull.LATERAL_FIN.centroid_m()[0])
-        + (hull.LATERAL_FIN_AXIS_FRAC * hull.LATERAL_FIN.root_chord_m)
-        - cg[0]
-    )
-    k_pitch += 2.0 * 0.5 * rho * dc_fin * area * abs(xl) ** 3
-    return np.array([k_roll, k_pitch, k_yaw])
+    blunt = 2.0 * float(derived_fluid_coefficients()["hull_fluid"][0])
+    out = np.zeros((n, 7))
+    out[:, 0] = x
+    out[:, 3] = 2.0 * hh * dx
+    out[:, 4] = 2.0 * ww * dx
+    out[:, 5] = CROSSFLOW_LENGTH_FACTOR * section_drag_coefficient(ww / hh) - blunt
+    out[:, 6] = CROSSFLOW_LENGTH_FACTOR * section_drag_coefficient(hh / ww) - blunt
+    return out
 
 
-def damper_semi_axes(k_rpy: ArrayLike, rho: float = 1025.0) -> NDArray[np.float64]:
-    """Semi-axes of a pure angular-drag ellipsoid (``fluidcoef="0 0 1 0 0"``) that reproduces given
-    damping constants about its x, y, z axes.
+def fin_crossflow_strips(n: int = N_FIN_STRIPS) -> NDArray[np.float64]:
+    """Crossflow elements of the fixed fins (dorsal fin, lateral fins at zero angle), by span.
 
-    MuJoCo's angular drag about axis i is rho C_ang I_i w_i |w| with
-    I_i = 8/15 pi d_i max(d_j, d_k)^4. For K_yaw > K_pitch > K_roll and d_x largest:
-    d_y / d_z = K_pitch / K_yaw, d_x / d_z = (K_yaw / K_roll)^(1/3), and K_roll fixes the scale.
+    A fin strip of chord c and width dr at its mid-chord point takes normal-flow drag with the
+    plate coefficient :data:`CROSSFLOW_DRAG_COEFFICIENT` less the fin's MuJoCo blunt drag
+    (``2 x`` :data:`FIN_OPERATING_DRAG_COEFFICIENT` ``/ 2``): on the dorsal fin (a vertical plate)
+    flow along y, on the lateral fins (horizontal plates) flow along z. These damp roll (their
+    lever arm is the span), and add to sway, heave, yaw and pitch. The caudal fin and the peduncle
+    have none: while they flap, their flow is what their lift and MuJoCo's drag describe.
 
     Args:
-        k_rpy: ``(K_roll, K_pitch, K_yaw)``, N m s^2, with K_yaw >= K_pitch and K_yaw > K_roll.
-        rho: water density, kg/m^3.
+        n: strips per fin.
 
     Returns:
-        ``(d_x, d_y, d_z)``, m.
+        Rows ``(x, y, z, a_y, a_z, C_y, C_z)`` as :func:`hull_crossflow_strips`, shape (3 n, 7).
     """
-    kr, kp, ky = (float(v) for v in k_rpy)
-    if not (ky >= kp > 0 and ky > kr > 0):
-        raise ConfigError(
-            f"damping constants {k_rpy}: need K_yaw >= K_pitch > 0 and K_yaw > K_roll > 0"
-        )
-    c = 8.0 / 15.0 * np.pi
-    ratio_x = (ky / kr) ** (1.0 / 3.0)
-    dz = (kr / (rho * c * ratio_x)) ** 0.2
-    dx, dy = ratio_x * dz, dz * kp / ky
-    if not dx >= dz >= dy:
-        raise ConfigError(f"damping constants {k_rpy}: no ellipsoid with d_x >= d_z >= d_y fits")
-    return np.array([dx, dy, dz])
+    c = CROSSFLOW_DRAG_COEFFICIENT - FIN_OPERATING_DRAG_COEFFICIENT
+    rows = []
+    # dorsal fin: root leading edge at DORSAL_FIN_ROOT_M, span up (z)
+    r, le, te = hull.DORSAL_FIN.edges(4 * n + 1)
+    re_ = np.linspace(0.0, hull.DORSAL_FIN.span_m, n + 1)
+    for a, b in itertools.pairwise(re_):
+        chord = np.interp(0.5 * (a + b), r, le - te)
+        mid = np.interp(0.5 * (a + b), r, 0.5 * (le + te))
+        x0, _, z0 = hull.DORSAL_FIN_ROOT_M
+        rows.append((x0 + mid, 0.0, z0 + 0.5 * (a + b), chord * (b - a), 0.0, c, c))
+    # lateral fins: root leading edge 30 % of the root chord ahead of the pivot, span along +-y
+    fin = hull.LATERAL_FIN
+    r, le, te = fin.edges(4 * n + 1)
+    re_ = np.linspace(0.0, fin.span_m, n + 1)
+    px, py, pz = hull.LATERAL_FIN_PIVOT_M
+    for side in (1.0, -1.0):
+        for a, b in itertools.pairwise(re_):
+            chord = np.interp(0.5 * (a + b), r, le - te)
+            mid = np.interp(0.5 * (a + b), r, 0.5 * (le + te))
+            x = px + hull.LATERAL_FIN_AXIS_FRAC * fin.root_chord_m + mid
+            rows.append((x, side * (py + 0.5 * (a + b)), pz, 0.0, chord * (b - a), c, c))
+    return np.asarray(rows)
+
+
+def crossflow_elements() -> NDArray[np.float64]:
+    """All crossflow elements of the vehicle: :func:`hull_crossflow_strips` then
+    :func:`fin_crossflow_strips`, rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape (k, 7) (the model
+    file's ``hydro_crossflow``)."""
+    return np.vstack([hull_crossflow_strips(), fin_crossflow_strips()])
+
+
+def slender_lift_stations() -> NDArray[np.float64]:
+    """Where the hull's potential (slender-body) lift is shed, and the sectional added mass there.
+
+    Slender-body theory (Munk 1924; Newman 1977, *Marine Hydrodynamics*, sec. 7.?): along the
+    body the crossflow builds up sectional momentum ``rho A(x) U c(x)``, with A the 2-D added
+    mass per unit density of the section (``pi h^2`` for an elliptic section moving along its
+    width, ``pi w^2`` along its height); on a closed body it is returned at the tail (no lift,
+    only the Munk moment), but the flow separates on the tapering aft body and the momentum is
+    shed: the lift is ``-rho U A(x_s) c(x_s)``, at the station x_s where it is shed. For a body
+    whose afterbody tapers from its largest section, the separation is taken at the largest
+    section (Allen & Perkins 1951 use the base; the boat-tailed body sheds at its maximum
+    section, Hopkins 1951, NACA RM A51C14): x_s is where h (sway) and w (heave) are largest.
+
+    Aft of x_s the potential flow is gone, and with it the afterbody's share of the hull's Munk
+    couple (Kirchhoff's moment of the whole body in potential flow): with sectional momentum built
+    only from x_s forward, the moment is the forebody's couple plus the lift at x_s. The share is
+    that of the strip-theory added mass aft of x_s, ``f = int_aft A dx / int A dx`` (the plugin
+    scales the hull's (B22 - B11) u v and (B33 - B11) u w by it).
+
+    Returns:
+        ``(x_y, A_y, x_z, A_z, f_y, f_z)``: station (hull frame, m) and sectional added mass per
+        density (m^2) for lift across y and across z, and the afterbody shares, shape (6,).
+    """
+    h = hull.HULL
+    x = np.linspace(h.hinge_x_m, h.nose_x_m, 20001)
+    s = h.s_of_x(x)
+    hh, ww = h.half_height(s), h.half_width(s)
+    iy, iz = int(np.argmax(hh)), int(np.argmax(ww))
+    fy = float(np.trapezoid(hh[:iy] ** 2, x[:iy]) / np.trapezoid(hh**2, x))
+    fz = float(np.trapezoid(ww[:iz] ** 2, x[:iz]) / np.trapezoid(ww**2, x))
+    return np.array([x[iy], np.pi * hh[iy] ** 2, x[iz], np.pi * ww[iz] ** 2, fy, fz])
+
+
+def hull_roll_damping() -> float:
+    """Quadratic roll damping of the hull's non-circular sections, K (torque ``-K p |p|``).
+
+    A section rotating about its centre moves the parts outside its inscribed circle through the
+    water; strip theory with the 2-D plate coefficient on the flat-plate equivalent of the
+    excess gives ``1/2 rho C (h^4 - w^4) / 4`` per unit length (the design's earlier damper term),
+    integrated over the rigid hull.
+
+    Returns:
+        K, N m s^2.
+    """
+    rho = hull.SEAWATER_DENSITY_KG_M3
+    h = hull.HULL
+    x = np.linspace(h.hinge_x_m, h.nose_x_m, 4001)
+    s = h.s_of_x(x)
+    hh, ww = h.half_height(s), h.half_width(s)
+    c = CROSSFLOW_DRAG_COEFFICIENT - 2.0 * float(derived_fluid_coefficients()["hull_fluid"][0])
+    return float(np.sum(0.5 * rho * c * 0.25 * (hh**4 - ww**4)) * (x[1] - x[0]))
+
+
+def added_mass_matrix(
+    path: str | None = None, geoms: Sequence[str] | None = None
+) -> NDArray[np.float64]:
+    """Added mass of the vehicle moving as a rigid body, about the hull origin in the hull frame.
+
+    Every fluid ellipsoid of the vehicle has MuJoCo's added masses and moments of inertia along
+    its axes (computed by the compiler from its semi-axes: Tuckerman 1925, exact for ellipsoids,
+    the potential-flow values of Lamb 1932 sec. 114-115); each is moved to the hull origin as a
+    rigid transformation (:func:`bauv_sim.hydro.rigid_added_mass`) with the tail straight and the
+    fins level, and the matrices are summed. Interactions between the parts' flows are neglected.
+    The flapping tail's own added inertia about its hinges is the joints' armature.
+
+    Args:
+        path: vehicle model file (default ``models/bauv/bauv.xml``); compiled without its plugins.
+        geoms: only these fluid geoms (default: all of the vehicle's).
+
+    Returns:
+        6 x 6 symmetric matrix, order (surge, sway, heave, roll, pitch, yaw), kg, kg m, kg m^2.
+    """
+    import mujoco
+
+    from bauv_sim.hydro import fluid_geoms, rigid_added_mass, subtree_bodies
+
+    spec = mujoco.MjSpec.from_file(str(path or hull.MODEL_DIR / "bauv.xml"))
+    for p in list(spec.plugins):
+        spec.delete(p)
+    m = spec.compile()
+    rho = float(m.opt.density)
+    vm = rho * np.array(m.geom_fluid[:, 6:12])
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    hull_b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "hull")
+    bodies = set(subtree_bodies(m, hull_b).tolist())
+    R0, o0 = d.xmat[hull_b].reshape(3, 3), d.xpos[hull_b]
+    M = np.zeros((6, 6))
+    for g in fluid_geoms(m):
+        if int(m.geom_bodyid[g]) not in bodies:
+            continue
+        if geoms is not None and mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) not in geoms:
+            continue
+        Rg = R0.T @ d.geom_xmat[g].reshape(3, 3)
+        rg = R0.T @ (d.geom_xpos[g] - o0)
+        M += rigid_added_mass(vm[g, :3], vm[g, 3:], Rg, rg)
+    return 0.5 * (M + M.T)
+
+
+def hydro_numerics() -> dict[str, NDArray[np.float64]]:
+    """The hydrodynamic tables the model file carries as ``<custom><numeric>`` elements, which
+    the plugin ``bauv.hydro`` (:mod:`bauv_sim.hydro`) reads:
+
+    * ``hydro_added_mass``: :func:`added_mass_matrix`, row-major (36);
+    * ``hydro_body_added_mass``: the hull ellipsoid's alone (:data:`BODY_GEOMS`), whose potential
+      coupling (Munk moment) the plugin applies; the plates' is replaced by their lift;
+    * ``hydro_crossflow``: :func:`crossflow_elements` flattened (7 per element);
+    * ``hydro_slender_lift``: :func:`slender_lift_stations`;
+    * ``hydro_roll_damping``: :func:`hull_roll_damping`;
+    * ``hydro_foil_cla``: :func:`foil_lift_slopes`, in the order of the text ``hydro_foils``.
+
+    Returns:
+        Mapping from numeric name to its data, shape (n,).
+    """
+    return {
+        "hydro_added_mass": added_mass_matrix().ravel(),
+        "hydro_body_added_mass": added_mass_matrix(geoms=BODY_GEOMS).ravel(),
+        "hydro_crossflow": crossflow_elements().ravel(),
+        "hydro_slender_lift": slender_lift_stations(),
+        "hydro_roll_damping": np.array([hull_roll_damping()]),
+        "hydro_foil_cla": np.array(list(foil_lift_slopes().values())),
+    }
+
+
+def custom_xml(precision: int = 7) -> str:
+    """The ``<custom>`` block of ``bauv.xml`` for :func:`hydro_numerics` (``%.{precision}g``)."""
+    lines = ["  <custom>", f'    <text name="hydro_foils" data="{" ".join(FOIL_GEOMS)}"/>']
+    for name, data in hydro_numerics().items():
+        vals = " ".join(f"{v:.{precision}g}" for v in data)
+        lines.append(f'    <numeric name="{name}" data="{vals}"/>')
+    lines.append("  </custom>")
+    return "\n".join(lines)

@@ -264,7 +264,9 @@ class AutopilotTrials(Experiment):
         s: AutopilotTrialsScenario = ctx.scenario  # type: ignore[assignment]
         tr = next(iter(ctx.blocks))
         t_step = 10.0
-        n = max(1, round(1.0 / (1.2 * s.control_tick_s)))  # one tail beat near cruise
+        # one tail beat at the trials' speed (the speed table's frequency)
+        f_beat = float(_speed_table().frequency_for(s.speed_to_m_s))
+        n = max(1, round(1.0 / (f_beat * s.control_tick_s)))
         trials = [
             # (trial, response, before, set-point, band, unit)
             (
@@ -426,3 +428,9 @@ register(
         max_runs=1,
     )
 )
+
+
+def _speed_table():
+    from bauv_sim.design.speed_table import load_speed_table
+
+    return load_speed_table()

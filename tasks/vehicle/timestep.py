@@ -148,7 +148,7 @@ def fly(timestep_s: float, frequency_hz: float | None = None) -> TimestepResult:
         lambda t: s.depth_m if t < t_step else s.depth_m + s.depth_step_m,
         lambda t: s.speed_to_m_s,
     )
-    n = max(1, round(1.0 / (1.2 * s.control_tick_s)))  # one tail beat near cruise
+    n = max(1, round(1.0 / (f * s.control_tick_s)))  # one tail beat at the cruise frequency
     depth = beat_average(tr["depth"], n)
     after = tr["t"] >= t_step
     y0, y1 = s.depth_m, s.depth_m + s.depth_step_m

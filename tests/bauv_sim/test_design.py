@@ -53,17 +53,36 @@ def test_fluid_coefficients_in_the_model_are_the_derived_ones():
         assert np.allclose([float(x) for x in m.group(1).split()], coefs, rtol=1e-4, atol=1e-9)
 
 
-def test_crossflow_damper_reproduces_the_strip_theory_constants(model):
-    phys = BauvPhysics.from_scene_xml()
-    hs = phys.hydrostatics()
-    k = fluid.crossflow_damping_constants(hs.cg_world_m - phys.position_world())
-    g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "crossflow_damper")
-    size = model.geom_size[g]
-    assert np.allclose(size, fluid.damper_semi_axes(k), rtol=1e-3)
-    # MuJoCo's angular drag law, I_i = 8/15 pi d_i max(d_j, d_k)^4, gives the constants back
-    c = 8.0 / 15.0 * math.pi
-    ii = [c * size[i] * max(size[(i + 1) % 3], size[(i + 2) % 3]) ** 4 for i in range(3)]
-    assert np.allclose(SEAWATER_DENSITY_KG_M3 * np.array(ii), k, rtol=3e-3)
+def test_hydro_tables_in_the_model_are_the_derived_ones(model):
+    derived = fluid.hydro_numerics()
+    for name, data in derived.items():
+        i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, name)
+        assert i >= 0, name
+        a, n = model.numeric_adr[i], model.numeric_size[i]
+        assert np.allclose(model.numeric_data[a : a + n], data, rtol=1e-6, atol=1e-9), name
+    t = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, "hydro_foils")
+    a, n = model.text_adr[t], model.text_size[t]
+    assert bytes(model.text_data[a : a + n]).decode().rstrip("\x00").split() == list(
+        fluid.FOIL_GEOMS
+    )
+
+
+def test_crossflow_strips_reproduce_the_hull_integrals():
+    """The 16 midpoint strips against a fine quadrature of the profile: projected side and top
+    areas (m^2) and the yaw/pitch damping integrals of |x|^3 (strip theory's K)."""
+    strips = fluid.hull_crossflow_strips()
+    h = hull.HULL
+    x = np.linspace(h.hinge_x_m, h.nose_x_m, 40001)
+    s = h.s_of_x(x)
+    side = np.trapezoid(2.0 * h.half_height(s), x)
+    top = np.trapezoid(2.0 * h.half_width(s), x)
+    assert strips[:, 3].sum() == pytest.approx(side, rel=1e-2)
+    assert strips[:, 4].sum() == pytest.approx(top, rel=1e-2)
+    k_yaw = np.trapezoid(2.0 * h.half_height(s) * np.abs(x - 0.19) ** 3, x)
+    assert (strips[:, 3] * np.abs(strips[:, 0] - 0.19) ** 3).sum() == pytest.approx(k_yaw, rel=0.02)
+    # 2-D coefficients by fineness: a laterally compressed section is bluffer across y
+    assert fluid.section_drag_coefficient(1.0) == pytest.approx(1.2)
+    assert np.all(strips[:, 5] > strips[:, 6])
 
 
 def test_formula_laws():

@@ -18,9 +18,7 @@ VEHICLE = MODEL_DIR / "bauv.xml"
 
 @pytest.fixture(scope="module")
 def model() -> mujoco.MjModel:
-    m = mujoco.MjModel.from_xml_path(str(VEHICLE))
-    hydro.prepare_model(m)
-    return m
+    return hydro.load_model(VEHICLE)
 
 
 def _mesh_volumes() -> dict[str, float]:
@@ -72,19 +70,26 @@ def test_vehicle_is_level_and_self_righting():
     assert 0.03 < hs.metacentric_height_m() < 0.07
 
 
-def test_prepare_model_removes_virtual_mass_and_set_const_needs_it_again():
-    m = mujoco.MjModel.from_xml_path(str(VEHICLE))
-    assert not hydro.added_mass_removed(m)
-    ids = hydro.prepare_model(m)
-    assert ids.size == hydro.fluid_geoms(m).size
-    assert hydro.added_mass_removed(m)
+def test_the_plugin_takes_over_the_virtual_mass_again_after_set_const():
+    m = hydro.load_model(VEHICLE)
     d = mujoco.MjData(m)
+    assert hydro.added_mass_removed(m)  # zeroed when the plugin starts on a data
     mujoco.mj_setConst(m, d)
     assert not hydro.added_mass_removed(m)  # MuJoCo recomputes them
-    phys = BauvPhysics.from_scene_xml()
-    mujoco.mj_setConst(phys.model.ptr, phys.data.ptr)
-    phys.set_const()
-    assert hydro.added_mass_removed(phys.model.ptr)
+    mujoco.mj_forward(m, d)
+    assert hydro.added_mass_removed(m)  # the plugin zeroes them at every evaluation
+
+
+def test_without_the_plugin_the_model_does_not_compile(tmp_path):
+    """Plain MuJoCo refuses the vehicle rather than simulating a wrong one (in a process that
+    never registered the plugin)."""
+    import subprocess
+    import sys
+
+    code = f"import mujoco; mujoco.MjModel.from_xml_path({str(VEHICLE)!r})"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode != 0
+    assert "plugin bauv.hydro not found" in out.stderr
 
 
 def _mujoco_drag_by_hand(m: mujoco.MjModel, u: float) -> float:

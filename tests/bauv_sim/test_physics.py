@@ -179,7 +179,7 @@ def test_scene_sites_and_injected_fault(phys):
 
 
 def test_the_primitives_the_sea_acts_through(phys):
-    """Buoyancy scale, water velocity, fluid-force change and held force (``bauv_sim.sea``)."""
+    """Buoyancy scale and the water at each vehicle (``bauv_sim.sea``)."""
     full = phys.hydrostatics().buoyancy_n
     phys.set_buoyancy_scale(0.25)
     assert phys.buoyancy_scale() == 0.25
@@ -189,23 +189,21 @@ def test_the_primitives_the_sea_acts_through(phys):
     phys.set_buoyancy_scale(1.0)
     assert phys.hydrostatics().buoyancy_n == full
     with pytest.raises(ConfigError, match="water velocity"):
-        phys.set_water_velocity_world([0.0, math.nan, 0.0])
+        phys.set_water_world([0.0, math.nan, 0.0])
+    with pytest.raises(ConfigError, match="water acceleration"):
+        phys.set_water_world([0.0, 0.0, 0.0], [0.0, 0.0, math.inf])
+    # the water changes linearly from now on; MuJoCo's water follows it at every step
     phys.set_pose([0, 0, -3], [0, 0, 0], [0.5, 0.0, 0.0])
-    # the same water as the model's: no change; other water: the model's is left as it was
-    same = phys.fluid_force_change_generalized(np.zeros(3))
-    assert np.array_equal(same, np.zeros_like(same))
-    change = phys.fluid_force_change_generalized([0.5, 0.0, 0.0])
-    assert change[0] > 0.0  # moving with the water: the drag against the motion is gone
-    assert np.array_equal(phys.model.opt.wind, np.zeros(3))
-    # a held force acts at every step until replaced
-    push = np.zeros_like(same)
-    push[1] = 50.0  # N, world y, on the free joint
-    phys.set_pose([0, 0, -3])
-    phys.hold_generalized_force(push)
-    phys.step(100)
-    assert phys.velocity_world()[1] > 0.05
-    phys.hold_generalized_force(0.0)
-    assert not np.any(phys.data.qfrc_applied)
+    t0 = phys.time_s()
+    phys.set_water_world([0.1, 0.0, 0.0], [0.2, 0.0, 0.0])
+    assert np.array_equal(phys.model.opt.wind, [0.1, 0.0, 0.0])
+    phys.step(50)
+    dt = phys.time_s() - t0
+    assert np.allclose(phys.current_at_vehicle_world(), [0.1 + 0.2 * dt, 0.0, 0.0], atol=1e-12)
+    # the last step ran in the water of its start
+    step = phys.timestep()
+    assert np.allclose(phys.model.opt.wind, [0.1 + 0.2 * (dt - step), 0.0, 0.0], atol=1e-12)
+    assert np.allclose(phys.truth().current_world_m_s, phys.current_at_vehicle_world())
 
 
 def test_model_without_disabled_autoreset_is_refused():
@@ -347,15 +345,17 @@ def test_the_timestep_is_kept_when_the_model_is_reloaded():
 
 def test_the_4ms_preset_swims_at_the_1ms_cruise_speed():
     """The missions' 4 ms step against 1 ms over a short swim from the same start at the cruise
-    frequency (models/bauv/README.md, Timestep presets: +0.37 % over the long swim)."""
+    frequency (models/bauv/README.md, Timestep presets)."""
+    from bauv_sim.design.speed_table import load_speed_table
     from bauv_sim.manoeuvres import open_water_scene, straight_swim
 
+    cruise = load_speed_table().frequency_for(1.0)
     speeds = {}
     for dt in (0.001, 0.004):
         p = open_water_scene(speed_m_s=1.0)
         p.set_timestep(dt)
         assert p.timestep() == pytest.approx(dt)
-        r = straight_swim(p, 1.21, settle_s=10.0, measure_s=5.0)
+        r = straight_swim(p, cruise, settle_s=10.0, measure_s=5.0)
         assert p.time_s() == pytest.approx(10.0 + r.window_s)
         speeds[dt] = r.speed_through_water_m_s
     assert speeds[0.001] == pytest.approx(1.0, abs=0.05)  # it cruises

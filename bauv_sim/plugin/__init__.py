@@ -1,0 +1,1 @@
+"""The MuJoCo engine plugin ``bauv.hydro`` (C source ``hydro.c``, built at install)."""

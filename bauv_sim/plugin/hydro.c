@@ -1,0 +1,584 @@
+// bauv.hydro: the BAUV's run-time hydrodynamics as a MuJoCo engine plugin (passive forces).
+//
+// MuJoCo's ellipsoid fluid model gives drag, lift and the velocity terms of added mass, but not the
+// acceleration term of added mass (engine_passive.c: "disabled due to dependency on qacc"), no
+// crossflow drag across a streamlined hull, a Kutta lift whose slope near zero angle grows with the
+// chord/thickness ratio, and no reaction to an accelerating current. One instance of this plugin
+// per vehicle (instance "<prefix>hydro", the vehicle's elements "<prefix>...") adds, at every step:
+//
+//   * added mass M_A (6 x 6, hull origin and frame, numeric "<prefix>hydro_added_mass"): added to
+//     the free joint's block of the mass matrix, T^T M_A T with T = diag(R^T, I), which is then
+//     refactored (implicit in the acceleration, stable at any step), and M_A (w x nu_r +
+//     R^T a_water) as a force (the rest of -M_A d(nu_r)/dt in the body frame); the hull's
+//     potential coupling -C_B(nu_r) nu_r of its own added mass B ("<prefix>hydro_body_added_mass",
+//     default M_A) with the Munk moment (Fossen 2021, eq. 6.43; Kirchhoff's equations, Lamb 1932
+//     ch. 6): the lifting plates' potential couple is replaced by their circulation (Kutta
+//     condition: their lift below). MuJoCo's own virtual masses of the vehicle's fluid geoms are
+//     zeroed (their velocity terms alone are not physics);
+//   * crossflow drag by strip theory, -1/2 rho C a |c| c per element ("<prefix>hydro_crossflow":
+//     x y z a_y a_z C_y C_z in the hull frame), and the hull sections' roll damping
+//     ("<prefix>hydro_roll_damping");
+//   * the hull's slender-body lift with separation at x_s: -rho u A(x_s) c(x_s)
+//     ("<prefix>hydro_slender_lift": x_y A_y x_z A_z f_y f_z) and the afterbody's share f of the
+//     hull's Munk couple removed (lost to separation, Hopkins 1951);
+//   * thin-plate lift 1/2 rho S C_La sin(a) cos(a) |u|^2 in each plate's chord-normal plane, at its
+//     quarter chord (text "<prefix>hydro_foils": geom names; numeric "<prefix>hydro_foil_cla": C_La
+//     per plate; chord along the geom's x, normal along its thinnest axis, S = pi a_chord a_span);
+//   * the Froude-Krylov force rho V a_water on every displacing body (gravcomp x mass);
+//   * for a vehicle whose water is not MuJoCo's (option wind: the first vehicle's), the change of
+//     MuJoCo's translational drag (blunt, slender, Stokes) of its fluid geoms in its own water.
+//
+// The water at the vehicle is the plugin's state (7 numbers: w0[3], a[3], t0): w(t) = w0 + a (t -
+// t0), set by the simulator once per control tick (bauv_sim/hydro.py, set_water). The Python
+// module bauv_sim/hydro.py holds the same equations as a reference implementation; the tests
+// compare the two.
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <mujoco/mujoco.h>
+
+#define NSTATE 7
+#define NAME_LEN 1024
+
+typedef struct {
+  int free_body;     // body of the vehicle's free joint
+  int dof;           // first dof of the free joint
+  mjtNum MA[36];     // added mass of the vehicle, row-major, order (v, w): the mass matrix
+  mjtNum MB[36];     // added mass of the hull alone: its potential coupling C_A(nu) nu
+  int midx[21];      // positions of the free joint's lower-triangle block in d->M
+  int mrow[21];
+  int mcol[21];
+  mjtNum last_blk[21];
+  int have_last;
+  int ncross;
+  mjtNum* cross;     // 7 per element
+  int has_slender;
+  mjtNum slender[6];
+  mjtNum roll_k;
+  int nfoil;
+  int* foil_geom;
+  mjtNum* foil_k;    // 1/2 rho S C_La
+  int* foil_normal;
+  int ndrag;
+  int* drag_geom;    // every fluid geom of the vehicle
+  int nfk;
+  int* fk_body;
+  int nfluid;
+  int* fluid_geom;
+  int nkutta;
+  int* kutta_geom;
+} Hydro;
+
+static void hydro_free(Hydro* h) {
+  if (!h) return;
+  free(h->cross);
+  free(h->foil_geom);
+  free(h->foil_k);
+  free(h->foil_normal);
+  free(h->drag_geom);
+  free(h->fk_body);
+  free(h->fluid_geom);
+  free(h->kutta_geom);
+  free(h);
+}
+
+static int* dup_int(const int* a, int n) {
+  if (n <= 0) return NULL;
+  int* b = (int*)malloc(sizeof(int) * n);
+  memcpy(b, a, sizeof(int) * n);
+  return b;
+}
+
+static mjtNum* dup_num(const mjtNum* a, int n) {
+  if (n <= 0) return NULL;
+  mjtNum* b = (mjtNum*)malloc(sizeof(mjtNum) * n);
+  memcpy(b, a, sizeof(mjtNum) * n);
+  return b;
+}
+
+static Hydro* hydro_copy(const Hydro* s) {
+  Hydro* h = (Hydro*)malloc(sizeof(Hydro));
+  *h = *s;
+  h->cross = dup_num(s->cross, 7 * s->ncross);
+  h->foil_geom = dup_int(s->foil_geom, s->nfoil);
+  h->foil_k = dup_num(s->foil_k, s->nfoil);
+  h->foil_normal = dup_int(s->foil_normal, s->nfoil);
+  h->drag_geom = dup_int(s->drag_geom, s->ndrag);
+  h->fk_body = dup_int(s->fk_body, s->nfk);
+  h->fluid_geom = dup_int(s->fluid_geom, s->nfluid);
+  h->kutta_geom = dup_int(s->kutta_geom, s->nkutta);
+  return h;
+}
+
+// numeric "<prefix><name>": its data and size, or NULL
+static const mjtNum* numeric(const mjModel* m, const char* prefix, const char* name, int* size) {
+  char full[NAME_LEN];  // prefix (< NAME_LEN / 2) and a short name
+  snprintf(full, NAME_LEN, "%s%s", prefix, name);
+  int id = mj_name2id(m, mjOBJ_NUMERIC, full);
+  if (id < 0) return NULL;
+  *size = m->numeric_size[id];
+  return m->numeric_data + m->numeric_adr[id];
+}
+
+static int in_subtree(const mjModel* m, int body, int root) {
+  while (body > 0) {
+    if (body == root) return 1;
+    body = m->body_parentid[body];
+  }
+  return root == 0;
+}
+
+static int fail(const char* instance, const char* what) {
+  mju_warning("bauv.hydro instance '%s': %s", instance, what);
+  return -1;
+}
+
+static void zero_model_terms(const mjModel* m, const Hydro* h) {
+  // MuJoCo's virtual masses (velocity terms only) and the Kutta lift this plugin replaces; the
+  // model is const to plugins, but these are per-geom parameters nothing else reads
+  mjtNum* fluid = (mjtNum*)m->geom_fluid;
+  for (int i = 0; i < h->nfluid; i++) {
+    mjtNum* f = fluid + mjNFLUID * h->fluid_geom[i];
+    for (int k = 6; k < 12; k++) f[k] = 0;
+  }
+  for (int i = 0; i < h->nkutta; i++) fluid[mjNFLUID * h->kutta_geom[i] + 4] = 0;
+}
+
+static int hydro_init(const mjModel* m, mjData* d, int instance) {
+  const char* iname = mj_id2name(m, mjOBJ_PLUGIN, instance);
+  if (!iname) iname = "";
+  char prefix[NAME_LEN / 2];
+  size_t n = strlen(iname);
+  const size_t ns = strlen("hydro");
+  if (n < ns || n - ns >= NAME_LEN / 2 || strcmp(iname + n - ns, "hydro") != 0) {
+    return fail(iname, "the instance must be named '<prefix>hydro'");
+  }
+  memcpy(prefix, iname, n - ns);
+  prefix[n - ns] = '\0';
+
+  Hydro* h = (Hydro*)calloc(1, sizeof(Hydro));
+  char full[NAME_LEN];
+  snprintf(full, NAME_LEN, "%shull", prefix);
+  int hullb = mj_name2id(m, mjOBJ_BODY, full);
+  if (hullb < 0) {
+    hydro_free(h);
+    return fail(iname, "no body '<prefix>hull'");
+  }
+  int fb = hullb;
+  while (m->body_jntnum[fb] == 0 && m->body_parentid[fb] != 0) fb = m->body_parentid[fb];
+  int j = m->body_jntadr[fb];
+  if (j < 0 || m->jnt_type[j] != mjJNT_FREE) {
+    hydro_free(h);
+    return fail(iname, "the hull has no free joint");
+  }
+  h->free_body = fb;
+  h->dof = m->jnt_dofadr[j];
+
+  int size = 0;
+  const mjtNum* ma = numeric(m, prefix, "hydro_added_mass", &size);
+  if (!ma || size != 36) {
+    hydro_free(h);
+    return fail(iname, "numeric '<prefix>hydro_added_mass' (36 numbers) missing");
+  }
+  for (int k = 0; k < 36; k++) h->MA[k] = ma[k];
+  const mjtNum* mb = numeric(m, prefix, "hydro_body_added_mass", &size);
+  if (mb && size != 36) {
+    hydro_free(h);
+    return fail(iname, "numeric '<prefix>hydro_body_added_mass' must hold 36 numbers");
+  }
+  for (int k = 0; k < 36; k++) h->MB[k] = mb ? mb[k] : ma[k];
+
+  for (int i = 0; i < 6; i++) {
+    int r = h->dof + i;
+    int adr = m->M_rowadr[r], nnz = m->M_rownnz[r];
+    for (int c = 0; c <= i; c++) {
+      int pos = -1;
+      for (int k = 0; k < nnz; k++) {
+        if (m->M_colind[adr + k] == h->dof + c) {
+          pos = adr + k;
+          break;
+        }
+      }
+      if (pos < 0) {
+        hydro_free(h);
+        return fail(iname,
+                    "the free joint's 6 x 6 block is not in the mass matrix's sparsity (MuJoCo "
+                    "treats a lone body as 'simple', with a diagonal block): weld a child body "
+                    "to the hull");
+      }
+      int e = i * (i + 1) / 2 + c;
+      h->midx[e] = pos;
+      h->mrow[e] = i;
+      h->mcol[e] = c;
+    }
+  }
+
+  const mjtNum* cr = numeric(m, prefix, "hydro_crossflow", &size);
+  if (cr) {
+    if (size % 7) {
+      hydro_free(h);
+      return fail(iname, "numeric '<prefix>hydro_crossflow' must hold 7 numbers per element");
+    }
+    h->ncross = size / 7;
+    h->cross = dup_num(cr, size);
+  }
+  const mjtNum* sl = numeric(m, prefix, "hydro_slender_lift", &size);
+  if (sl) {
+    if (size != 6) {
+      hydro_free(h);
+      return fail(iname, "numeric '<prefix>hydro_slender_lift' must hold x_y A_y x_z A_z f_y f_z");
+    }
+    h->has_slender = 1;
+    for (int k = 0; k < 6; k++) h->slender[k] = sl[k];
+  }
+  const mjtNum* rk = numeric(m, prefix, "hydro_roll_damping", &size);
+  h->roll_k = (rk && size >= 1) ? rk[0] : 0;
+
+  // vehicle geoms and bodies
+  h->fluid_geom = (int*)malloc(sizeof(int) * (m->ngeom + 1));
+  h->drag_geom = (int*)malloc(sizeof(int) * (m->ngeom + 1));
+  h->kutta_geom = (int*)malloc(sizeof(int) * (m->ngeom + 1));
+  for (int g = 0; g < m->ngeom; g++) {
+    if (!(m->geom_fluid[mjNFLUID * g] > 0)) continue;
+    if (!in_subtree(m, m->geom_bodyid[g], fb)) continue;
+    h->fluid_geom[h->nfluid++] = g;
+    h->drag_geom[h->ndrag++] = g;  // every fluid geom: Stokes drag has no coefficient
+    // the hull's own thick geoms: their lift is the slender-body lift
+    int b = m->geom_bodyid[g];
+    int on_hull = (b == fb) || (m->body_parentid[b] == fb && m->body_jntnum[b] == 0);
+    const mjtNum* s = m->geom_size + 3 * g;
+    mjtNum lo = fmin(s[0], fmin(s[1], s[2])), hi = fmax(s[0], fmax(s[1], s[2]));
+    mjtNum mid = s[0] + s[1] + s[2] - lo - hi;
+    if (h->has_slender && on_hull && !(lo < 0.2 * mid)) h->kutta_geom[h->nkutta++] = g;
+  }
+  h->fk_body = (int*)malloc(sizeof(int) * (m->nbody + 1));
+  for (int b = 1; b < m->nbody; b++) {
+    if (m->body_gravcomp[b] > 0 && in_subtree(m, b, fb)) h->fk_body[h->nfk++] = b;
+  }
+
+  // plates
+  snprintf(full, NAME_LEN, "%shydro_foils", prefix);
+  int tid = mj_name2id(m, mjOBJ_TEXT, full);
+  const mjtNum* cla = numeric(m, prefix, "hydro_foil_cla", &size);
+  if (tid >= 0) {
+    const char* text = m->text_data + m->text_adr[tid];
+    int len = m->text_size[tid];
+    char buf[4096];
+    if (len >= (int)sizeof(buf)) len = sizeof(buf) - 1;
+    memcpy(buf, text, len);
+    buf[len] = '\0';
+    int count = 0;
+    char* save = NULL;
+    for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
+      count++;
+    }
+    if (!cla || size != count) {
+      hydro_free(h);
+      return fail(iname, "'<prefix>hydro_foil_cla' must give one C_La per '<prefix>hydro_foils'");
+    }
+    h->foil_geom = (int*)malloc(sizeof(int) * (count + 1));
+    h->foil_k = (mjtNum*)malloc(sizeof(mjtNum) * (count + 1));
+    h->foil_normal = (int*)malloc(sizeof(int) * (count + 1));
+    memcpy(buf, text, len);
+    buf[len] = '\0';
+    save = NULL;
+    int i = 0;
+    for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
+      snprintf(full, NAME_LEN, "%s%s", prefix, tok);
+      int g = mj_name2id(m, mjOBJ_GEOM, full);
+      if (g < 0) {
+        hydro_free(h);
+        return fail(iname, "a geom of '<prefix>hydro_foils' is not in the model");
+      }
+      const mjtNum* s = m->geom_size + 3 * g;
+      int normal = (s[1] <= s[2]) ? 1 : 2;
+      if (s[0] < s[normal]) {
+        hydro_free(h);
+        return fail(iname, "a plate's chord must be along its geom's x axis");
+      }
+      h->foil_geom[i] = g;
+      h->foil_normal[i] = normal;
+      h->foil_k[i] = 0.5 * m->opt.density * mjPI * s[0] * s[3 - normal] * cla[i];
+      h->kutta_geom[h->nkutta++] = g;
+      i++;
+    }
+    h->nfoil = count;
+  }
+  zero_model_terms(m, h);
+  d->plugin_data[instance] = (uintptr_t)h;
+  return 0;
+}
+
+static void hydro_destroy(mjData* d, int instance) {
+  hydro_free((Hydro*)d->plugin_data[instance]);
+  d->plugin_data[instance] = 0;
+}
+
+static void hydro_copy_cb(mjData* dest, const mjModel* m, const mjData* src, int instance) {
+  Hydro* s = (Hydro*)src->plugin_data[instance];
+  if (dest->plugin_data[instance]) hydro_free((Hydro*)dest->plugin_data[instance]);
+  dest->plugin_data[instance] = s ? (uintptr_t)hydro_copy(s) : 0;
+}
+
+static void hydro_reset(const mjModel* m, mjtNum* state, void* data, int instance) {
+  for (int k = 0; k < NSTATE; k++) state[k] = 0;
+  Hydro* h = (Hydro*)data;
+  if (h) h->have_last = 0;
+}
+
+static int hydro_nstate(const mjModel* m, int instance) { return NSTATE; }
+
+static inline void cross3(mjtNum r[3], const mjtNum a[3], const mjtNum b[3]) {
+  r[0] = a[1] * b[2] - a[2] * b[1];
+  r[1] = a[2] * b[0] - a[0] * b[2];
+  r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+// semi-axes of a geom's fluid ellipsoid, as MuJoCo's ellipsoid model takes them
+static void semi_axes(mjtNum r[3], const mjModel* m, int g) {
+  const mjtNum* s = m->geom_size + 3 * g;
+  switch (m->geom_type[g]) {
+    case mjGEOM_SPHERE:
+      r[0] = r[1] = r[2] = s[0];
+      break;
+    case mjGEOM_CAPSULE:
+      r[0] = r[1] = s[0];
+      r[2] = s[1] + s[0];
+      break;
+    case mjGEOM_CYLINDER:
+      r[0] = r[1] = s[0];
+      r[2] = s[1];
+      break;
+    default:  // ellipsoid, box
+      r[0] = s[0];
+      r[1] = s[1];
+      r[2] = s[2];
+  }
+}
+
+// MuJoCo's translational drag of an ellipsoid (blunt, slender, Stokes), geom frame
+static void ellipsoid_drag(mjtNum f[3], const mjtNum u[3], const mjtNum r[3], mjtNum blunt,
+                           mjtNum slender, mjtNum rho, mjtNum beta) {
+  mjtNum speed = mju_norm3(u);
+  mjtNum lo = fmin(r[0], fmin(r[1], r[2])), hi = fmax(r[0], fmax(r[1], r[2]));
+  mjtNum mid = r[0] + r[1] + r[2] - lo - hi;
+  mjtNum a_max = mjPI * hi * mid;
+  mjtNum a_proj = 0;
+  if (speed > 0) {
+    mjtNum x = u[0] / speed, y = u[1] / speed, z = u[2] / speed;
+    mjtNum r2[3] = {r[0] * r[0], r[1] * r[1], r[2] * r[2]};
+    mjtNum num = r2[1] * r2[1] * r2[2] * r2[2] * x * x + r2[2] * r2[2] * r2[0] * r2[0] * y * y
+                 + r2[0] * r2[0] * r2[1] * r2[1] * z * z;
+    mjtNum den = r2[1] * r2[2] * x * x + r2[2] * r2[0] * y * y + r2[0] * r2[1] * z * z;
+    a_proj = den > 0 ? mjPI * sqrt(num / den) : 0;
+  }
+  mjtNum c = -rho * (blunt * a_proj + slender * (a_max - a_proj)) * speed
+             - 6.0 * mjPI * (r[0] + r[1] + r[2]) / 3.0 * beta;
+  f[0] = c * u[0];
+  f[1] = c * u[1];
+  f[2] = c * u[2];
+}
+
+static void hydro_compute(const mjModel* m, mjData* d, int instance, int capability_bit) {
+  Hydro* h = (Hydro*)d->plugin_data[instance];
+  if (!h) return;
+  zero_model_terms(m, h);  // again after mj_setConst, which recomputes the virtual masses
+  const mjtNum* st = d->plugin_state + m->plugin_stateadr[instance];
+  const mjtNum rho = m->opt.density;
+  mjtNum dt_w = d->time - st[6];
+  mjtNum w[3] = {st[0] + st[3] * dt_w, st[1] + st[4] * dt_w, st[2] + st[5] * dt_w};
+  const mjtNum* aw = st + 3;
+  int accelerating = (aw[0] != 0 || aw[1] != 0 || aw[2] != 0);
+  const mjtNum* R = d->xmat + 9 * h->free_body;  // world from body, row-major
+  const mjtNum* qv = d->qvel + h->dof;
+  mjtNum* qfrc = d->qfrc_passive;
+
+  // velocity relative to the water, body frame: nu = (R^T (v - w), omega)
+  mjtNum rel[3] = {qv[0] - w[0], qv[1] - w[1], qv[2] - w[2]};
+  mjtNum nu[6];
+  mju_mulMatTVec3(nu, R, rel);
+  nu[3] = qv[3];
+  nu[4] = qv[4];
+  nu[5] = qv[5];
+
+  // added mass in the mass matrix: [R A11 R^T, R A12; A21 R^T, A22]
+  mjtNum blk[21];
+  for (int e = 0; e < 21; e++) blk[e] = d->M[h->midx[e]];
+  int fresh = !h->have_last;
+  if (!fresh) {
+    for (int e = 0; e < 21; e++) {
+      if (blk[e] != h->last_blk[e]) {
+        fresh = 1;
+        break;
+      }
+    }
+  }
+  if (fresh) {
+    mjtNum A11[9], A12[9], T11[9], tmp[9], T12[9];
+    for (int i = 0; i < 3; i++) {
+      for (int k = 0; k < 3; k++) {
+        A11[3 * i + k] = h->MA[6 * i + k];
+        A12[3 * i + k] = h->MA[6 * i + 3 + k];
+      }
+    }
+    mju_mulMatMat(tmp, R, A11, 3, 3, 3);
+    mju_mulMatMatT(T11, tmp, R, 3, 3, 3);
+    mju_mulMatMat(T12, R, A12, 3, 3, 3);
+    mjtNum T[36];
+    for (int i = 0; i < 3; i++) {
+      for (int k = 0; k < 3; k++) {
+        T[6 * i + k] = T11[3 * i + k];
+        T[6 * i + 3 + k] = T12[3 * i + k];
+        T[6 * (3 + k) + i] = T12[3 * i + k];
+        T[6 * (3 + i) + 3 + k] = h->MA[6 * (3 + i) + 3 + k];
+      }
+    }
+    for (int e = 0; e < 21; e++) {
+      blk[e] += T[6 * h->mrow[e] + h->mcol[e]];
+      d->M[h->midx[e]] = blk[e];
+      h->last_blk[e] = blk[e];
+    }
+    h->have_last = 1;
+    mj_factorM(m, d);
+  }
+
+  // -C_B(nu) nu + M_A (omega x nu_1 + R^T a_water)
+  mjtNum pl[6];
+  mju_mulMatVec(pl, h->MB, nu, 6, 6);
+  mjtNum ext[3];
+  cross3(ext, nu + 3, nu);
+  if (accelerating) {
+    mjtNum ab[3];
+    mju_mulMatTVec3(ab, R, aw);
+    ext[0] += ab[0];
+    ext[1] += ab[1];
+    ext[2] += ab[2];
+  }
+  mjtNum f[3], t[3], c1[3], c2[3];
+  cross3(f, pl, nu + 3);
+  cross3(c1, pl, nu);
+  cross3(c2, pl + 3, nu + 3);
+  t[0] = c1[0] + c2[0];
+  t[1] = c1[1] + c2[1];
+  t[2] = c1[2] + c2[2];
+  for (int i = 0; i < 3; i++) {
+    f[i] += h->MA[6 * i] * ext[0] + h->MA[6 * i + 1] * ext[1] + h->MA[6 * i + 2] * ext[2];
+    t[i] += h->MA[6 * (3 + i)] * ext[0] + h->MA[6 * (3 + i) + 1] * ext[1]
+            + h->MA[6 * (3 + i) + 2] * ext[2];
+  }
+  const mjtNum u = nu[0], v = nu[1], ww = nu[2], p = nu[3], q = nu[4], r = nu[5];
+
+  // crossflow elements: -1/2 rho C a |c| c
+  for (int k = 0; k < h->ncross; k++) {
+    const mjtNum* e = h->cross + 7 * k;
+    mjtNum cy = v + r * e[0] - p * e[2];
+    mjtNum cz = ww + p * e[1] - q * e[0];
+    mjtNum c = sqrt(cy * cy + cz * cz);
+    mjtNum gy = -0.5 * rho * e[3] * e[5] * c * cy;
+    mjtNum gz = -0.5 * rho * e[4] * e[6] * c * cz;
+    f[1] += gy;
+    f[2] += gz;
+    t[0] += e[1] * gz - e[2] * gy;
+    t[1] -= e[0] * gz;
+    t[2] += e[0] * gy;
+  }
+  t[0] -= h->roll_k * p * fabs(p);
+
+  // slender-body lift, shed at the largest section; the afterbody's share of the Munk couple
+  // (B22 - B11) u v (yaw), (B33 - B11) u w (pitch) is lost to the separation
+  if (h->has_slender) {
+    mjtNum uu = u > 0 ? u : 0;
+    mjtNum ly = -rho * uu * h->slender[1] * (v + r * h->slender[0]);
+    mjtNum lz = -rho * uu * h->slender[3] * (ww - q * h->slender[2]);
+    f[1] += ly;
+    f[2] += lz;
+    t[2] += h->slender[0] * ly + h->slender[4] * (h->MB[7] - h->MB[0]) * uu * v;
+    t[1] -= h->slender[2] * lz + h->slender[5] * (h->MB[14] - h->MB[0]) * uu * ww;
+  }
+  mjtNum fw[3];
+  mju_mulMatVec3(fw, R, f);
+  for (int i = 0; i < 3; i++) {
+    qfrc[h->dof + i] += fw[i];
+    qfrc[h->dof + 3 + i] += t[i];
+  }
+
+  // Froude-Krylov: rho V a on every displacing body
+  mjtNum zero[3] = {0, 0, 0};
+  if (accelerating) {
+    for (int i = 0; i < h->nfk; i++) {
+      int b = h->fk_body[i];
+      mjtNum mb = m->body_gravcomp[b] * m->body_mass[b];
+      mjtNum fb[3] = {mb * aw[0], mb * aw[1], mb * aw[2]};
+      mj_applyFT(m, d, fb, zero, d->xipos + 3 * b, b, qfrc);
+    }
+  }
+
+  // plates: thin-plate lift in the chord-normal plane
+  for (int i = 0; i < h->nfoil; i++) {
+    int g = h->foil_geom[i];
+    const mjtNum* Rg = d->geom_xmat + 9 * g;
+    mjtNum vel[6], wl[3], ul[3];
+    mj_objectVelocity(m, d, mjOBJ_GEOM, g, vel, 1);
+    mju_mulMatTVec3(wl, Rg, w);
+    ul[0] = vel[3] - wl[0];
+    ul[1] = vel[4] - wl[1];
+    ul[2] = vel[5] - wl[2];
+    int n = h->foil_normal[i];
+    mjtNum uc = ul[0], un = ul[n];
+    mjtNum sp = sqrt(uc * uc + un * un);
+    if (sp <= 0) continue;
+    mjtNum k = h->foil_k[i] * uc * un / sp;
+    mjtNum fl[3] = {k * un, 0, 0};
+    fl[n] = -k * uc;
+    mjtNum fg[3], pt[3];
+    mju_mulMatVec3(fg, Rg, fl);
+    // at the quarter chord: half the chord semi-axis ahead of the centre (along the flow's x)
+    mjtNum off = (uc > 0 ? 0.5 : -0.5) * m->geom_size[3 * g];
+    for (int k = 0; k < 3; k++) pt[k] = d->geom_xpos[3 * g + k] + off * Rg[3 * k];
+    mj_applyFT(m, d, fg, zero, pt, m->geom_bodyid[g], qfrc);
+  }
+
+  // MuJoCo's drag saw option wind: the change in this vehicle's own water
+  const mjtNum* wind = m->opt.wind;
+  if (h->ndrag && (w[0] != wind[0] || w[1] != wind[1] || w[2] != wind[2])) {
+    for (int i = 0; i < h->ndrag; i++) {
+      int g = h->drag_geom[i];
+      const mjtNum* Rg = d->geom_xmat + 9 * g;
+      const mjtNum* fc = m->geom_fluid + mjNFLUID * g;
+      mjtNum vel[6], wl[3], wr[3], uo[3], ur[3], fo[3], fr[3], df[3], fg[3];
+      mj_objectVelocity(m, d, mjOBJ_GEOM, g, vel, 1);
+      mju_mulMatTVec3(wl, Rg, w);
+      mju_mulMatTVec3(wr, Rg, wind);
+      for (int k = 0; k < 3; k++) {
+        uo[k] = vel[3 + k] - wl[k];
+        ur[k] = vel[3 + k] - wr[k];
+      }
+      mjtNum semi[3];
+      semi_axes(semi, m, g);
+      ellipsoid_drag(fo, uo, semi, fc[1], fc[2], rho, m->opt.viscosity);
+      ellipsoid_drag(fr, ur, semi, fc[1], fc[2], rho, m->opt.viscosity);
+      for (int k = 0; k < 3; k++) df[k] = fo[k] - fr[k];
+      mju_mulMatVec3(fg, Rg, df);
+      mj_applyFT(m, d, fg, zero, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
+    }
+  }
+}
+
+mjPLUGIN_LIB_INIT(bauv_hydro) {
+  mjpPlugin plugin;
+  mjp_defaultPlugin(&plugin);
+  plugin.name = "bauv.hydro";
+  plugin.capabilityflags = mjPLUGIN_PASSIVE;
+  plugin.nattribute = 0;
+  plugin.attributes = NULL;
+  plugin.nstate = hydro_nstate;
+  plugin.init = hydro_init;
+  plugin.destroy = hydro_destroy;
+  plugin.copy = hydro_copy_cb;
+  plugin.reset = hydro_reset;
+  plugin.compute = hydro_compute;
+  mjp_registerPlugin(&plugin);
+}

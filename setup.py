@@ -1,0 +1,40 @@
+"""Build of the MuJoCo engine plugin ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``).
+
+Everything else is declared in ``pyproject.toml``. The plugin is a shared library that MuJoCo
+loads with ``mj_loadPluginLibrary`` (``bauv_sim.hydro.load_plugin``); it is compiled against the
+headers of the MuJoCo release pinned in ``pyproject.toml`` (its ``mjModel``/``mjData`` layouts) and
+linked to that release's library, found in the ``mujoco`` package of the build environment.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+
+from setuptools import Extension, setup
+
+
+def _mujoco() -> tuple[str, str, str]:
+    import mujoco
+
+    root = os.path.dirname(mujoco.__file__)
+    libs = sorted(glob.glob(os.path.join(root, "libmujoco.so*")))
+    if not libs:
+        raise RuntimeError(f"no libmujoco.so in {root}: is the mujoco wheel complete?")
+    return os.path.join(root, "include"), root, os.path.basename(libs[-1])
+
+
+_include, _libdir, _lib = _mujoco()
+
+setup(
+    ext_modules=[
+        Extension(
+            "bauv_sim.plugin._bauv_hydro",
+            sources=["bauv_sim/plugin/hydro.c"],
+            include_dirs=[_include],
+            library_dirs=[_libdir],
+            libraries=[":" + _lib],
+            extra_compile_args=["-O2", "-std=c11", "-D_POSIX_C_SOURCE=200809L", "-Wall"],
+        )
+    ]
+)

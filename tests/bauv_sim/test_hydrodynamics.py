@@ -1,0 +1,216 @@
+"""The run-time hydrodynamics (plugin ``bauv.hydro``) against independent truth: a second
+implementation of its equations, Lamb's added mass of a spheroid, the conservation laws of a body
+in ideal fluid, and the hydrodynamic balance of a neutrally buoyant body in accelerating water."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from bauv_sim import build, hydro
+from bauv_sim.hull import MODEL_DIR
+
+from .hydro_reference import free_body, reference
+
+RHO = 1025.0
+
+
+def _randomise(m: mujoco.MjModel, d: mujoco.MjData, rng: np.random.Generator) -> None:
+    """A random pose, velocity and joint state of every vehicle (kept moderate)."""
+    mujoco.mj_resetData(m, d)
+    for j in range(m.njnt):
+        a, v = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            d.qpos[a : a + 3] += rng.normal(0, 2.0, 3)
+            q = rng.normal(size=4)
+            d.qpos[a + 3 : a + 7] = q / np.linalg.norm(q)
+            d.qvel[v : v + 3] = rng.normal(0, 0.8, 3)
+            d.qvel[v + 3 : v + 6] = rng.normal(0, 0.5, 3)
+        elif m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE:
+            lo, hi = m.jnt_range[j] if m.jnt_limited[j] else (-0.3, 0.3)
+            d.qpos[a] = rng.uniform(0.5 * lo, 0.5 * hi)
+            d.qvel[v] = rng.normal(0, 1.0)
+
+
+def _plugin_contribution(m, d):
+    dofs = np.arange(m.nv)
+    return hydro.plugin_force(d, dofs)
+
+
+def _augmented_block(m, d, dof):
+    """(M with the plugin's added mass) - (M as MuJoCo makes it), free joint block, qvel coords."""
+    full = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, full)
+    mujoco.mj_makeM(m, d)
+    raw = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, raw)
+    return (full - raw)[dof : dof + 6, dof : dof + 6], (full - raw)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_plugin_equals_the_reference_implementation_on_one_vehicle(seed):
+    m = hydro.load_model(MODEL_DIR / "scene.xml")
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(seed)
+    _randomise(m, d, rng)
+    inst = hydro.plugin_instances(m)[""]
+    w = rng.normal(0, 0.4, 3)
+    hydro.set_water(m, d, inst, w, rng.normal(0, 0.3, 3), t0_s=-0.05)
+    hydro.set_water_velocity(m, w + 0.05 * hydro.water(m, d, inst)[1])  # the first vehicle's
+    mujoco.mj_forward(m, d)
+    got = _plugin_contribution(m, d)
+    want, M_add = reference(m, d)
+    assert np.allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+    dof = int(m.jnt_dofadr[m.body_jntadr[free_body(m, "")]])
+    blk, full = _augmented_block(m, d, dof)
+    assert np.allclose(blk, M_add, rtol=0, atol=1e-9)
+    full[dof : dof + 6, dof : dof + 6] = 0.0
+    assert not np.any(full)  # nothing outside the free joint's block
+
+
+def test_plugin_equals_the_reference_for_vehicles_in_different_water():
+    phys = build.build_physics(
+        build.SceneConfig(
+            vehicles=(
+                build.VehicleSpec(name="leader", depth_m=3.0),
+                build.VehicleSpec(name="follower", east_m=-30.0, depth_m=3.0),
+            )
+        )
+    )
+    m, d = phys.model.ptr, phys.data.ptr
+    rng = np.random.default_rng(7)
+    _randomise(m, d, rng)
+    inst = hydro.plugin_instances(m)
+    hydro.set_water(m, d, inst["leader/"], [0.2, 0.1, 0.0])
+    hydro.set_water_velocity(m, [0.2, 0.1, 0.0])
+    hydro.set_water(m, d, inst["follower/"], [-0.3, 0.4, 0.05], [0.1, -0.2, 0.0])
+    mujoco.mj_forward(m, d)
+    got = _plugin_contribution(m, d)
+    want = reference(m, d, "leader/")[0] + reference(m, d, "follower/")[0]
+    assert np.allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+
+
+def test_forces_are_evaluated_again_without_adding_the_mass_twice():
+    m = hydro.load_model(MODEL_DIR / "scene.xml")
+    d = mujoco.MjData(m)
+    _randomise(m, d, np.random.default_rng(3))
+    mujoco.mj_forward(m, d)
+    first = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, first)
+    mujoco.mj_fwdVelocity(m, d)  # a second passive evaluation on the same mass matrix
+    again = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, again)
+    assert np.array_equal(first, again)
+
+
+# ------------------------------------------------------------------------------------------
+# a prolate spheroid in ideal fluid (the issue's analytic case)
+
+A_SPH, B_SPH = 0.5, 0.1  # semi-axes, m (5:1)
+
+
+def _lamb(a: float, b: float) -> tuple[float, float, float]:
+    """Lamb (1932, sec. 114-115) for a prolate spheroid: k1 (axial), k2 (transverse), k' (rotation
+    about a transverse axis), from alpha0, beta0 of the eccentricity."""
+    e = math.sqrt(1.0 - (b / a) ** 2)
+    log = math.log((1.0 + e) / (1.0 - e))
+    alpha0 = 2.0 * (1.0 - e * e) / e**3 * (0.5 * log - e)
+    beta0 = 1.0 / e**2 - (1.0 - e * e) / (2.0 * e**3) * log
+    k1 = alpha0 / (2.0 - alpha0)
+    k2 = beta0 / (2.0 - beta0)
+    den = (2.0 - e * e) * (2.0 * e * e - (2.0 - e * e) * (beta0 - alpha0))
+    kr = e**4 * (beta0 - alpha0) / den
+    return k1, k2, kr
+
+
+def _spheroid_model(tmp_path) -> mujoco.MjModel:
+    """The 5:1 spheroid of ``tasks.vehicle.hydro`` (neutral, ideal fluid, added mass through the
+    BAUV's pipeline: ``design.fluid.added_mass_matrix`` and the plugin)."""
+    from tasks.vehicle.hydro import spheroid_model
+
+    return spheroid_model(tmp_path, A_SPH, B_SPH)
+
+
+def test_spheroid_added_mass_is_lambs(tmp_path):
+    m = _spheroid_model(tmp_path)
+    d = mujoco.MjData(m)
+    vol = 4.0 / 3.0 * math.pi * A_SPH * B_SPH * B_SPH
+    k1, k2, kr = _lamb(A_SPH, B_SPH)
+    assert (k1, k2, kr) == pytest.approx((0.0591, 0.894, 0.700), abs=2e-3)  # the issue's values
+    mass = RHO * vol
+    # a force step along each axis from rest: the acceleration gives the effective mass
+    for axis, k in ((0, k1), (1, k2), (2, k2)):
+        mujoco.mj_resetData(m, d)
+        d.xfrc_applied[1, :3] = 0.0
+        d.xfrc_applied[1, axis] = 10.0
+        mujoco.mj_forward(m, d)
+        added = 10.0 / d.qacc[axis] - mass
+        assert added == pytest.approx(k * mass, rel=0.05)
+    mujoco.mj_resetData(m, d)
+    d.xfrc_applied[1, 5] = 1.0  # torque about z
+    mujoco.mj_forward(m, d)
+    i_rigid = mass * (A_SPH**2 + B_SPH**2) / 5.0
+    assert 1.0 / d.qacc[5] - i_rigid == pytest.approx(kr * i_rigid, rel=0.05)
+
+
+def test_spheroid_munk_moment_at_five_degrees(tmp_path):
+    m = _spheroid_model(tmp_path)
+    d = mujoco.MjData(m)
+    vol = 4.0 / 3.0 * math.pi * A_SPH * B_SPH * B_SPH
+    k1, k2, _ = _lamb(A_SPH, B_SPH)
+    u, v = math.cos(math.radians(5.0)), math.sin(math.radians(5.0))
+    d.qvel[:3] = [u, v, 0.0]  # body axes = world axes
+    mujoco.mj_forward(m, d)
+    yaw = hydro.plugin_force(d, [5])[0]
+    munk = (k2 - k1) * RHO * vol * u * v
+    # it turns the body broadside: a moment towards -z for flow from +x, +y
+    assert yaw == pytest.approx(-munk, rel=0.05)
+
+
+def test_spheroid_in_ideal_fluid_keeps_energy_and_impulse(tmp_path):
+    """Kirchhoff: a body coasting in ideal fluid keeps the kinetic energy of body and fluid,
+    1/2 nu^T (M_RB + M_A) nu, and the impulse R (M_RB + M_A)_lin nu in the world frame (Lamb 1932
+    sec. 124). Flipping a sign of C_A or leaving out the w x nu term breaks both."""
+    m = _spheroid_model(tmp_path)
+    d = mujoco.MjData(m)
+    d.qpos[3:7] = [0.9, 0.2, -0.3, 0.1]
+    d.qpos[3:7] /= np.linalg.norm(d.qpos[3:7])
+    d.qvel[:] = [0.6, -0.4, 0.3, 0.4, -0.7, 0.5]
+    M_A = np.array(m.numeric_data[:36]).reshape(6, 6)
+
+    def invariants():
+        mujoco.mj_forward(m, d)
+        full = np.zeros((6, 6))
+        mujoco.mj_fullM(m, d, full)  # M_RB + T^T M_A T in qvel coordinates
+        energy = 0.5 * d.qvel @ full @ d.qvel
+        R = d.xmat[1].reshape(3, 3)
+        nu = np.r_[R.T @ d.qvel[:3], d.qvel[3:]]
+        mass = m.body_mass[1]
+        impulse = R @ (mass * nu[:3] + (M_A @ nu)[:3])
+        return energy, impulse
+
+    e0, p0 = invariants()
+    for _ in range(4000):  # 2 s
+        mujoco.mj_step(m, d)
+    e1, p1 = invariants()
+    assert e1 == pytest.approx(e0, rel=2e-3)
+    assert np.allclose(p1, p0, atol=2e-3 * np.linalg.norm(p0))
+
+
+def test_neutral_body_follows_accelerating_water(tmp_path):
+    """A neutrally buoyant body in water accelerating uniformly moves with it: the Froude-Krylov
+    force rho V a and the added mass's reaction M_A a accelerate the body's mass and added mass
+    at a (no relative motion builds up)."""
+    m = _spheroid_model(tmp_path)
+    d = mujoco.MjData(m)
+    inst = hydro.plugin_instances(m)[""]
+    a = np.array([0.3, -0.2, 0.1])
+    hydro.set_water(m, d, inst, [0.0, 0.0, 0.0], a, t0_s=0.0)
+    for _ in range(2000):  # 1 s
+        mujoco.mj_step(m, d)
+    w, _ = hydro.water(m, d, inst)
+    assert np.allclose(d.qvel[:3], w, rtol=0, atol=1e-4 * np.linalg.norm(w))
+    assert np.allclose(d.qvel[3:], 0.0, atol=1e-9)
