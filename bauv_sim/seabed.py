@@ -21,6 +21,7 @@ upper-right corner).
 from __future__ import annotations
 
 import argparse
+import functools
 import struct
 from dataclasses import dataclass
 from pathlib import Path
@@ -151,6 +152,137 @@ class Seabed:
         return np.where(
             lower, z00 + u * (z10 - z00) + v * (z11 - z10), z00 + v * (z01 - z00) + u * (z11 - z01)
         )
+
+    @functools.cached_property
+    def _z_grid(self) -> NDArray[np.float64]:
+        """World z at the grid points as MuJoCo stores them (float32 normalised), m."""
+        return self.z_min_m + self.hfield_size()[2] * self.normalised().astype(np.float64)
+
+    @functools.cached_property
+    def max_slope(self) -> float:
+        """Largest ``|grad z|`` over the heightfield's triangles (dimensionless)."""
+        z, c = self._z_grid, self.config.cell_m
+        dx, dy = np.diff(z, axis=1), np.diff(z, axis=0)
+        lower = np.hypot(dx[:-1], dy[:, 1:])  # (z10 - z00, z11 - z10)
+        upper = np.hypot(dx[1:], dy[:, :-1])  # (z11 - z01, z01 - z00)
+        return float(max(lower.max(), upper.max())) / c
+
+    def _facet(self, x: NDArray[np.float64], y: NDArray[np.float64]):
+        """Triangle and plane of the heightfield at points (r,) inside the grid: ``(key, z,
+        dz/dx, dz/dy, u, v)``, each (r,); ``key`` numbers the triangle (cell and half), ``u, v``
+        are the point's coordinates in its cell, in cells (the lower triangle is ``u >= v``)."""
+        c = self.config
+        n = c.n
+        gx = (x + c.half_extent_m) / c.cell_m
+        gy = (y + c.half_extent_m) / c.cell_m
+        j = np.minimum(np.floor(gx).astype(np.int64), n - 2)
+        i = np.minimum(np.floor(gy).astype(np.int64), n - 2)
+        u, v = gx - j, gy - i
+        zf = self._z_grid.ravel()
+        k00 = i * n + j
+        z00, z10, z01, z11 = zf[k00], zf[k00 + 1], zf[k00 + n], zf[k00 + n + 1]
+        lower = u >= v
+        du = np.where(lower, z10 - z00, z11 - z01)
+        dv = np.where(lower, z11 - z10, z01 - z00)
+        z = np.where(lower, z00 + u * du + v * dv, z00 + v * dv + u * du)
+        return 2 * k00 + lower, z, du / c.cell_m, dv / c.cell_m, u, v
+
+    def ray_ranges(
+        self,
+        origin_m: ArrayLike,
+        directions: ArrayLike,
+        max_range_m: float,
+        tol_m: float = 1e-9,
+        max_iterations: int = 10_000,
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Distance along rays to the first crossing of the triangulated heightfield, analytically
+        (the surface MuJoCo's rays meet, :meth:`height_world`), batched.
+
+        Along a ray ``x(s) = o + s e`` the height above the seabed ``f(s) = z(s) - h(x(s), y(s))``
+        is linear on each triangle the ray passes over. From a point above triangle T: if the ray
+        meets T's plane before it leaves T, that is the first crossing (exact); otherwise the ray
+        moves on to the larger of T's exit and ``s + f / Lip`` (``Lip = |e_z| + |e_xy|
+        max_slope`` bounds ``|f'|``), neither of which can pass the first crossing. A ray that
+        leaves the grid, or starts at or below the seabed, has no echo.
+
+        Args:
+            origin_m: ray origins, shape (..., 3), m, world.
+            directions: ray directions, shape (..., 3) (broadcast with the origins; normalised
+                here).
+            max_range_m: no echo beyond this distance, m.
+            tol_m: a ray within ``tol_m`` (height over ``Lip``) of the seabed has met it, m.
+            max_iterations: cap of the march (an error if reached).
+
+        Returns:
+            ``(range_m, hit)``, shape (...): ``range_m`` is 0 where ``hit`` is False.
+
+        Raises:
+            GeometryError: for a zero or non-finite direction, a non-finite origin, or a march
+                that does not finish in ``max_iterations`` steps.
+        """
+        o, e = np.broadcast_arrays(np.asarray(origin_m, float), np.asarray(directions, float))
+        shape = o.shape[:-1]
+        o, e = o.reshape(-1, 3), e.reshape(-1, 3)
+        norm = np.linalg.norm(e, axis=1)
+        if not np.all(np.isfinite(norm) & (norm > 0)) or not np.all(np.isfinite(o)):
+            raise GeometryError(
+                "ray_ranges: origins must be finite, directions finite and non-zero"
+            )
+        e = e / norm[:, None]
+        half, cell = self.config.half_extent_m, self.config.cell_m
+        lip = np.abs(e[:, 2]) + np.hypot(e[:, 0], e[:, 1]) * self.max_slope
+        r = np.zeros(len(o))
+        hit = np.zeros(len(o), bool)
+        # start where the ray comes down to the highest point of the seabed
+        top = self.z_max_m
+        above = o[:, 2] > top
+        with np.errstate(divide="ignore"):
+            s = np.where(above & (e[:, 2] < 0), (o[:, 2] - top) / -e[:, 2], 0.0)
+        idx = np.flatnonzero(~(above & (e[:, 2] >= 0)) & (s <= max_range_m))
+        for _ in range(max_iterations):
+            if idx.size == 0:
+                break
+            si, ei = s[idx], e[idx]
+            p = o[idx] + si[:, None] * ei
+            inside = (np.abs(p[:, 0]) <= half) & (np.abs(p[:, 1]) <= half)
+            _, h, gx, gy, u, v = self._facet(
+                np.where(inside, p[:, 0], 0.0), np.where(inside, p[:, 1], 0.0)
+            )
+            f = p[:, 2] - h
+            slope = ei[:, 2] - gx * ei[:, 0] - gy * ei[:, 1]  # f' over this triangle
+            a, b = ei[:, 0] / cell, ei[:, 1] / cell  # du/ds, dv/ds
+            lower = u >= v
+            with np.errstate(divide="ignore", invalid="ignore"):
+                to_plane = np.where(slope < 0, f / -slope, np.inf)
+                # where the ray leaves the triangle: lower (v >= 0, u <= 1, u >= v), upper
+                # (u >= 0, v <= 1, v > u)
+                e1 = np.where(
+                    lower, np.where(b < 0, -v / b, np.inf), np.where(a < 0, -u / a, np.inf)
+                )
+                e2 = np.where(
+                    lower,
+                    np.where(a > 0, (1 - u) / a, np.inf),
+                    np.where(b > 0, (1 - v) / b, np.inf),
+                )
+                d = np.where(lower, a - b, b - a)
+                e3 = np.where(d < 0, np.abs(u - v) / -d, np.inf)
+            to_exit = np.minimum(np.minimum(e1, e2), e3)
+            above_bed = f > 0
+            in_tri = above_bed & (to_plane <= to_exit)
+            near = above_bed & (f <= tol_m * lip[idx])
+            root = np.where(in_tri, si + to_plane, si)
+            found = inside & (in_tri | near | (~above_bed & (si > 0))) & (root <= max_range_m)
+            step = np.maximum(to_exit * (1 + 1e-12) + 1e-12, f / lip[idx])
+            nxt = si + step
+            gone = ~found & (~inside | ~above_bed | (nxt > max_range_m))
+            r[idx[found]] = root[found]
+            hit[idx[found]] = True
+            go = ~(found | gone)
+            s[idx[go]] = nxt[go]
+            idx = idx[go]
+        if idx.size:
+            raise GeometryError(f"ray_ranges: the march did not finish in {max_iterations} steps")
+        return np.where(hit, r, 0.0).reshape(shape), hit.reshape(shape)
 
     def depth_at(self, x_m: ArrayLike, y_m: ArrayLike) -> NDArray[np.float64]:
         """Depth of the seabed below the surface, m (positive down); see :meth:`height_world`."""

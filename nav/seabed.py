@@ -252,28 +252,44 @@ class SlopeBasis:
         Returns:
             ``(phi, dphi_dx, dphi_dy)``, each shape (..., m, size).
         """
+        return tuple(np.swapaxes(a, -1, -2) for a in self.rows(x, y))  # type: ignore[return-value]
+
+    def rows(self, x: Array, y: Array) -> tuple[Array, Array, Array]:
+        """:meth:`values_and_gradients` with the function index before the point index.
+
+        Returns:
+            ``(phi, dphi_dx, dphi_dy)``, each shape (..., size, m).
+        """
         one, zero = np.ones_like(x), np.zeros_like(x)
         if self.kind == "plane":
             return (
-                np.stack([one, x, y], -1),
-                np.stack([zero, one, zero], -1),
-                np.stack([zero, zero, one], -1),
+                np.stack([one, x, y], -2),
+                np.stack([zero, one, zero], -2),
+                np.stack([zero, zero, one], -2),
             )
         if self.kind == "quadratic":
             return (
-                np.stack([one, x, y, x * x, x * y, y * y], -1),
-                np.stack([zero, one, zero, 2 * x, y, zero], -1),
-                np.stack([zero, zero, one, zero, x, 2 * y], -1),
+                np.stack([one, x, y, x * x, x * y, y * y], -2),
+                np.stack([zero, one, zero, 2 * x, y, zero], -2),
+                np.stack([zero, zero, one, zero, x, 2 * y], -2),
             )
+        # sin and cos of l w x from those of w x (angle addition), the argument reduced to one
+        # period first (cheaper sines)
+        px, py = self.period_x_m, self.period_y_m
+        w1x, w1y = 2.0 * np.pi / px, 2.0 * np.pi / py
+        tx, ty = w1x * (x - px * np.round(x / px)), w1y * (y - py * np.round(y / py))
+        sx1, cx1, sy1, cy1 = np.sin(tx), np.cos(tx), np.sin(ty), np.cos(ty)
+        sx, cx, sy, cy = sx1, cx1, sy1, cy1
         phi, dx, dy = [one], [zero], [zero]
         for lv in range(1, self.harmonics + 1):
-            wx = 2.0 * np.pi * lv / self.period_x_m
-            wy = 2.0 * np.pi * lv / self.period_y_m
-            sx, cx, sy, cy = np.sin(wx * x), np.cos(wx * x), np.sin(wy * y), np.cos(wy * y)
+            if lv > 1:
+                sx, cx = sx * cx1 + cx * sx1, cx * cx1 - sx * sx1
+                sy, cy = sy * cy1 + cy * sy1, cy * cy1 - sy * sy1
+            wx, wy = lv * w1x, lv * w1y
             phi += [sx, cx, sy, cy]
             dx += [wx * cx, -wx * sx, zero, zero]
             dy += [zero, zero, wy * cy, -wy * sy]
-        return np.stack(phi, -1), np.stack(dx, -1), np.stack(dy, -1)
+        return np.stack(phi, -2), np.stack(dx, -2), np.stack(dy, -2)
 
 
 def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Array, BoolArray]:
@@ -301,16 +317,56 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
         cnt = np.maximum(n_valid, 1)[:, None]
         x = x - np.where(w, x, 0.0).sum(1, keepdims=True) / cnt
         y = y - np.where(w, y, 0.0).sum(1, keepdims=True) / cnt
-    phi, dphi_dx, dphi_dy = basis.values_and_gradients(x, y)
-    wf = w[..., None].astype(float)
-    a = phi * wf  # masked rows are zero
+    phi, dphi_dx, dphi_dy = basis.rows(x, y)  # (P, size, m)
+    at = phi * w[:, None, :]  # A^T; masked points are zero columns
     rhs = -np.where(w, z, 0.0)[..., None]  # eq. A1 with the z coefficient fixed to 1
-    p = np.linalg.pinv(a, rcond=1e-10) @ rhs  # (P, size, 1)
-    gx = (dphi_dx @ p)[..., 0]
-    gy = (dphi_dy @ p)[..., 0]
+    p = _least_squares(at, rhs).transpose(0, 2, 1)  # (P, 1, size)
+    gx = (p @ dphi_dx)[:, 0]
+    gy = (p @ dphi_dy)[:, 0]
     grad = np.stack([gx, gy, np.ones_like(gx)], axis=-1)
     grad = np.where((ok[:, None] & w)[..., None], grad, 0.0)
     return grad, ok
+
+
+FIT_RCOND = 1e-10
+"""Relative singular-value cut-off of Appendix A's fit (:func:`fit_slopes`)."""
+
+GRAM_CONDITION = 1e12
+"""Largest condition number of the Jacobi-scaled Gram matrix ``A^T A`` that
+:func:`_least_squares` solves by its eigen-decomposition; beyond it, the SVD of ``A``."""
+
+
+def _least_squares(at: Array, rhs: Array) -> Array:
+    """``pinv(A, rcond=FIT_RCOND) @ rhs`` per path, through the Gram matrix where it is safe.
+
+    The normal equations ``(A^T A) p = A^T b``, scaled to a unit diagonal and solved by the
+    eigen-decomposition of the small Gram matrix, cost a fraction of a batched SVD of the tall
+    ``A``. They square the condition number, so paths whose scaled Gram matrix has a condition
+    number above :data:`GRAM_CONDITION` (singular values of ``A`` spread by more than 1e6; a
+    rank-deficient fit among them) take the SVD pseudo-inverse instead, with its minimum-norm
+    solution.
+
+    Args:
+        at: ``A^T``, shape (P, n, m).
+        rhs: shape (P, m, 1).
+
+    Returns:
+        Shape (P, n, 1).
+    """
+    a = at.transpose(0, 2, 1)
+    g = at @ a
+    d = np.sqrt(np.einsum("pii->pi", g))
+    dinv = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 0.0)
+    gs = g * dinv[:, :, None] * dinv[:, None, :]
+    lam, v = np.linalg.eigh(gs)  # ascending
+    good = lam[:, 0] > lam[:, -1] / GRAM_CONDITION
+    ys = dinv[..., None] * (at @ rhs)
+    lam = np.where(good[:, None], lam, 1.0)
+    p = dinv[..., None] * (v @ ((v.transpose(0, 2, 1) @ ys) / lam[..., None]))
+    bad = np.flatnonzero(~good)
+    if bad.size:
+        p[bad] = np.linalg.pinv(a[bad], rcond=FIT_RCOND) @ rhs[bad]
+    return p
 
 
 @dataclass(frozen=True)
@@ -460,22 +516,31 @@ def shift_estimate(
     B = -np.einsum("pmc,pmc->pm", grad, de * L0f[..., None] + e * dL[..., None])
     beams = usef.sum(axis=1)
     ok = fit_ok & (beams >= 3)
-    # step 5: eq. 15 by SVD with an absolute floor (rank-deficient A: minimum-norm shift)
-    U, s, Vt = np.linalg.svd(A, full_matrices=False)  # (P,m,3), (P,3), (P,3,3)
+    # step 5: eq. 15 by the singular values of A with an absolute floor (rank-deficient A:
+    # minimum-norm shift), from the eigen-decomposition of the 3 x 3 A^T A: A = U S V^T with
+    # A^T A = V S^2 V^T and U^T B = S^-1 V^T A^T B
+    At = A.transpose(0, 2, 1)
+    lam, V = np.linalg.eigh(At @ A)  # ascending
+    s = np.sqrt(np.maximum(lam[:, ::-1], 0.0))  # descending, as an SVD's
+    Vt = V[:, :, ::-1].transpose(0, 2, 1)
     floor = np.maximum(SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1)), rcond * s[:, 0])[:, None]
+    if rcond * 1e8 < 1.0:  # a cut-off below what eigenvalues of A^T A resolve: the SVD
+        _, s, Vt = np.linalg.svd(A, full_matrices=False)  # (P,3), (P,3,3)
+        floor = np.maximum(SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1)), rcond * s[:, 0])
+        floor = floor[:, None]
     keep = s > floor
     rank = keep.sum(axis=1)
     s_inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
-    coef = np.einsum("pmc,pm->pc", U, B) * s_inv
-    shift = np.einsum("pcd,pc->pd", Vt, coef)
+    atb = np.einsum("pcm,pm->pc", At, B)
+    shift = np.einsum("pcd,pc->pd", Vt, np.einsum("pcd,pd->pc", Vt, atb) * s_inv**2)
     resid = np.where(usef, np.einsum("pmc,pc->pm", A, shift) - B, 0.0)
     rss = (resid**2).sum(axis=1)
     # range-noise propagation: dB/dL_k = -g.(de - e), dB/dL_{k+1} = -g.e
     gb0 = np.einsum("pmc,pmc->pm", grad, de - e)
     gb1 = np.einsum("pmc,pmc->pm", grad, e)
     var_b = sigma_range_m**2 * (gb0**2 + gb1**2) * usef
-    # pseudo-inverse rows: dX = Vt^T diag(s_inv) U^T B
-    Apinv = np.einsum("pdc,pc,pmc->pdm", Vt.transpose(0, 2, 1), s_inv, U)
+    # pseudo-inverse rows: dX = V diag(s_inv^2) V^T A^T B
+    Apinv = np.einsum("pcd,pc,pce->pde", Vt, s_inv**2, Vt) @ At
     cov_noise = np.einsum("pdm,pm,pem->pde", Apinv, var_b, Apinv)
     if covariance == "residual":
         dof = np.maximum(beams - rank, 1)

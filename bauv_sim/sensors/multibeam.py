@@ -14,9 +14,10 @@ The defaults are seed 004's (section 6): 8 x 8 beams, ``gamma^i`` uniformly over
 
 * Kinematic world: the seed's harmonic seabed ``psi(x) = 0`` of eq. 24
   (:class:`HarmonicSeabed`), by root finding along each ray (:meth:`HarmonicSeabed.ray_ranges`):
-  a Lipschitz march (steps ``max(psi / Lip, min_step_m)``, which cannot pass the first crossing
-  unless the ray dips less than ``Lip * min_step_m / 2`` into a crest and out again) brackets the
-  first root, then a safeguarded Newton-bisection refines it to ``tol_m`` (1e-9 m).
+  a march whose steps are the first root of a parabola bounding ``psi`` from below along the ray
+  (the curvature of eq. 24 is bounded by its coefficients), so that no step passes the first
+  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m); grazing rays finish
+  with a Lipschitz march and safeguarded Newton-bisection.
 * Physics world: MuJoCo's ``mj_multiRay`` against the scene's seabed heightfield, through
   :meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances` (the only code that reads MuJoCo
   arrays); the beams start at the ``sonar`` site of the vehicle model. The direction of motion
@@ -53,6 +54,10 @@ from bauv_sim.sensors.online import (
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+
+CURVATURE_STEPS = 60
+"""Steps of :meth:`HarmonicSeabed.ray_ranges`' curvature-bounded march before a ray still
+unresolved (grazing a crest) is handed to the first-order march."""
 
 
 class MultibeamConfig(Config):
@@ -221,6 +226,11 @@ class HarmonicSeabed:
         """Seabed z at horizontal points, shape (P, ...), m (negative below the surface)."""
         return -self.a0_m - self.relief(x, y)
 
+    def relief_bound(self) -> Array:
+        """Bound of ``|sum(...)|`` of eq. 24, shape (P,), m: the seabed lies within
+        ``-a0 +- bound``."""
+        return (np.hypot(self.a, self.b) + np.hypot(self.c, self.d)).sum(-1)
+
     def slope_bound(self) -> tuple[Array, Array]:
         """Bounds of ``|dpsi/dx|`` and ``|dpsi/dy|``, each shape (P,)."""
         wx, wy = self._w()
@@ -240,14 +250,34 @@ class HarmonicSeabed:
     ) -> tuple[Array, BoolArray]:
         """Distance along each ray to the first crossing of the seabed (module docstring).
 
+        Along a ray ``x(s) = o + s e`` the function ``f(s) = psi(x(s))`` has ``f'(s) = grad psi .
+        e`` and ``|f''(s)| <= M2 = e_x^2 C_x + e_y^2 C_y`` with ``C_x = sum_l w_l^2 hypot(a_l,
+        b_l)`` (and the same in y; eq. 24 is separable, so there is no cross term). From a point
+        where ``f > 0`` the concave parabola ``f + f' h - M2 h^2 / 2`` bounds ``f(s + h)`` from
+        below; its first positive root
+
+            h = 2 f / (sqrt(f'^2 + 2 M2 f) - f')      (= (f' + sqrt(...)) / M2 for f' > 0)
+
+        is a step that cannot pass the first crossing, and near a simple root it is Newton's step
+        to second order (quadratic convergence). The upper parabola ``f + f' h + M2 h^2 / 2``
+        crosses zero at ``h_up``, so the first crossing lies in ``[s + h, s + h_up]``: the march
+        takes its middle once that interval is at most ``tol_m`` wide (or the step is), and has no
+        echo past ``max_range_m``. It starts where the ray enters the slab ``|z + a0| <= sum_l
+        (hypot(a_l, b_l) + hypot(c_l, d_l))`` that holds the seabed. The harmonics ``l = 2..K``
+        come from those of ``l = 1`` by the angle-addition recurrence (4 sines and cosines per
+        evaluation). A ray that grazes a crest converges slowly (a double root): rays not
+        resolved in :data:`CURVATURE_STEPS` steps finish with the first-order march
+        (:meth:`_lipschitz_ranges`).
+
         Args:
             origin_m: ray origins, shape (P, ..., 3), m, world.
             directions: ray directions, shape (P, ..., 3) (broadcast with the origins;
                 normalised here).
             max_range_m: no echo beyond this distance, m.
-            min_step_m: smallest march step, m.
-            tol_m: bracket width at which the root is taken, m.
-            max_iterations: cap of the march (an error if reached: the ray is not resolved).
+            min_step_m: smallest step of the first-order march, m.
+            tol_m: step (first-order march: bracket width) at which the root is taken, m.
+            max_iterations: cap of the first-order march (an error if reached: the ray is not
+                resolved).
 
         Returns:
             ``(range_m, hit)``: shape (P, ...); ``range_m`` is 0 where ``hit`` is False (no
@@ -255,7 +285,7 @@ class HarmonicSeabed:
 
         Raises:
             ConfigError: for rays of another number of paths, a zero or non-finite direction,
-                or a march that does not finish in ``max_iterations`` steps.
+                or a first-order march that does not finish in ``max_iterations`` steps.
         """
         o, e = np.broadcast_arrays(np.asarray(origin_m, float), np.asarray(directions, float))
         shape = o.shape[:-1]
@@ -269,6 +299,115 @@ class HarmonicSeabed:
         if not np.all(np.isfinite(norm) & (norm > 0)) or not np.all(np.isfinite(o)):
             raise ConfigError("ray_ranges: origins must be finite, directions finite and non-zero")
         e = e / norm[:, None]
+        wx, wy = self._w()
+        m2 = (
+            e[:, 0] ** 2 * (wx**2 * np.hypot(self.a, self.b)).sum(-1)[path]
+            + e[:, 1] ** 2 * (wy**2 * np.hypot(self.c, self.d)).sum(-1)[path]
+        )
+        K = self.a.shape[1]
+        r = np.zeros(path.size)
+        hit = np.zeros(path.size, bool)
+        # start where the ray enters the slab that holds the seabed (psi > 0 above its top)
+        top = -self.a0_m + self.relief_bound()[path]
+        above = o[:, 2] > top
+        with np.errstate(divide="ignore"):
+            s0 = np.where(above & (e[:, 2] < 0), (o[:, 2] - top) / -e[:, 2], 0.0)
+        gid = np.flatnonzero(~(above & (e[:, 2] >= 0)) & (s0 <= max_range_m))
+        # the live rays' state, one contiguous array per quantity (compacted as rays finish)
+        st = [o[gid, 0], o[gid, 1], o[gid, 2], e[gid, 0], e[gid, 1], e[gid, 2], m2[gid], s0[gid]]
+        st += [getattr(self, c)[path[gid], lv] for c in "abcd" for lv in range(K)]
+        live = np.ones(gid.size, bool)
+        for _ in range(CURVATURE_STEPS):
+            if gid.size == 0:
+                break
+            ox, oy, oz, ex, ey, ez, mi, si = st[:8]
+            f, g = self._psi_slope(ox + si * ex, oy + si * ey, oz + si * ez, ex, ey, ez, st[8:])
+            below = f <= 0  # at the origin: no echo; later: a rounding step onto the root
+            fp = np.maximum(f, 0.0)
+            root = np.sqrt(g * g + 2.0 * mi * fp)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                h = np.where(g > 0, (g + root) / mi, 2.0 * f / (root - g))
+                # the upper parabola f + f' h + M2 h^2 / 2 crosses zero at h_up: the first root
+                # is in [h, h_up]
+                h_up = 2.0 * f / (np.sqrt(g * g - 2.0 * mi * fp) - g)
+            h = np.where(np.isnan(h), np.inf, h)
+            close = (g < 0) & (h_up - h <= tol_m)
+            h = np.where(close, 0.5 * (h + h_up), h)
+            nxt = si + h
+            found = live & np.where(below, si > 0, (close | (h <= tol_m)) & (nxt <= max_range_m))
+            gone = live & np.where(below, si == 0, nxt > max_range_m)
+            r[gid[found]] = np.where(below, si, nxt)[found]
+            hit[gid[found]] = True
+            live &= ~(found | gone)
+            st[7] = np.where(live, nxt, si)
+            left = int(live.sum())
+            if left < 0.5 * gid.size:  # compact
+                gid = gid[live]
+                st = [a[live] for a in st]
+                live = np.ones(left, bool)
+        if gid.size and live.any():  # rays grazing a crest: the first-order march from there
+            gid, si = gid[live], st[7][live]
+            L, h1 = self._lipschitz_ranges(
+                o[gid] + si[:, None] * e[gid],
+                e[gid],
+                path[gid],
+                max_range_m - si,
+                min_step_m,
+                tol_m,
+                max_iterations,
+            )
+            r[gid] = si + L
+            hit[gid] = h1
+        return np.where(hit, r, 0.0).reshape(shape), hit.reshape(shape)
+
+    def _psi_slope(
+        self, x: Array, y: Array, z: Array, ex: Array, ey: Array, ez: Array, coef: list[Array]
+    ) -> tuple[Array, Array]:
+        """``psi`` and its derivative ``grad psi . e`` along rays.
+
+        Args:
+            x, y, z: points, each shape (r,), m.
+            ex, ey, ez: the rays' unit directions, each shape (r,).
+            coef: the rays' coefficients, ``a_1..a_K, b_1..b_K, c_1..c_K, d_1..d_K``, each (r,).
+
+        Returns:
+            ``(psi, dpsi/ds)``, each shape (r,).
+        """
+        K = len(coef) // 4
+        wx, wy = self._w()
+        px, py = self.period_x_m, self.period_y_m
+        tx = wx[0] * (x - px * np.round(x / px))  # reduced to [-pi, pi]: cheaper sines
+        ty = wy[0] * (y - py * np.round(y / py))
+        sx1, cx1, sy1, cy1 = np.sin(tx), np.cos(tx), np.sin(ty), np.cos(ty)
+        sx, cx, sy, cy = sx1, cx1, sy1, cy1
+        f = self.a0_m + z
+        gx = 0.0
+        gy = 0.0
+        for lv in range(K):
+            if lv:  # sin and cos of (l + 1) theta by angle addition
+                sx, cx = sx * cx1 + cx * sx1, cx * cx1 - sx * sx1
+                sy, cy = sy * cy1 + cy * sy1, cy * cy1 - sy * sy1
+            a, b, c, d = coef[lv], coef[K + lv], coef[2 * K + lv], coef[3 * K + lv]
+            f = f + (a * sx + b * cx) + (c * sy + d * cy)
+            gx = gx + wx[lv] * (a * cx - b * sx)
+            gy = gy + wy[lv] * (c * cy - d * sy)
+        return f, ez + ex * gx + ey * gy
+
+    def _lipschitz_ranges(
+        self,
+        o: Array,
+        e: Array,
+        path: Array,
+        max_range_m: Array,
+        min_step_m: float,
+        tol_m: float,
+        max_iterations: int,
+    ) -> tuple[Array, BoolArray]:
+        """The first-order march: a Lipschitz march (steps ``max(psi / Lip, min_step_m)``, which
+        cannot pass the first crossing unless the ray dips less than ``Lip * min_step_m / 2``
+        into a crest and out again) brackets the first root, then a safeguarded Newton-bisection
+        refines it to ``tol_m``. Rays (r, 3) with unit directions (r, 3), their paths (r,) and
+        ranges (r,) m; returns ``(range_m, hit)`` (r,)."""
         gx, gy = self.slope_bound()
         lip = np.abs(e[:, 2]) + np.abs(e[:, 0]) * gx[path] + np.abs(e[:, 1]) * gy[path]
         lo = np.zeros(path.size)
@@ -280,10 +419,12 @@ class HarmonicSeabed:
         for _ in range(max_iterations):
             if idx.size == 0:
                 break
-            cand = np.minimum(lo[idx] + np.maximum(f_lo[idx] / lip[idx], min_step_m), max_range_m)
+            cand = np.minimum(
+                lo[idx] + np.maximum(f_lo[idx] / lip[idx], min_step_m), max_range_m[idx]
+            )
             f_c = self.psi_at(o[idx] + cand[:, None] * e[idx], path[idx])
             crossed = f_c <= 0
-            go = ~crossed & (cand < max_range_m)
+            go = ~crossed & (cand < max_range_m[idx])
             hi[idx[crossed]] = cand[crossed]
             hit[idx[crossed]] = True
             lo[idx[go]] = cand[go]
@@ -311,7 +452,7 @@ class HarmonicSeabed:
             lo[idx], hi[idx], x[idx] = a, b, nxt
             done = (b - a <= tol_m) | (f == 0) | (np.abs(nxt - xc) <= 0.5 * tol_m)
             idx = idx[~done]
-        return np.where(hit, x, 0.0).reshape(shape), hit.reshape(shape)
+        return np.where(hit, x, 0.0), hit
 
     def psi_at(self, points: Array, path: Array) -> Array:
         """``psi`` at points of given paths: points shape (r, 3), path shape (r,) -> (r,)."""

@@ -32,7 +32,21 @@ section 6) on ``seed004.surrogate_test_paths`` fresh surrogate paths with the on
 runs, and gives the physics' own step residual ``X_{k+1} - X_k - V(u_k) dt`` (what the surrogate's
 ``S^W`` stands for).
 
-Not done here: the multibeam (seabed-sensing) prediction in the physics loop.
+**Seabed-sensing prediction** (``navigation.prediction = "seabed"``, Table 1's row 2 on the
+vehicle): the rig carries the multibeam (:class:`bauv_sim.sensors.multibeam.MultibeamDevice`,
+``multibeam.*``: seed 004's 8 x 8 beams, 0.1 m range noise, an image every filter step), whose
+beams MuJoCo casts against the scene's seabed heightfield from the hull's ``sonar`` site. Every
+filter predicts with the shift of eq. 15 between the images of ``t_{j-1}`` and ``t_j``
+(:class:`SonarShift`: the hull's measured attitudes at the two pings, reading ``"turning"`` with
+the exact beam change, Appendix A's fit with ``seed004.slope_basis``, the lever arm's turn
+removed) and its stated covariance; the CMNF's alpha is the estimate plus that shift. The CMNF is
+trained on a surrogate that images the same heightfield
+(:class:`tasks.paper004.seabed.HeightfieldPrediction`, rays by
+:meth:`bauv_sim.seabed.Seabed.ray_ranges`, which equal MuJoCo's). The mission's seabed
+(:data:`SEABED_PRESET`) has relief at the scale of the multibeam's footprint, and the check
+refuses a seabed beyond the multibeam's range along the path. A filter whose estimate leaves the
+nominal point by more than ``seed004.diverge_m`` stops its flight with a named divergence
+(``failures``); the report gives the shift's own error on the physics and on the surrogate.
 """
 
 from __future__ import annotations
@@ -53,10 +67,19 @@ from bauv_sim.build import BeaconSpec, SceneConfig
 from bauv_sim.config import Config
 from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import ConfigError, GeometryError
+from bauv_sim.frames import R_from_roll_pitch_heading, theta_from_course
 from bauv_sim.kinematic.seed004 import NominalPathConfig, Seed004Noise
 from bauv_sim.sensors.doa import DoaConfig, DoaSet
+from bauv_sim.sensors.multibeam import MultibeamConfig, MultibeamImage
 from bauv_sim.sensors.rig import RigTick, SensorRig
-from nav.bearings import SystemPrediction, ekf_update, predict, upmf_update, velocity
+from nav.bearings import (
+    PredictedShift,
+    SystemPrediction,
+    ekf_update,
+    predict,
+    upmf_update,
+    velocity,
+)
 from nav.cmnf import CmnfGains, cmnf_step
 from nav.guidance import GuidanceCommand
 from nav.local_control import ControlLimits
@@ -84,6 +107,18 @@ SEED_BEACONS = np.array(
     [[500.0, 100.0, 0.0], [500.0, -100.0, 0.0], [-100.0, 100.0, 0.0], [-100.0, -100.0, 0.0]]
 )
 """Seed 004's beacons X_B^1..4 (section 6), m."""
+SEABED_PRESET = {
+    "half_extent_m": 250.0,
+    "cell_m": 0.5,
+    "relief_std_m": 0.4,
+    "min_wavelength_m": 8.0,
+    "max_wavelength_m": 40.0,
+}
+"""The mission's seabed (module docstring): the scene's generated bathymetry (6 m at the origin,
+5 m per km) over +-250 m (the beacons are 190 m east and 110 m west of the origin), in cells of
+0.5 m, with 0.4 m of relief in wavelengths of 8-40 m, the size of the multibeam's footprint (1-9 m
+ahead from 1.8-4.8 m above the seabed): on the default scene's 60-600 m relief in 10 m cells an
+image sees one or two planar triangles, which leave the along-seabed shift unobserved."""
 SURROGATE_RUN_OFFSET = 1_000_000
 """Run indices of the surrogate's test paths start here (apart from the physics runs)."""
 
@@ -107,6 +142,17 @@ class Seed004Config(Config):
     sigma_x0_m: tuple[float, float, float] = Field(
         (1.0, 1.0, 0.05), description="filters' initial sigma about the nominal start (S_0), m"
     )
+    slope_basis: Literal["quadratic", "plane", "harmonic"] = Field(
+        "quadratic",
+        description="Appendix A's basis of the seabed fit for the seabed-sensing prediction "
+        "(the scene's relief is no sum of known harmonics: a local quadratic by default)",
+    )
+    diverge_m: float = Field(
+        50.0,
+        gt=0,
+        description="a filter whose estimate is farther than this from the nominal point has "
+        "diverged: the flight stops with that named failure, m",
+    )
     train_paths: int = Field(2000, ge=50, le=100_000, description="CMNF training paths")
     surrogate_test_paths: int = Field(
         2000, ge=10, le=100_000, description="fresh surrogate paths for the CMNF's J-bar"
@@ -119,6 +165,11 @@ class Seed004Navigation(NavigationConfig):
     filter: Literal["ekf", "upmf", "cmnf", "all"] = Field(
         "all", description="the filter guidance steers on; 'all' flies each in turn per run"
     )
+    prediction: Literal["system", "seabed"] = Field(
+        "system",
+        description="the filters' prediction: by virtue of the system (eq. 1, Table 1 row 1) or "
+        "the seabed shift from two multibeam images (eq. 15, row 2)",
+    )
 
 
 class Seed004Scenario(MissionScenario):
@@ -126,6 +177,10 @@ class Seed004Scenario(MissionScenario):
 
     seed004: Seed004Config = Field(default_factory=Seed004Config)
     doa: DoaConfig = Field(default_factory=DoaConfig, description="DOA receiver (seed 004)")
+    multibeam: MultibeamConfig = Field(
+        default_factory=MultibeamConfig,
+        description="multibeam (seed 004's beams and range noise; used by the seabed prediction)",
+    )
     navigation: Seed004Navigation = Field(default_factory=Seed004Navigation)
 
 
@@ -191,7 +246,9 @@ def limits_of(c: Seed004Config) -> ControlLimits:
 
 
 def surrogate(scn: Seed004Scenario) -> LoopSetting:
-    """The kinematic surrogate of the mission (the CMNF is trained on it).
+    """The kinematic surrogate of the mission (the CMNF is trained on it): with the seabed
+    prediction it images the scene's heightfield with the mission's multibeam
+    (``prediction = "heightfield"``).
 
     ``tasks.paper004`` is imported here, not at module level: importing ``tasks.missions`` must
     register the missions only (its experiments register when it is imported)."""
@@ -211,6 +268,16 @@ def surrogate(scn: Seed004Scenario) -> LoopSetting:
         beacons=tuple(tuple(float(v) for v in b) for b in beacons_world(scn)),
         limits=limits_of(c),
         train_paths=c.train_paths,
+        **(
+            {
+                "prediction": "heightfield",
+                "heightfield": scn.seabed,
+                "multibeam": scn.multibeam,
+                "slope_basis": c.slope_basis,
+            }
+            if scn.navigation.prediction == "seabed"
+            else {}
+        ),
     )
 
 
@@ -248,14 +315,111 @@ def depth_setpoint(depth_m: float, u: Array, ap) -> float:
     return max(depth_m - w * (1.0 + v * ap.depth_kd) / (v * ap.depth_kp), 0.0)
 
 
+class SonarShift:
+    """The seabed-sensing prediction on the vehicle (seed 004, eq. 8-15, row 2 of Table 1).
+
+    The multibeam's beams are fixed to the hull (aimed from its pitch and heading, roll
+    stabilised), so the two images of a shift are aimed from the vehicle's attitudes at the two
+    pings: the shift uses the reading ``"turning"`` with the exact change of the beams
+    (``delta_e="exact"``), the attitudes as the vehicle measures them (INS pitch, compass
+    heading: gamma = pitch, theta from the heading), Appendix A's fit on image j-1's feet with
+    ``basis`` and the stated residual covariance (:func:`nav.seabed.shift_estimate`). The images
+    are the transducer's: the reference point's shift is the transducer's less the turn of the
+    lever arm, ``R_j l - R_{j-1} l`` (measured attitudes). A step without two images (the first:
+    the sonar has no image at t = 0) or without a shift (too few echoes) predicts the commanded
+    displacement ``V(u) dt`` with ``fallback`` (the system's ``S^W``) or the fallback variance
+    of :func:`nav.seabed.shift_estimate`.
+
+    Args:
+        cfg: the multibeam.
+        lever_arm_body_m: transducer from the reference point, body FLU, m.
+        basis: Appendix A's basis.
+        dt: filter step, s.
+        fallback: the covariance of the first step, ``(3, 3)`` m^2.
+    """
+
+    def __init__(
+        self,
+        cfg: MultibeamConfig,
+        lever_arm_body_m: Array,
+        basis: str,
+        dt: float,
+        fallback: Array,
+    ):
+        from nav.seabed import BeamGeometry, SlopeBasis
+
+        self.cfg, self.dt, self.fallback = cfg, dt, np.asarray(fallback, float)
+        self.lever = np.asarray(lever_arm_body_m, float)
+        self.geometry = BeamGeometry(cfg.elevations_rad(), cfg.azimuths_rad())
+        self.basis = SlopeBasis(basis)  # type: ignore[arg-type]
+        self.prev: tuple[MultibeamImage, Array] | None = None
+        self.image: tuple[MultibeamImage, Array] | None = None
+        self.last_ok = False
+        self.last_beams = 0
+
+    def take(self, tick: RigTick) -> None:
+        """Keep the image arriving at this tick (with the measured attitude at its ping)."""
+        for m in tick.arrived:
+            if m.device == "multibeam" and m.attitude_rad is not None:
+                self.prev, self.image = self.image, (m.payload, np.asarray(m.attitude_rad))
+
+    def __call__(self, x_hat: Array, u: Array) -> PredictedShift:
+        """The predicted displacement of the reference point over the step that just ended.
+
+        Args:
+            x_hat: the estimate at the step's start, shape (1, 3), m, world.
+            u: the control flown over the step ``(gamma, theta, V)``, shape (1, 3).
+
+        Returns:
+            The displacement (1, 3) m and its covariance (3, 3) or (1, 3, 3) m^2;
+            ``last_ok`` and ``last_beams`` (beams used, 0 without a shift) say how it was made.
+        """
+        from nav.seabed import shift_estimate
+
+        cmd = velocity(u) * self.dt
+        self.last_ok, self.last_beams = False, 0
+        if self.prev is None or self.image is None:
+            return PredictedShift(cmd, self.fallback)
+        (a, rph0), (b, rph1) = self.prev, self.image
+        att0 = np.array([[rph0[1], float(theta_from_course(rph0[2]))]])
+        att1 = np.array([[rph1[1], float(theta_from_course(rph1[2]))]])
+        est = shift_estimate(
+            a.ranges_m[None],
+            b.ranges_m[None],
+            self.geometry,
+            att0,
+            att1,
+            echo=a.echo[None],
+            next_echo=b.echo[None],
+            reading="turning",
+            delta_e="exact",
+            basis=self.basis,
+            position_m=x_hat,
+            sigma_range_m=self.cfg.range.sigma_m,
+            commanded_shift_m=cmd,
+        )
+        self.last_ok = bool(est.ok[0])
+        self.last_beams = int(est.beams[0]) if self.last_ok else 0
+        if not self.last_ok:
+            return PredictedShift(est.shift_m, est.covariance_m2)
+        arm = R_from_roll_pitch_heading(*rph1) @ self.lever - R_from_roll_pitch_heading(*rph0) @ (
+            self.lever
+        )
+        return PredictedShift(est.shift_m - arm, est.covariance_m2)
+
+
 class BearingNavigation:
     """A seed-004 filter on the DOA bearings beside the standard part (heading, depth, speed and
     DR for the autopilot and the log), plus the locally optimal control on its estimate.
 
-    At every filter step ``j`` (``t = j dt``, j = 1..N): predict with ``u_{j-1}`` (eq. 1), update
-    on the bearing set of that tick (absent pairs left out; no set: prediction only), then
-    ``u_j`` from the estimate (eq. 7 with the box). ``extra`` holds ``control`` (gamma, theta, V),
-    ``depth_cmd`` (m), ``filter_step`` (j, -1 between steps) and ``absent`` (pairs missing).
+    At every filter step ``j`` (``t = j dt``, j = 1..N): predict with ``u_{j-1}`` (eq. 1) or from
+    the two multibeam images of ``t_{j-1}`` and ``t_j`` (:class:`SonarShift`), update on the
+    bearing set of that tick (absent pairs left out; no set: prediction only), then ``u_j`` from
+    the estimate (eq. 7 with the box). An estimate that is not finite, or farther than
+    ``diverge_m`` from the nominal point, stops the flight with a named divergence
+    (:class:`nav.errors.NavError`). ``extra`` holds ``control`` (gamma, theta, V), ``depth_cmd``
+    (m), ``filter_step`` (j, -1 between steps), ``shift`` (the predicted displacement, m) and
+    ``shift_beams`` (beams the seabed shift used; 0: none).
 
     Args:
         base: the standard part.
@@ -263,6 +427,8 @@ class BearingNavigation:
         setting: the surrogate setting (path, noise the filter assumes, beacons, limits).
         gains: the CMNF's gains (for ``"cmnf"``).
         autopilot: the autopilot's gains (for :func:`depth_setpoint`).
+        sonar: the seabed-sensing prediction (``None``: by virtue of the system).
+        diverge_m: the divergence distance, m.
     """
 
     def __init__(
@@ -272,9 +438,14 @@ class BearingNavigation:
         setting: LoopSetting,
         gains: CmnfGains | None,
         autopilot,
+        sonar: SonarShift | None = None,
+        diverge_m: float = math.inf,
     ):
         self.base, self.name, self.s, self.gains = base, name, setting, gains
         self.ap = autopilot
+        self.sonar, self.diverge_m = sonar, diverge_m
+        self.nominal = setting.path.path()
+        self.shift = np.zeros(3)
         from tasks.paper004.sim import Controller
 
         self.dt = setting.path.dt_s
@@ -306,13 +477,19 @@ class BearingNavigation:
         out = self.base.step(tick, initial)
         j = round(tick.t_s / self.dt)
         at_step = abs(tick.t_s - j * self.dt) < 1e-6
+        if self.sonar is not None:
+            self.sonar.take(tick)
         if initial:
             self.depth_cmd = depth_setpoint(out.depth_m, self.u[0], self.ap)
         elif at_step and self.j < j <= self.n_steps:
             y, present = self._bearings(tick)
             self.absent_total += int((~present).sum())
             self.missing_sets += int(not present.any())
-            shift = self.pred(j - 1, self.x_hat, self.u)
+            if self.sonar is None:
+                shift = self.pred(j - 1, self.x_hat, self.u)
+            else:
+                shift = self.sonar(self.x_hat, self.u)
+            self.shift = shift.displacement_m[0].copy()
             if self.name == "cmnf":
                 alpha = self.x_hat + shift.displacement_m
                 _, self.x_hat = cmnf_step(
@@ -324,10 +501,16 @@ class BearingNavigation:
                 update = ekf_update if self.name == "ekf" else upmf_update
                 self.x_hat, self.P = update(x_t, p_t, y, present, self.beacons, self.s_eps)
             self.j = j
-            if not (np.isfinite(self.x_hat).all() and np.isfinite(self.P).all()):
-                from nav.errors import NavError
+            from nav.errors import NavError
 
-                raise NavError(f"{self.name.upper()} estimate not finite at step {j}")
+            if not (np.isfinite(self.x_hat).all() and np.isfinite(self.P).all()):
+                raise NavError(f"{self.name.upper()} diverged: estimate not finite at step {j}")
+            off = float(np.linalg.norm(self.x_hat[0] - self.nominal[j]))
+            if off > self.diverge_m:
+                raise NavError(
+                    f"{self.name.upper()} diverged at step {j}: estimate {off:.0f} m from the "
+                    f"nominal point (seed004.diverge_m = {self.diverge_m:g})"
+                )
             if j < self.n_steps:
                 self.u = self.ctl(j, self.x_hat)
             self.depth_cmd = depth_setpoint(out.depth_m, self.u[0], self.ap)
@@ -336,6 +519,8 @@ class BearingNavigation:
             "depth_cmd": self.depth_cmd,
             "filter_step": float(j if at_step and not initial and j == self.j else -1),
             "done": self.j >= self.n_steps,
+            "shift": self.shift.copy(),
+            "shift_beams": float(self.sonar.last_beams if self.sonar is not None else 0),
         }
         if initial:
             extra["filter_step"] = 0.0
@@ -355,6 +540,20 @@ EXTRA_COLUMNS = {
         False,
     ),
     "filter_step": ("filter_step", "1", "filter step j at this tick (-1: none)", (), False),
+    "shift": (
+        "shift",
+        "m",
+        "predicted displacement of the last filter step (world)",
+        ("east", "north", "up"),
+        False,
+    ),
+    "shift_beams": (
+        "shift_beams",
+        "1",
+        "beams the last seabed shift used (0: none, or the prediction by virtue of the system)",
+        (),
+        False,
+    ),
 }
 """Per-tick columns the mission adds."""
 
@@ -405,6 +604,9 @@ class Seed004Mission:
         s = scn.sensors
         devices = {"compass": s.compass, "ins": s.ins, "log": s.log, "odometry": s.odometry}
         devices |= {"pressure": s.pressure, "doa": scn.doa}
+        seabed_pred = scn.navigation.prediction == "seabed"
+        if seabed_pred:
+            devices["multibeam"] = scn.multibeam
         rig = SensorRig(
             devices, physics, "bauv", seed, run, "", extra={"odometry": {"speed_table": table}}
         )
@@ -412,7 +614,19 @@ class Seed004Mission:
         P0 = initial_covariance(n)
         e0 = rng_mod.generator(seed, run, *streams("", "initial")).standard_normal(3) @ np.sqrt(P0)
         base = EkfNavigation(n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, False)
-        nav = BearingNavigation(base, self.filter, surrogate(scn), self.gains, scn.autopilot)
+        setting = surrogate(scn)
+        sonar = None
+        if seabed_pred:
+            sonar = SonarShift(
+                scn.multibeam,
+                np.asarray(rig.lever_arms_body_m["multibeam"]),
+                scn.seed004.slope_basis,
+                scn.seed004.dt_s,
+                setting.fnoise.s_w,
+            )
+        nav = BearingNavigation(
+            base, self.filter, setting, self.gains, scn.autopilot, sonar, scn.seed004.diverge_m
+        )
         v = P.VehicleParts("bauv", rig, nav, ControlGuidance(), scn.autopilot, table)
         v.extra_columns = EXTRA_COLUMNS
         return P.MissionParts([v], scenario_sea(scn, seed, run))
@@ -441,14 +655,25 @@ def distance_to_polyline(points: Array, line: Array) -> Array:
     return np.linalg.norm(points[:, None, :] - near, axis=2).min(axis=1)
 
 
-def flight_metrics(run: MissionRun, nominal: Array, dt: float) -> dict[str, Any]:
+def flight_metrics(
+    run: MissionRun, nominal: Array, dt: float, seabed_shift: bool = False
+) -> dict[str, Any]:
     """Path following and estimation of one flight (NaN never: missing data gives ``None``).
+
+    Args:
+        run: the flight.
+        nominal: the nominal path, shape (N + 1, 3), m.
+        dt: filter step, s.
+        seabed_shift: the flight predicted with the seabed shift (adds its errors).
 
     Returns:
         ``path_mean_m`` / ``path_max_m`` (distance of the truth to the nominal path, every
         control tick), ``j_k`` (``||X°_k - X_k||^2`` at the filter steps, list, m^2),
         ``est_rmse_m`` / ``est_max_m`` (``||X_k - X^_k||`` at the filter steps), ``residual_std_m``
-        (per axis, of ``X_{k+1} - X_k - V(u_k) dt``), ``steps`` reached.
+        (per axis, of ``X_{k+1} - X_k - V(u_k) dt``), ``steps`` reached, and with
+        ``seabed_shift``: ``shift_err_m`` (the seabed shift less the true move of the reference
+        point at each filter step with a shift, ``(n, 3)`` float32, m), ``shift_beams_mean`` and
+        ``shift_none`` (steps after the first without a shift).
     """
     v = run.lead
     seen = {k: int(v.outcome.get(k, 0)) for k in ("absent_pairs", "missing_sets")}
@@ -479,6 +704,22 @@ def flight_metrics(run: MissionRun, nominal: Array, dt: float) -> dict[str, Any]
         "residual_mean_m": [float(a) for a in res.mean(axis=0)],
         "track": xk.astype(np.float32),
         **seen,
+        **(_shift_errors(c, sel, xk) if seabed_shift else {}),
+    }
+
+
+def _shift_errors(c, sel: NDArray[np.int_], xk: Array) -> dict[str, Any]:
+    """The seabed shift's own error at the filter steps that had one (:func:`flight_metrics`)."""
+    if "shift_beams" not in c:
+        return {}
+    beams = np.asarray(c["shift_beams"].values, float)[sel][1:]
+    shift = np.asarray(c["shift"].values, float)[sel][1:]
+    used = beams > 0
+    err = (shift - (xk[1:] - xk[:-1]))[used]
+    return {
+        "shift_err_m": err.astype(np.float32),
+        "shift_beams_mean": float(beams[used].mean()) if used.any() else 0.0,
+        "shift_none": int((~used[1:]).sum()),
     }
 
 
@@ -512,6 +753,13 @@ class FilterSummary(BaseModel):
     j_mean_m2: float | None = Field(description="mean_k mean over runs ||X°_k - X_k||^2, m^2")
     residual_std_m: list[float] | None = Field(description="physics step residual std, m")
     residual_mean_m: list[float] | None = Field(description="physics step residual mean, m")
+    diverged_runs: int = Field(0, description="runs whose flight stopped on a named failure")
+    shift_steps: int = Field(0, description="filter steps with a seabed shift (all runs)")
+    shift_err_median_m: float | None = Field(None, description="median |shift error|, m")
+    shift_err_p90_m: float | None = Field(None, description="90th percentile |shift error|, m")
+    shift_err_bias_m: list[float] | None = Field(None, description="mean shift error, m")
+    shift_beams_mean: float | None = Field(None, description="beams used per shift, mean")
+    shift_none_steps: int = Field(0, description="filter steps without a shift (no echoes)")
 
 
 class Seed004Metrics(BaseModel):
@@ -521,6 +769,7 @@ class Seed004Metrics(BaseModel):
     experiment: str
     seed: int
     n_runs: int
+    prediction: Literal["system", "seabed"] = "system"
     filters: dict[str, FilterSummary]
     cmnf_j_bar_surrogate_m2: float | None = Field(description="CMNF J-bar on the surrogate")
     cmnf_j_bar_physics_m2: float | None
@@ -528,6 +777,10 @@ class Seed004Metrics(BaseModel):
     cmnf_j_mean_surrogate_m2: float | None = Field(description="CMNF time-mean J, surrogate")
     cmnf_j_mean_physics_m2: float | None
     cmnf_j_mean_gap_m2: float | None = Field(description="physics minus surrogate mean J, m^2")
+    surrogate_shift: dict[str, Any] = Field(
+        default_factory=dict,
+        description="the seabed shift's error on the CMNF's surrogate paths (median, p90, bias)",
+    )
     cmnf_train_paths: int
     failures: list[str]
     warnings: list[str]
@@ -537,12 +790,38 @@ def _mean(vals: list[float]) -> float | None:
     return float(np.mean(vals)) if vals else None
 
 
+def _shift_summary(results: list[Seed004RunResult], name: str) -> dict[str, Any]:
+    """The seabed shift's own error pooled over the filter steps of every run (failed ones too:
+    the shift does not depend on the filter's success)."""
+    all_m = [r.metrics[name] for r in results if name in r.metrics]
+    errs = [np.asarray(m["shift_err_m"], float) for m in all_m if "shift_err_m" in m]
+    out: dict[str, Any] = {
+        "diverged_runs": sum(1 for r in results if r.failed.get(name) is not None),
+        "shift_none_steps": sum(int(m.get("shift_none", 0)) for m in all_m),
+    }
+    err = np.concatenate(errs) if errs else np.zeros((0, 3))
+    if len(err):
+        norm = np.linalg.norm(err, axis=1)
+        beams = [m["shift_beams_mean"] * len(m["shift_err_m"]) for m in all_m if "shift_err_m" in m]
+        out |= {
+            "shift_steps": len(err),
+            "shift_err_median_m": float(np.median(norm)),
+            "shift_err_p90_m": float(np.quantile(norm, 0.9)),
+            "shift_err_bias_m": [float(a) for a in err.mean(axis=0)],
+            "shift_beams_mean": float(sum(beams) / len(err)),
+        }
+    return out
+
+
 def summarise_filter(results: list[Seed004RunResult], name: str) -> FilterSummary:
-    """A filter's summary over the runs that completed."""
+    """A filter's summary over the runs that completed (the seabed shift's error and the
+    diverged runs over all)."""
     ms = [r.metrics[name] for r in results if r.failed.get(name) is None and name in r.metrics]
     ms = [m for m in ms if "path_mean_m" in m]
+    shift = _shift_summary(results, name)
     if not ms:
         return FilterSummary(
+            **shift,
             runs_ok=0,
             path_mean_m=None,
             path_max_m=None,
@@ -550,6 +829,7 @@ def summarise_filter(results: list[Seed004RunResult], name: str) -> FilterSummar
             est_rmse_m=None,
             est_max_m=None,
             j_bar_m2=None,
+            j_mean_m2=None,
             residual_std_m=None,
             residual_mean_m=None,
             est_rmse_axis_m=None,
@@ -558,6 +838,7 @@ def summarise_filter(results: list[Seed004RunResult], name: str) -> FilterSummar
     jk = np.mean([m["j_k"][:n] for m in ms], axis=0)
     jbar, jmean = float(np.max(jk)), float(np.mean(jk))
     return FilterSummary(
+        **shift,
         runs_ok=len(ms),
         path_mean_m=_mean([m["path_mean_m"] for m in ms]),
         path_max_m=float(max(m["path_max_m"] for m in ms)),
@@ -576,21 +857,76 @@ def summarise_filter(results: list[Seed004RunResult], name: str) -> FilterSummar
 
 def surrogate_j(
     scn: Seed004Scenario, seed: int, gains: CmnfGains
-) -> tuple[float | None, float | None]:
+) -> tuple[float | None, float | None, dict[str, Any]]:
     """The CMNF's J-bar (``max_k``) and time-mean J (``mean_k`` of ``E||X°_k - X_k||^2``) on
-    fresh surrogate paths, m^2 (the definitions used on physics; ``None`` if a path diverged)."""
+    fresh surrogate paths, m^2 (the definitions used on physics; ``None`` if a path diverged),
+    and with the seabed prediction the surrogate's own shift error (``shift_err_median_m``,
+    ``shift_err_p90_m`` to the histogram's 0.05 m bins, ``shift_err_bias_m``)."""
 
+    from tasks.paper004.sim import SHIFT_BIN_M
     from tasks.paper004.sim import fly as fly_surrogate
 
     s = surrogate(scn)
     n = scn.seed004.surrogate_test_paths
     runs = tuple(range(SURROGATE_RUN_OFFSET, SURROGATE_RUN_OFFSET + n))
     sums = fly_surrogate(s, seed, runs, gains, filters=("CMNF",), sample_runs=0)
+    shift: dict[str, Any] = {}
+    if sums.shift_n[0] > 0:
+        c = np.cumsum(sums.shift_hist[0]) / sums.shift_hist[0].sum()
+        shift = {
+            "shift_err_median_m": float((np.searchsorted(c, 0.5) + 0.5) * SHIFT_BIN_M),
+            "shift_err_p90_m": float((np.searchsorted(c, 0.9) + 0.5) * SHIFT_BIN_M),
+            "shift_err_bias_m": [float(v) for v in sums.shift_err[0] / sums.shift_n[0]],
+        }
     ok = sums.count[0] > 0
     if not ok.all():
-        return None, None
+        return None, None, shift
     j = sums.j[0] / sums.count[0]
-    return float(np.max(j)), float(np.mean(j))
+    return float(np.max(j)), float(np.mean(j)), shift
+
+
+PITCH_MARGIN_DEG = 5.0
+"""Hull pitch beyond ``seed004.max_gamma_deg`` allowed for in :func:`check_multibeam` (the hull
+pitches by up to ~13 deg at |gamma| <= 10 deg, the tail beat included)."""
+
+
+def check_multibeam(scn: Seed004Scenario, bed: seabed.Seabed) -> None:
+    """The seabed must be within the multibeam's range all along the nominal path, and the
+    sonar must image once per filter step.
+
+    The longest beam of an image is the shallowest, at ``min |gamma^i| - max_gamma -
+    PITCH_MARGIN_DEG`` below the horizontal; over the seabed ``h`` below the path it reaches the
+    bottom after about ``h / sin`` of that angle.
+
+    Raises:
+        ConfigError: naming the field, the value and what is allowed.
+    """
+    c, mb = scn.seed004, scn.multibeam
+    if abs(mb.period_s - c.dt_s) > 1e-9:
+        raise ConfigError(
+            f"multibeam.period_s = {mb.period_s:g}: must equal seed004.dt_s = {c.dt_s:g} (one "
+            "image per filter step)"
+        )
+    steep = float(np.min(np.abs(mb.elevations_rad())))
+    worst = steep - math.radians(c.max_gamma_deg + PITCH_MARGIN_DEG)
+    if worst <= math.radians(5.0):
+        raise ConfigError(
+            f"multibeam.elevation_deg = {mb.elevation_deg}: the shallowest beam must point at "
+            f"least seed004.max_gamma_deg + {PITCH_MARGIN_DEG:g} + 5 deg below the hull's axis"
+        )
+    p = path_config(scn).path()
+    try:
+        floor = bed.height_world(p[:, 0], p[:, 1])
+    except GeometryError as exc:
+        raise ConfigError(f"seabed: the nominal path leaves the seabed grid ({exc})") from None
+    reach = (p[:, 2] - floor) / math.sin(worst)
+    i = int(np.argmax(reach))
+    if reach[i] > mb.max_range_m:
+        raise ConfigError(
+            f"multibeam.max_range_m = {mb.max_range_m:g}: the seabed is {reach[i]:.1f} m away "
+            f"along the shallowest beam at step {i} of the nominal path ({-floor[i]:.2f} m deep "
+            f"there); allowed: at least {math.ceil(reach.max())} m"
+        )
 
 
 @dataclass(frozen=True)
@@ -643,11 +979,14 @@ class Seed004Experiment(MissionExperiment):
                     f"is at z = {z:.2f} m, out of the water column ({-floor:.2f} m deep there, "
                     "1 m clearance)"
                 )
+        if scenario.navigation.prediction == "seabed":
+            check_multibeam(scenario, bed)
 
     def run_block(self, scenario: Seed004Scenario, seed: int, runs: tuple[int, ...]):
         nominal = path_config(scenario).path()
         dt = scenario.seed004.dt_s
         gains = gains_for(scenario, seed) if "cmnf" in self.filters(scenario) else None
+        seabed = scenario.navigation.prediction == "seabed"
         out = []
         for r in runs:
             res = Seed004RunResult(r, {})
@@ -655,7 +994,7 @@ class Seed004Experiment(MissionExperiment):
                 design = Seed004Mission(f, gains if f == "cmnf" else None)
                 flight = fly(design, scenario, seed, r)
                 res.failed[f] = flight.failed
-                res.metrics[f] = flight_metrics(flight, nominal, dt)
+                res.metrics[f] = flight_metrics(flight, nominal, dt, seabed)
             out.append(res)
         return out
 
@@ -673,10 +1012,11 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
     summ = {f: summarise_filter(results, f) for f in names}
     files: list[str] = []
     j_sur = j_phys = gap = m_sur = m_phys = m_gap = None
+    sur_shift: dict[str, Any] = {}
     if "cmnf" in names:
         gains = gains_for(scn, ctx.seed)
         files.append(gains.save(ctx.out_dir / "cmnf-gains.npz").name)
-        j_sur, m_sur = surrogate_j(scn, ctx.seed, gains)
+        j_sur, m_sur, sur_shift = surrogate_j(scn, ctx.seed, gains)
         j_phys, m_phys = summ["cmnf"].j_bar_m2, summ["cmnf"].j_mean_m2
         if j_sur is not None and j_phys is not None:
             gap, m_gap = j_phys - j_sur, m_phys - m_sur
@@ -694,12 +1034,19 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
             )
         if summ[f].runs_ok < ctx.n_runs:
             warnings.append(
-                f"{f}: {ctx.n_runs - summ[f].runs_ok} of {ctx.n_runs} runs have no data"
+                f"{f}: {ctx.n_runs - summ[f].runs_ok} of {ctx.n_runs} runs failed or have no "
+                "data (see failures)"
+            )
+        if summ[f].shift_none_steps:
+            warnings.append(
+                f"{f}: {summ[f].shift_none_steps} filter steps without a seabed shift (too few "
+                "beams with an echo in both images): the commanded displacement was predicted"
             )
     metrics = Seed004Metrics(
         experiment=exp.name,
         seed=ctx.seed,
         n_runs=ctx.n_runs,
+        prediction=scn.navigation.prediction,
         filters=summ,
         cmnf_j_bar_surrogate_m2=j_sur,
         cmnf_j_bar_physics_m2=j_phys,
@@ -707,6 +1054,7 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
         cmnf_j_mean_surrogate_m2=m_sur,
         cmnf_j_mean_physics_m2=m_phys,
         cmnf_j_mean_gap_m2=m_gap,
+        surrogate_shift=sur_shift,
         cmnf_train_paths=scn.seed004.train_paths,
         failures=failures,
         warnings=warnings,
@@ -753,6 +1101,51 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
         ),
     )
     tables = [t]
+    if scn.navigation.prediction == "seabed":
+        tables.append(
+            Table(
+                "Seabed-sensing prediction: the shift's own error (norm of the shift less the "
+                "true move of the reference point, every filter step with a shift, all runs) and "
+                "the flights that diverged",
+                [
+                    "Filter",
+                    "Diverged runs",
+                    "Steps with a shift",
+                    "Steps without",
+                    "Beams used",
+                    "Median error (m)",
+                    "P90 error (m)",
+                    "Bias x (m)",
+                    "Bias y (m)",
+                    "Bias z (m)",
+                ],
+                [
+                    [
+                        f.upper(),
+                        v.diverged_runs,
+                        v.shift_steps,
+                        v.shift_none_steps,
+                        v.shift_beams_mean,
+                        v.shift_err_median_m,
+                        v.shift_err_p90_m,
+                        *(v.shift_err_bias_m or [None] * 3),
+                    ]
+                    for f, v in summ.items()
+                ],
+                digits=2,
+                slug="seabed-shift",
+                note=(
+                    f"Multibeam {scn.multibeam.beams_elevation} x {scn.multibeam.beams_azimuth} "
+                    f"beams, range noise {scn.multibeam.range.sigma_m:g} m, Appendix A basis "
+                    f"{c.slope_basis}; the two images of a shift are aimed from the hull's "
+                    "attitudes at their pings (reading 'turning', exact beam change). On the "
+                    "CMNF's surrogate paths: median "
+                    f"{_fmt(sur_shift.get('shift_err_median_m'))} m, p90 "
+                    f"{_fmt(sur_shift.get('shift_err_p90_m'))} m, bias "
+                    f"{[round(v, 2) for v in sur_shift.get('shift_err_bias_m', [])]} m."
+                ),
+            )
+        )
     if failures:
         tables.append(Table("Failed flights", ["Failure"], [[f] for f in failures], slug="failed"))
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
@@ -814,6 +1207,7 @@ register(
                 "heading_sigma_deg": 3.0,
             },
             "current": {"kind": "uniform", "speed_m_s": 0.1, "direction_deg": 60.0},
+            "seabed": SEABED_PRESET,
             "sensors": {"use_usbl": False, "use_gps": False},
             "guidance": {"waypoints": [{"east_m": 60.0, "north_m": 0.0, "depth_m": 2.5}]},
             "timing": {"max_duration_s": 170.0},

@@ -15,6 +15,7 @@ from __future__ import annotations
 import functools
 import json
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +31,10 @@ from nav.bearings import SystemPrediction, ekf_update, predict, upmf_update
 from nav.cmnf import CmnfGains, cmnf_step, train
 from nav.local_control import ControlLimits, limited_control, optimal_control
 from nav.pcrb import bearing_information
+
+if TYPE_CHECKING:
+    from bauv_sim.seabed import SeabedConfig
+    from bauv_sim.sensors.multibeam import MultibeamConfig
 
 Array = NDArray[np.float64]
 
@@ -53,8 +58,14 @@ class LoopSetting:
         upmf_form: ``"unbiased"`` or ``"printed"`` (:func:`nav.bearings.upmf_update`).
         floor: the CMNF's singular-value floor.
         train_paths: CMNF training paths.
-        prediction: ``"system"`` (eq. 1, row 1 of Table 1) or ``"seabed-one_attitude"`` /
-            ``"seabed-turning"`` (eq. 15, row 2; :mod:`tasks.paper004.seabed`).
+        prediction: ``"system"`` (eq. 1, row 1 of Table 1), ``"seabed-one_attitude"`` /
+            ``"seabed-turning"`` (eq. 15, row 2, over the seed's harmonic seabeds;
+            :mod:`tasks.paper004.seabed`) or ``"heightfield"`` (eq. 15 over the heightfield
+            ``heightfield`` with the multibeam ``multibeam``:
+            :class:`tasks.paper004.seabed.HeightfieldPrediction`).
+        heightfield: the scene's seabed (for ``"heightfield"``).
+        multibeam: the multibeam of a seabed prediction (default: seed 004's).
+        slope_basis: Appendix A's basis (for ``"heightfield"``).
     """
 
     path: NominalPathConfig
@@ -68,6 +79,9 @@ class LoopSetting:
     floor: float = 1e-9
     train_paths: int = 100_000
     prediction: str = "system"
+    heightfield: SeabedConfig | None = None
+    multibeam: MultibeamConfig | None = None
+    slope_basis: str = "quadratic"
 
     @property
     def b(self) -> Array:
@@ -101,6 +115,11 @@ class LoopSetting:
             "train": self.train_paths,
             "prediction": self.prediction,
         }
+        if self.prediction == "heightfield":
+            d["heightfield"] = None if self.heightfield is None else self.heightfield.model_dump()
+            d["slope_basis"] = self.slope_basis
+        if self.prediction != "system" and self.multibeam is not None:
+            d["multibeam"] = self.multibeam.model_dump()
         return json.dumps(d, sort_keys=True)
 
 
@@ -150,10 +169,28 @@ def prediction_of(s: LoopSetting, seed: int, runs: tuple[int, ...], world, strea
     """The setting's prediction for a batch of paths, and the world it needs (sensed or not)."""
     if s.prediction == "system":
         return SystemPrediction(s.path.dt_s, s.fnoise.s_w), world
+    if s.prediction == "heightfield":
+        from tasks.paper004.seabed import HeightfieldPrediction, heightfield
+
+        if s.heightfield is None or s.multibeam is None:
+            raise ValueError("prediction 'heightfield' needs the heightfield and the multibeam")
+        pred = HeightfieldPrediction(
+            heightfield(s.heightfield),
+            s.multibeam,
+            s.slope_basis,
+            seed,
+            runs,
+            s.path.dt_s,
+            s.fnoise.s_w,
+            stream,
+        )
+        return pred, _SensedWorld(world, pred)
     from tasks.paper004.seabed import SeabedPrediction
 
     reading = s.prediction.removeprefix("seabed-")
-    pred = SeabedPrediction(reading, seed, runs, s.path.dt_s, s.path.controls(), stream)
+    pred = SeabedPrediction(
+        reading, seed, runs, s.path.dt_s, s.path.controls(), stream, cfg=s.multibeam
+    )
     return pred, _SensedWorld(world, pred)
 
 
@@ -207,6 +244,8 @@ class LoopSums:
         shift_err: sum of ``dX^ - (X_{k+1} - X_k)``, ``(F, 3)`` m.
         shift_hist: histogram of its norm, bins of :data:`SHIFT_BIN_M` from 0 (the last bin
             holds everything beyond), ``(F, SHIFT_BINS)``.
+        shift_none: sensed shifts not produced (too few echoes; the command stood in), ``(F,)``.
+        shift_beams: sum of the beams the sensed shifts used (produced or not), ``(F,)``.
         samples: run -> filter -> ``(N + 1, 6)`` true and estimated positions (float32).
     """
 
@@ -221,6 +260,8 @@ class LoopSums:
     shift_n: Array
     shift_err: Array
     shift_hist: Array
+    shift_none: Array = field(default_factory=lambda: np.zeros(0))
+    shift_beams: Array = field(default_factory=lambda: np.zeros(0))
     samples: dict = field(default_factory=dict)
 
 
@@ -277,6 +318,8 @@ def fly(
         shift_n=np.zeros(F),
         shift_err=np.zeros((F, 3)),
         shift_hist=np.zeros((F, SHIFT_BINS)),
+        shift_none=np.zeros(F),
+        shift_beams=np.zeros(F),
     )
     keep = [i for i, r in enumerate(runs) if r < sample_runs]
     for fi, name in enumerate(filters):
@@ -296,8 +339,11 @@ def fly(
             x_prev = x
             x = world.advance(k, x, u)
             shift = pred(k, x_hat, u)  # after the move (a sensed shift reads t_{k+1}'s data)
-            if s.prediction != "system":
-                e = (shift.displacement_m - (x - x_prev))[alive]
+            if s.prediction != "system" and getattr(pred, "last", None) is not None:
+                ok = pred.last.ok[alive]
+                out.shift_none[fi] += (~ok).sum()
+                out.shift_beams[fi] += pred.last.beams[alive].sum()
+                e = (shift.displacement_m - (x - x_prev))[alive][ok]
                 out.shift_n[fi] += len(e)
                 out.shift_err[fi] += e.sum(0)
                 idx = np.minimum(np.linalg.norm(e, axis=1) / SHIFT_BIN_M, SHIFT_BINS - 1)

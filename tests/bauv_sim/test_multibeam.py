@@ -7,7 +7,7 @@ import pytest
 from bauv_sim import seabed as sb
 from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.errors import ConfigError
-from bauv_sim.sensors import LengthErrorConfig
+from bauv_sim.sensors import LengthErrorConfig, multibeam
 from bauv_sim.sensors.multibeam import (
     HarmonicSeabed,
     Multibeam,
@@ -45,7 +45,11 @@ def _dense_first_root(f, lmax, step):
     return 0.5 * (a + b), v[:i]
 
 
-def test_harmonic_ranges_are_the_first_crossing_found_by_dense_sampling():
+@pytest.mark.parametrize("steps", [60, 3, 0], ids=["curvature", "mixed", "first-order"])
+def test_harmonic_ranges_are_the_first_crossing_found_by_dense_sampling(steps, monkeypatch):
+    # the curvature-bounded march alone, handing rays over after 3 steps, and the first-order
+    # march alone must all find the same first crossing
+    monkeypatch.setattr(multibeam, "CURVATURE_STEPS", steps)
     paths = 4
     bed = HarmonicSeabed.draw(7, tuple(range(paths)))
     cfg = MultibeamConfig()
@@ -188,6 +192,38 @@ def test_mujoco_ray_ranges_equal_the_triangulated_heightfield_intersection():
     # a shorter maximum range removes the far echoes
     d2, h2 = phys.seabed_ray_distances(origin, e, 20.0)
     assert np.array_equal(h2, hit & (dist <= 20.0)) and np.all(d2[~h2] == 0)
+
+
+def test_analytic_heightfield_ranges_equal_mujoco_and_the_dense_first_crossing():
+    # the surrogate's ray cast (Seabed.ray_ranges, triangle by triangle) against MuJoCo's rays on
+    # the same heightfield, and against the 1 mm grid and bisection of the triangulated surface
+    phys = build_physics(
+        SceneConfig(seabed=SMALL, beacons=(), vehicles=(VehicleSpec(depth_m=5.0),))
+    )
+    bed = sb.generate(SMALL)
+    rng = np.random.default_rng(8)
+    checked = 0
+    for _ in range(3):
+        origin = np.array([rng.uniform(-40, 40), rng.uniform(-40, 40), -6.0 - rng.uniform(0, 3)])
+        e = rng.normal(size=(60, 3))
+        e[:, 2] = -np.abs(e[:, 2]) - 0.1
+        e /= np.linalg.norm(e, axis=1)[:, None]
+        e[-1] = (0.6, 0.0, 0.8)  # up: no echo
+        dist, hit = phys.seabed_ray_distances(origin, e, 150.0)
+        L, h = bed.ray_ranges(origin, e, 150.0)
+        assert np.array_equal(h, hit) and not h[-1] and L[-1] == 0
+        np.testing.assert_allclose(L[h], dist[h], rtol=0, atol=1e-9)
+        for i in range(0, 59, 6):
+            want = _triangulated_range(bed, origin, e[i], 150.0)
+            assert (want is None) == (not h[i])
+            if want is not None:
+                assert abs(L[i] - want) < 1e-9, (i, L[i], want)
+                checked += 1
+    assert checked >= 20
+    # batched shapes, an origin below the seabed and a ray leaving the grid have no echo
+    o = np.array([[[0.0, 0.0, -60.0]], [[79.0, 0.0, -6.0]]])
+    L, h = bed.ray_ranges(o, np.array([[[0.0, 0.0, -1.0]], [[1.0, 0.0, -0.01]]]), 150.0)
+    assert L.shape == (2, 1) and not h.any() and np.all(L == 0)
 
 
 def test_mujoco_ray_ranges_on_a_flat_seabed_are_the_plane_intersection():

@@ -335,3 +335,30 @@ def test_predicted_shift_is_added_to_the_estimate_and_its_covariance():
     xt, Pt = predict(x, P, PredictedShift(d, c))
     np.testing.assert_allclose(xt, x + d)
     np.testing.assert_allclose(Pt, 3 * np.broadcast_to(np.eye(3), (4, 3, 3)))
+
+
+def test_pseudo_noise_mean_is_the_monte_carlo_mean_of_eq20s_noise():
+    """The UPMF's correction (its unbiased form takes this mean off Y'): the mean of eq. 20's
+    noise term at the true position, ``Y' - Psi1(Y) X`` with ``Y = h(X) + E``, by Monte Carlo
+    with antithetic draws (the odd orders cancel pairwise), against the second-order formula;
+    beacons west (phi in the left half-plane) and east, below and above the vehicle's depth."""
+    from nav.bearings import pseudo_noise_mean
+
+    beacons = np.array([[-80.0, 30.0, 0.0], [120.0, -40.0, 5.0]])
+    x = np.array([[0.0, 0.0, -10.0]])
+    h, ok = bearings(x, beacons)
+    assert ok.all()
+    sig = 0.02  # fourth-order terms ~ sig^2 relative: 0.04 %
+    want = pseudo_noise_mean(x, h, beacons, sig**2 * np.eye(2))[0]
+    n = 200_000
+    eps = np.random.default_rng(0).normal(0.0, sig, (n, 2, 2))
+    xr = np.broadcast_to(x, (n, 3))
+
+    def noise(y):
+        yp, psi1, _ = pseudo_measurements(y, xr, beacons)
+        return yp - np.einsum("nbij,nj->nbi", psi1, xr)
+
+    r = 0.5 * (noise(h + eps) + noise(h - eps))
+    mean, se = r.mean(axis=0), r.std(axis=0) / math.sqrt(n)
+    assert np.all(np.abs(want) > 20 * se)  # a mean well resolved by the draws
+    assert np.all(np.abs(mean - want) < 0.01 * np.abs(want) + 4 * se), (mean, want, se)

@@ -304,3 +304,19 @@ def test_seabed_track_is_eq16_and_exact_on_the_valley():
         )
         pos = pos + s.shift_m[0]
         np.testing.assert_allclose(track[0, k + 1], pos, atol=1e-12)
+
+
+def test_slope_fit_least_squares_is_the_pseudo_inverse_solution_also_when_rank_deficient():
+    # Appendix A's fit goes through the Gram matrix where it is well conditioned and through the
+    # SVD elsewhere: both must give numpy's pinv solution (minimum norm when rank-deficient)
+    from nav.seabed import _least_squares
+
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(3, 40, 6))
+    a[1, :, 5] = a[1, :, 2]  # two equal columns: rank 5
+    a[2, :, 4] = 1e-7 * a[2, :, 0] + a[2, :, 1]  # nearly dependent: condition ~1e7
+    a[:, 30:] = 0.0  # masked points
+    rhs = rng.normal(size=(3, 40, 1))
+    got = _least_squares(a.transpose(0, 2, 1), rhs)
+    want = np.linalg.pinv(a, rcond=1e-10) @ rhs
+    np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-9)

@@ -266,7 +266,7 @@ def test_row2_seabed_prediction_runs_for_both_readings_and_reports_the_shift_err
         assert cmnf["paper_m2"] == 27.25
         assert m["claims"][f"{c['label']}: CMNF J-bar finite"]
         for e in c["shift_error"]:
-            assert e["shifts"] == 6 * 15 and 0 < e["median_m"] <= e["p90_m"]
+            assert e["shifts"] + e["not_produced"] == 6 * 15 and 0 < e["median_m"] <= e["p90_m"]
             assert len(e["bias_m"]) == 3
     text = (out / "tables.md").read_text()
     assert "Table 1, row 2" in text and "shift estimate" in text and "nan" not in text.lower()
@@ -279,3 +279,65 @@ def test_training_seabeds_are_not_the_test_seabeds():
     test = HarmonicSeabed.draw(0, (0, 1))
     train = HarmonicSeabed.draw(0, (TRAIN_RUN_OFFSET, TRAIN_RUN_OFFSET + 1))
     assert not np.allclose(test.a, train.a)
+
+
+def test_row2_seabed_out_of_range_degrades_with_warnings_and_no_nan(tmp_path):
+    """The seed's seabed lies ~20-35 m below the path: a 25 m multibeam range loses the far
+    beams (fewer beams per shift, a warning), a 5 m range loses them all (no shift is produced,
+    the commanded displacement stands in, a warning); nothing is NaN and the CMNF stays finite."""
+    over = [
+        "path.duration_s=10.0",
+        "filters.train_paths=30",
+        "runner.block_size=6",
+        "report.figures=false",
+        "sweep.prediction=['seabed-one_attitude']",
+    ]
+    beams = {}
+    for rng_m in (25.0, 5.0):
+        out = tmp_path / f"r{rng_m:g}"
+        run(
+            "paper-004/table-1-seabed",
+            n_runs=6,
+            seed=0,
+            out_dir=out,
+            overrides=[*over, f"multibeam.max_range_m={rng_m}"],
+            progress=False,
+        )
+        m = _metrics(out)
+        text = (out / "metrics.json").read_text() + (out / "tables.md").read_text()
+        assert "nan" not in text.lower()
+        (c,) = m["cases"]
+        cmnf = next(f for f in c["filters"] if f["filter"] == "CMNF")
+        assert cmnf["j_bar_m2"] is not None and math.isfinite(cmnf["j_bar_m2"])
+        e = next(e for e in c["shift_error"] if e["filter"] == "CMNF")
+        beams[rng_m] = e["beams_mean"]
+        assert any("beams per shift had an echo" in w for w in m["warnings"]), m["warnings"]
+        if rng_m == 5.0:
+            assert e["shifts"] == 0 and e["not_produced"] == 6 * 10 and e["median_m"] is None
+            assert any("seabed shifts not produced" in w for w in m["warnings"])
+    assert 0 == beams[5.0] < beams[25.0] < 0.9 * 64
+
+
+def test_row2_same_numbers_whatever_the_worker_count(tmp_path):
+    # row 2 (ray casting, seabed shifts, the CMNF trained with them): a block's numbers come
+    # from its runs' streams alone, not from the worker that flies it
+    over = [
+        "path.duration_s=8.0",
+        "filters.train_paths=20",
+        "runner.block_size=4",
+        "report.figures=false",
+    ]
+    outs = []
+    for workers in (1, 2):
+        out = tmp_path / f"w{workers}"
+        run(
+            "paper-004/table-1-seabed",
+            n_runs=12,
+            seed=5,
+            out_dir=out,
+            overrides=over,
+            workers=workers,
+            progress=False,
+        )
+        outs.append((out / "metrics.json").read_text())
+    assert outs[0] == outs[1]

@@ -5,6 +5,7 @@ section-6 beacons scaled by hand; the distance to a polyline against brute force
 sampling; the course hand-over checked by the flight staying near the nominal path (a vehicle
 steered with a wrong angle convention leaves it by tens of metres in 20 s)."""
 
+import dataclasses
 import itertools
 import json
 import math
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 
 from bauv_sim.build import build_physics
+from nav.bearings import velocity
 from tasks.core import registry
 from tasks.core.runner import plan_batch, run
 from tasks.missions.seed004 import (
@@ -22,6 +24,7 @@ from tasks.missions.seed004 import (
     beacons_world,
     depth_setpoint,
     distance_to_polyline,
+    surrogate,
 )
 
 NAME = "mission/seed004"
@@ -56,6 +59,9 @@ def test_short_run_completes_without_nan_and_stays_on_the_path(short_runs):
     for f, s in m["filters"].items():
         assert s["runs_ok"] == 1, f
         for k, v in s.items():
+            if k.startswith("shift_") and k not in ("shift_steps", "shift_none_steps"):
+                assert v is None, (f, k, v)  # no seabed prediction: no seabed shift
+                continue
             vals = v if isinstance(v, list) else [v]
             assert all(x is not None and math.isfinite(x) for x in vals), (f, k, v)
         # 20 s along a path that turns by +-60 deg: a wrong course convention (theta taken as a
@@ -158,3 +164,183 @@ def test_depth_setpoint_makes_the_depth_loop_fly_the_pitch(gamma_deg, v):
     pid = PID(ap.depth_kp, 0.0, ap.depth_kd, -1.0, 1.0)
     pitch = -pid.step(sp - depth, -w_up, 0.2)  # as the autopilot: depth error, depth rate
     assert v * pitch == pytest.approx(w_up, rel=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# The seabed-sensing prediction (navigation.prediction = "seabed")
+
+SEABED = [*FAST, "navigation.prediction=seabed"]
+
+
+def _flat_image(cfg, origin, pitch, heading, depth_m):
+    """The multibeam image of a flat seabed at ``depth_m`` from ``origin``: each beam's range to
+    the plane z = -depth written out here (beam elevation g below the axis pitched by ``pitch``,
+    azimuth from the heading's seed-004 angle)."""
+    from bauv_sim.sensors.multibeam import MultibeamImage
+
+    g = pitch + cfg.elevations_rad()[:, None] + 0 * cfg.azimuths_rad()[None, :]
+    L = (origin[2] + depth_m) / -np.sin(g)
+    echo = np.ones(L.shape, bool)
+    att = np.array([pitch, math.pi / 2 - heading])
+    return MultibeamImage(L, echo, att, cfg.elevations_rad(), cfg.azimuths_rad())
+
+
+def test_sonar_shift_on_a_flat_seabed_is_the_vertical_move_less_the_lever_arms_turn():
+    """A flat seabed observes only the vertical move of the transducer (the shift has no
+    horizontal component of its own); the reference point's shift is the transducer's less the
+    turn of the lever arm between the pings (heading 30 -> 42 deg), worked out here with the
+    hull's forward axis (sin h, cos h, 0) at zero roll and pitch."""
+    from bauv_sim.sensors.multibeam import MultibeamConfig
+    from bauv_sim.sensors.online import Measurement
+    from bauv_sim.sensors.rig import RigTick
+    from tasks.missions.seed004 import SonarShift
+
+    cfg = MultibeamConfig(range={"sigma_m": 0.0})
+    lever = np.array([0.45, 0.0, -0.159])
+    fallback = np.diag([0.09, 0.09, 0.01])
+    sonar = SonarShift(cfg, lever, "plane", 1.0, fallback)
+    u = np.array([[0.0, 0.3, 1.0]])
+    h0, h1 = math.radians(30.0), math.radians(42.0)
+
+    def tick(t, head, z):
+        fwd = np.array([math.sin(head), math.cos(head), 0.0])
+        transducer = np.array([0.0, 0.0, z]) + 0.45 * fwd + np.array([0.0, 0.0, -0.159])
+        img = _flat_image(cfg, transducer, 0.0, head, 6.0)
+        m = Measurement("multibeam", t, t, img.ranges_m.ravel(), np.array([0.0, 0.0, head]), img)
+        return RigTick(t, {}, frozenset(), (m,)), transducer
+
+    tk, p0 = tick(0.0, h0, -2.0)
+    sonar.take(tk)
+    first = sonar(np.zeros((1, 3)), u)  # one image only: the commanded move, S^W
+    assert np.allclose(first.displacement_m, [[math.cos(0.3), math.sin(0.3), 0.0]])
+    assert np.array_equal(first.covariance_m2, fallback) and not sonar.last_ok
+    tk, p1 = tick(1.0, h1, -2.35)
+    sonar.take(tk)
+    got = sonar(np.zeros((1, 3)), u)
+    assert sonar.last_ok and sonar.last_beams == 64
+    arm_turn = (p1 - np.array([0.0, 0.0, -2.35])) - (p0 - np.array([0.0, 0.0, -2.0]))
+    want = np.array([0.0, 0.0, -0.35]) - arm_turn  # transducer's vertical move, less the turn
+    assert np.allclose(got.displacement_m[0], want, atol=1e-9), (got.displacement_m, want)
+    # the horizontal directions are unobserved on a plane: stated with the fallback variance
+    assert np.all(np.diag(got.covariance_m2[0])[:2] >= 1e5) and got.covariance_m2[0, 2, 2] < 1e-6
+
+
+def test_surrogate_images_the_scene_heightfield_and_shifts_exactly_on_a_flat_one():
+    """The kinematic surrogate's prediction images the scene's heightfield (here flat, 6 m deep,
+    no range noise), image k+1 aimed from u_k: from the second step on, its shift's vertical
+    component is what eq. 11 gives on a plane with the beams turning between the images (a
+    plane observes nothing else), worked out here: each beam states the true vertical move plus
+    de_z dL (the product eq. 11 drops), and the least squares averages the beams; the first
+    step is the command."""
+    from bauv_sim.seabed import SeabedConfig
+    from bauv_sim.sensors.multibeam import MultibeamConfig
+    from tasks.paper004.seabed import HeightfieldPrediction
+    from tasks.paper004.sim import prediction_of
+
+    scn = plan_batch(NAME, overrides=SEABED).scenario
+    flat = SeabedConfig(half_extent_m=250.0, cell_m=5.0, relief_std_m=0.0, slope=0.0)
+    s = dataclasses.replace(
+        surrogate(scn),
+        heightfield=flat,
+        multibeam=MultibeamConfig(range={"sigma_m": 0.0}),
+        slope_basis="plane",
+    )
+
+    class Still:
+        def start(self):
+            return np.array([[0.0, 0.0, -2.0], [5.0, 1.0, -3.0]])
+
+        def advance(self, k, x, u):
+            return x + np.array([[0.9, 0.1, -0.2], [1.0, -0.3, 0.25]])
+
+        def observe(self, k, x):
+            return None
+
+    pred, world = prediction_of(s, 0, (0, 1), Still(), "test")
+    assert isinstance(pred, HeightfieldPrediction)
+    elev = MultibeamConfig().elevations_rad()
+    x = world.start()
+    u_prev = None
+    for k in range(4):
+        u = np.array([[0.05, 0.2, 1.0], [-0.1, -0.3, 1.1]]) + k * np.array([0.04, -0.15, 0.0])
+        x1 = world.advance(k, x, u)
+        sh = pred(k, x, u)
+        if k == 0:
+            assert pred.last is None
+            np.testing.assert_allclose(sh.displacement_m, velocity(u))
+        else:
+            assert pred.last.ok.all()
+            ez0 = np.sin(u_prev[:, :1] + elev)  # (paths, Mi): e_z is the same for every azimuth
+            ez1 = np.sin(u[:, :1] + elev)
+            dl = (x1[:, 2:] + 6.0) / -ez1 - (x[:, 2:] + 6.0) / -ez0
+            want = (x1 - x)[:, 2] + ((ez1 - ez0) * dl).mean(axis=1)
+            np.testing.assert_allclose(sh.displacement_m[:, 2], want, atol=1e-9)
+            assert np.abs(want - (x1 - x)[:, 2]).max() > 1e-3  # the turn matters here
+        x, u_prev = x1, u
+
+
+def test_seabed_prediction_flies_every_filter_without_nan_and_reports_the_shift(tmp_path):
+    outs = []
+    for workers in (1, 2):
+        out = tmp_path / f"w{workers}"
+        run(NAME, n_runs=2, seed=3, out_dir=out, overrides=SEABED, workers=workers, progress=False)
+        outs.append(out)
+    a, b = ((o / "metrics.json").read_text() for o in outs)
+    assert a == b  # same numbers whatever the worker count
+    m = _metrics(outs[0])
+    assert m["prediction"] == "seabed" and m["failures"] == []
+    for f, s in m["filters"].items():
+        # 20 steps: a shift at steps 2..20 (the sonar has no image at t = 0) of both runs
+        assert s["shift_steps"] + s["shift_none_steps"] == 2 * 19, f
+        assert s["shift_beams_mean"] > 40, f
+        for k, v in s.items():
+            vals = v if isinstance(v, list) else [v]
+            assert all(x is not None and math.isfinite(x) for x in vals), (f, k, v)
+    sur = m["surrogate_shift"]
+    assert set(sur) == {"shift_err_median_m", "shift_err_p90_m", "shift_err_bias_m"}
+    assert math.isfinite(m["cmnf_gap_m2"])
+    text = (outs[0] / "tables.md").read_text()
+    assert "Seabed-sensing prediction" in text and "nan" not in text.lower()
+
+
+def test_a_filter_that_leaves_the_nominal_path_is_a_named_divergence_not_nan(tmp_path):
+    out = tmp_path / "div"
+    over = [*SEABED, "seed004.diverge_m=0.5", "navigation.filter=ekf"]
+    run(NAME, n_runs=1, seed=3, out_dir=out, overrides=over, progress=False)
+    m = _metrics(out)
+    s = m["filters"]["ekf"]
+    assert s["runs_ok"] == 0 and s["diverged_runs"] == 1
+    assert len(m["failures"]) == 1 and "EKF diverged at step" in m["failures"][0]
+    assert "seed004.diverge_m = 0.5" in m["failures"][0]
+    assert "nan" not in (out / "metrics.json").read_text().lower()
+
+
+@pytest.mark.parametrize(
+    "args, pattern",
+    [
+        (["--set", "multibeam.max_range_m=3"], "multibeam.max_range_m = 3"),
+        (["--set", "multibeam.period_s=0.5"], "multibeam.period_s = 0.5"),
+        (["--set", "navigation.prediction=dvl"], "navigation.prediction"),
+    ],
+)
+def test_bad_seabed_setting_is_one_line_exit_2(tmp_path, args, pattern):
+    out = tmp_path / "bad"
+    pred = ["--set", "navigation.prediction=seabed"]
+    res = _bauv(tmp_path, "--runs", "1", "--out", str(out), *pred, *args)
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
+    assert not out.exists()
+
+
+def test_beams_without_echo_degrade_to_the_command_with_a_warning_and_no_nan(tmp_path):
+    out = tmp_path / "noecho"
+    over = [*SEABED, "multibeam.range.dropout_probability=0.9", "navigation.filter=cmnf"]
+    run(NAME, n_runs=1, seed=3, out_dir=out, overrides=over, progress=False)
+    m = _metrics(out)
+    s = m["filters"]["cmnf"]
+    # P(echo in both images) = 0.01 per beam: a shift needs at least 7 such beams of 64
+    assert s["runs_ok"] == 1 and s["shift_none_steps"] >= 15, s
+    assert any("without a seabed shift" in w for w in m["warnings"]), m["warnings"]
+    assert "nan" not in (out / "metrics.json").read_text().lower()
+    assert math.isfinite(s["est_rmse_m"]) and math.isfinite(s["path_max_m"])
