@@ -6,10 +6,20 @@ Each seed is one run of the same physics job: the BAUV (``models/bauv/scene.xml`
 drawn from the stream ``(seed, run, "bench", "current")``), at the missions' timestep preset. Per
 control tick (0.2 s) each seed's autopilot runs in Python and sets the five actuator commands;
 between ticks the physics steps ``tick / timestep`` times with nothing from Python. The fluid
-forces are MuJoCo's own ellipsoid model, and the sea acts once per tick (``option wind`` = the
-current at the vehicle, buoyancy scaled by the submerged fraction), so the steps between two ticks
-need no Python callback: batched stepping is the same physics, which the script checks (every
-variant's final states must equal the reference's bit for bit).
+forces are MuJoCo's own ellipsoid drag and the ``bauv.hydro`` engine plugin (C), and the sea acts
+once per tick (``option wind`` and the plugin's water = the current at the vehicle, buoyancy
+scaled by the submerged fraction), so the steps between two ticks need no Python callback:
+batched stepping is the same physics, which the script checks (every variant's final states must
+equal the reference's bit for bit).
+
+**The plugin's water per seed.** Issue 11's hydrodynamics is the engine plugin ``bauv.hydro``
+(C, declared in the model), so every variant applies it inside ``mj_step`` with no Python and no
+GIL. The plugin reads the water it acts in from its own state (``plugin_state``: velocity, rate,
+epoch; :func:`bauv_sim.hydro.set_water`), which the facade's sea writes each tick; the batched
+variants write the same uniform current into each seed's plugin state once (a ``MjData`` each, a
+bound ``plugin_state`` row of the batch, the plugin slice of each rollout state), beside
+``option wind`` for MuJoCo's own drag. A current that varies along the path would need that
+write per tick, as the facade does.
 
 Variants, timed by :mod:`harness` (interleaved, warm-up, repeats, min and median, load):
 
@@ -61,6 +71,8 @@ import mujoco  # noqa: E402
 import mujoco.batch  # noqa: E402
 import numpy as np  # noqa: E402
 from harness import machine, measure  # noqa: E402
+
+from bauv_sim import hydro  # noqa: E402
 
 README = ROOT / "benchmarks" / "README.md"
 SEED = 0
@@ -207,20 +219,28 @@ def _model(timestep_s: float):
     return p, p.model.ptr
 
 
+def _instance(m) -> int:
+    """The plugin instance of the scene's one vehicle."""
+    (inst,) = hydro.plugin_instances(m).values()
+    return inst
+
+
 def mjdata_loop(seconds: float, dt: float) -> np.ndarray:
     """All seeds in one process: one model, one MjData per seed, one thread."""
     from bauv_sim.sea import submerged_fraction
 
     p0, m = _model(dt)
     n = p0.steps_per_tick
+    cur = [current_of(r) for r in range(RUNS)]
+    inst = _instance(m)
     datas = []
-    for _ in range(RUNS):
+    for i in range(RUNS):
         d = mujoco.MjData(m)
         d.qpos[:] = p0.data.qpos
         d.qvel[:] = p0.data.qvel
+        hydro.set_water(m, d, inst, cur[i])
         mujoco.mj_forward(m, d)
         datas.append(d)
-    cur = [current_of(r) for r in range(RUNS)]
     pilots = [Pilot(p0) for _ in range(RUNS)]  # p0: the scratch physics that encodes commands
     floats = np.flatnonzero(m.body_gravcomp > 0)
     g0 = m.body_gravcomp[floats].copy()
@@ -247,8 +267,12 @@ def batched(seconds: float, dt: float, nthread: int) -> np.ndarray:
     qpos, qvel, ctrl = b.bind("qpos"), b.bind("qvel"), b.bind("ctrl")
     qpos[:] = p0.data.qpos
     qvel[:] = p0.data.qvel
-    b.forward()
     cur = np.array([current_of(r) for r in range(RUNS)])
+    a = int(m.plugin_stateadr[_instance(m)])
+    ps = b.bind("plugin_state")  # the plugin's water per seed: velocity, rate, epoch
+    ps[:, a : a + 3] = cur
+    ps[:, a + 3 : a + 7] = 0.0
+    b.forward()
     wind = b.expand("opt.wind")
     wind[:] = cur
     grav = b.expand("body_gravcomp")
@@ -287,8 +311,12 @@ def rolled_out(seconds: float, dt: float, nthread: int) -> np.ndarray:
     datas = [mujoco.MjData(m) for _ in range(nthread)]
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     x = np.empty((RUNS, mujoco.mj_stateSize(m, spec)))
-    for i in range(RUNS):
-        mujoco.mj_getState(m, p0.data.ptr, x[i], spec)
+    inst = _instance(m)
+    scratch = mujoco.MjData(m)
+    for i in range(RUNS):  # each seed's state carries its water in the plugin's slice
+        mujoco.mj_copyData(scratch, m, p0.data.ptr)
+        hydro.set_water(m, scratch, inst, cur[i])
+        mujoco.mj_getState(m, scratch, x[i], spec)
     nq = m.nq
     qpos, qvel = x[:, 1 : 1 + nq], x[:, 1 + nq : 1 + nq + m.nv]  # after the time
     floats = np.flatnonzero(m.body_gravcomp > 0)

@@ -3,26 +3,29 @@
 Prints, measured in the same run (issue 13, check 1 and 3):
 
 * ``paper-000/test-1`` (600 s at 1 Hz, USBL every 5 s; figures and recording off) with
-  ``--passages`` runs on 1 and on 2 workers, interleaved: the whole ``bauv run`` command (a fresh
-  interpreter, imports, plan, blocks, report) and, from inside the same process, the batch phase
-  alone (``tasks.core.runner.run``: plan, blocks, report; the interpreter's start and the CLI's
-  imports left out); min and median of ``--repeats``, the machine's load beside each;
-* one 1-worker batch of ``--big`` runs: its wall time; and the peak resident memory (the larger of
-  bauv and its workers) at ``--passages / 10``, ``--passages`` and ``--big`` runs, with the growth
-  per 100,000 runs and the 1e6-run peak extrapolated on that line;
+  ``--passages`` runs on 1 and on 2 workers: the whole ``bauv run`` command as a user types it
+  (``python -m tasks.core.cli run ...``, a fresh process: interpreter, imports, plan, fork server,
+  blocks, report, exit), interleaved through :mod:`harness` (warm-up, min and median of
+  ``--repeats``, the machine's load beside each), and with ``--reference DIR`` the same two
+  commands of another checkout (e.g. the code before a change) in the same rotation;
+* one 1-worker ``bauv run`` of ``--big`` runs: its wall time; and the peak resident memory of
+  ``bauv`` (which computes the blocks on one worker) at ``--passages / 10``, ``--passages`` and
+  ``--big`` runs, with the growth per 100,000 runs between the two largest and the 1e6-run peak
+  extrapolated on that line;
 * the EKF cost per path-step of the shipped filter (blocks of 1,000 paths), of the kernel before
   it (stacked 3 x 3 updates), of the same filter predicting step by step, and of filterpy's
   ``ExtendedKalmanFilter`` looped path by path on a subset, on the same inputs: interleaved
   repeats after a warm-up, min and median, ratios to the filterpy loop (target: at least 100x).
 
 Usage: ``python benchmarks/bench_paper000.py [--passages 10000] [--big 100000] [--subset 20]
-[--repeats 5] [--ekf-only] [--no-scaling]``
+[--repeats 5] [--ekf-only] [--no-scaling] [--scaling-only] [--reference DIR]``
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -31,64 +34,112 @@ from pathlib import Path
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
-from harness import Result, machine, measure, table
+from harness import command, machine, measure, table
 
 from nav.ekf import BatchEKF
 from tasks.core.runner import plan_batch
 from tasks.paper000.passage import measure_passages, run_ekf
 
-DRIVER = """
-import resource, sys, time
-t0 = time.perf_counter()
-from tasks.core import runner
-t1 = time.perf_counter()
-runner.run("paper-000/test-1", int(sys.argv[1]), 1, sys.argv[3], FAST, workers=int(sys.argv[2]),
-           progress=False)
-t2 = time.perf_counter()
-r = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-c = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-print("PHASE", t2 - t1, "PEAK_KB", max(r, c))
-"""
+ROOT = Path(__file__).resolve().parents[1]
 FAST = ["report.figures=false", "report.recording=false"]
 
 
-def batch_run(passages: int, workers: int) -> tuple[float, float, float]:
-    """One batch in a fresh interpreter: wall time of the process (s), of its batch phase (s) and
-    its peak RSS (MB, the larger of bauv and its workers)."""
+def batch_run(passages: int, workers: int) -> tuple[float, float]:
+    """One ``bauv run`` command in a fresh process (as :func:`cli_batch` runs it): its wall time
+    (s) and its peak resident memory (MB; with one worker bauv computes the blocks itself)."""
     with tempfile.TemporaryDirectory() as tmp:
-        code = f"FAST = {FAST!r}\n" + DRIVER
+        cmd = [sys.executable, "-m", "tasks.core.cli", "run", "paper-000/test-1", "--quiet"]
+        cmd += ["--runs", str(passages), "--workers", str(workers), "--out", str(Path(tmp) / "r")]
         t0 = time.perf_counter()
-        res = subprocess.run(
-            [sys.executable, "-c", code, str(passages), str(workers), str(Path(tmp) / "run")],
-            capture_output=True,
-            text=True,
-            check=True,
+        proc = subprocess.Popen(
+            cmd + [f"--set={s}" for s in FAST], cwd=ROOT, stdout=subprocess.DEVNULL
         )
+        _, status, usage = os.wait4(proc.pid, 0)
         wall = time.perf_counter() - t0
-    words = res.stdout.split()
-    phase = float(words[words.index("PHASE") + 1])
-    peak_kb = int(words[words.index("PEAK_KB") + 1])
-    return wall, phase, peak_kb / 1024
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        if proc.returncode:
+            raise RuntimeError(f"{' '.join(cmd)}: exit status {proc.returncode}")
+    return wall, usage.ru_maxrss / 1024
 
 
-def scaling(passages: int, repeats: int) -> None:
-    """1 against 2 workers, interleaved (A B B A ...), whole process and batch phase."""
-    wall: dict[int, Result] = {w: Result(f"{w} worker(s), whole command", 1.0) for w in (1, 2)}
-    phase: dict[int, Result] = {w: Result(f"{w} worker(s), batch phase", 1.0) for w in (1, 2)}
-    batch_run(min(passages, 1000), 2)  # warm-up: file caches, the fork server's imports
-    for r in range(repeats):
-        for w in (1, 2) if r % 2 == 0 else (2, 1):
-            load = os.getloadavg()[0]
-            t_wall, t_phase, _ = batch_run(passages, w)
-            for res, t in ((wall[w], t_wall), (phase[w], t_phase)):
-                res.load.append(load)
-                res.seconds.append(t)
-    print(f"paper-000/test-1, {passages:,} passages, figures and recording off:")
-    print(table({**{v.name: v for v in wall.values()}}, reference=wall[2].name))
-    print(table({**{v.name: v for v in phase.values()}}, reference=phase[2].name))
+def cli_batch(checkout: Path, passages: int, workers: int, tmp: Path):
+    """A variant: ``bauv run paper-000/test-1 --runs passages --workers workers`` (figures and
+    recording off) as a whole command in a fresh process, from ``checkout``."""
+    env = {"PYTHONPATH": str(checkout)}
+    k = iter(range(10**6))
+
+    def run() -> None:
+        out = tmp / f"{checkout.name}-{workers}-{next(k)}"
+        command(
+            [sys.executable, "-m", "tasks.core.cli", "run", "paper-000/test-1", "--quiet"]
+            + ["--runs", str(passages), "--workers", str(workers), "--out", str(out)]
+            + [f"--set={s}" for s in FAST],
+            env,
+            checkout,
+        )()
+        shutil.rmtree(out)
+
+    return run
+
+
+def scaling(passages: int, repeats: int, reference: Path | None) -> None:
+    """1 against 2 workers as whole ``bauv run`` commands, interleaved through the harness
+    (optionally with the same commands of another checkout in the same rotation)."""
+    checkouts = {"": ROOT} | ({" (reference)": reference.resolve()} if reference else {})
+    with tempfile.TemporaryDirectory() as tmp_s:
+        variants = {}
+        for label, checkout in checkouts.items():
+            for w in (1, 2):
+                name = f"{w} worker{'s' if w > 1 else ''}{label}"
+                variants[name] = cli_batch(checkout, passages, w, Path(tmp_s))
+        res = measure(variants, repeats=repeats, warmup=1)
+    print(f"paper-000/test-1, {passages:,} passages, figures and recording off, whole command:")
+    print(table(res, reference="1 worker", unit="s"))
+    for label in checkouts:
+        one, two = res[f"1 worker{label}"], res[f"2 workers{label}"]
+        lo, hi = min(one.load + two.load), max(one.load + two.load)
+        print(
+            f"speed-up of 2 workers{label}: {one.median / two.median:.2f}x by the medians, "
+            f"{one.min / two.min:.2f}x by the minima (target 1.7x); load {lo:.2f}-{hi:.2f}"
+        )
+
+
+def _block(index: int) -> int:
+    """Compute and encode block ``index`` of 1,000 passages (a worker's share of the runner's
+    work: no file, no report); returns the encoded size."""
+    from tasks.core import store
+
+    exp = plan_batch("paper-000/test-1", overrides=FAST)
+    runs = tuple(range(index * 1000, (index + 1) * 1000))
+    return len(store.dumps(exp.experiment.run_block(exp.scenario, 1, runs), {}))
+
+
+def ceiling(passages: int, repeats: int) -> None:
+    """The blocks alone, on warm worker processes: ``passages / 1000`` blocks on a pool of one
+    worker against a pool of two, interleaved (no interpreter start, imports, plan, files,
+    report): how much two workers can gain on this machine at best."""
+    from tasks.core import workers
+    from tasks.core.runner import make_executor
+
+    workers.prepare_batch_process()  # the workers' settings under bauv run
+    blocks = range(max(1, passages // 1000))
+    with make_executor("local", 2, None, ("tasks.paper000",)) as pool:
+
+        def on_one() -> None:  # one block at a time: one worker busy
+            for i in blocks:
+                pool.submit(_block, i).result()
+
+        def on_two() -> None:
+            list(pool.map(_block, blocks))
+
+        list(pool.map(_block, range(4)))  # start and warm both workers
+        res = measure({"1 worker": on_one, "2 workers": on_two}, repeats=repeats, warmup=1)
+    print(f"the blocks alone ({len(blocks)} blocks of 1,000 passages, warm workers):")
+    print(table(res, reference="1 worker", unit="s"))
+    one, two_ = res["1 worker"], res["2 workers"]
     print(
-        f"speed-up of 2 workers (median): whole command {wall[1].median / wall[2].median:.2f}x, "
-        f"batch phase {phase[1].median / phase[2].median:.2f}x (target 1.7x)"
+        f"blocks alone, 2 workers against 1: {one.median / two_.median:.2f}x by the medians, "
+        f"{one.min / two_.min:.2f}x by the minima"
     )
 
 
@@ -97,18 +148,20 @@ def memory(passages: int, big: int) -> None:
     sizes = sorted({max(passages // 10, 1000), passages, big})
     peaks = {}
     for n in sizes:
-        wall, phase, mb = batch_run(n, 1)
+        load = os.getloadavg()[0]
+        wall, mb = batch_run(n, 1)
         peaks[n] = mb
         print(
-            f"{n:>9,} passages, 1 worker: wall {wall:.1f} s (batch phase {phase:.1f} s), "
-            f"peak RSS {mb:.0f} MB, load {os.getloadavg()[0]:.2f}"
+            f"{n:>9,} passages, 1 worker: wall {wall:.1f} s, peak RSS {mb:.0f} MB, load {load:.2f}"
         )
-    n = np.array(sizes, dtype=float)
-    slope, icpt = np.polyfit(n, np.array([peaks[s] for s in sizes]), 1)
+    # the growth between the two largest batches (the smallest may be a single block)
+    (n1, p1), (n2, p2) = [(n, peaks[n]) for n in sizes[-2:]]
+    slope = (p2 - p1) / (n2 - n1)
+    at_1e6 = p2 + slope * (1e6 - n2)
     print(
-        f"peak RSS grows {slope * 1e5:.1f} MB per 100,000 passages; extrapolated 1e6: "
-        f"{icpt + slope * 1e6:.0f} MB ({(icpt + slope * 1e6) / peaks[passages]:.2f}x the "
-        f"peak at {passages:,})"
+        f"peak RSS grows {slope * 1e5:.1f} MB per 100,000 passages ({n1:,} to {n2:,}); "
+        f"extrapolated 1e6: {at_1e6:.0f} MB ({at_1e6 / peaks[passages]:.2f}x the peak at "
+        f"{passages:,})"
     )
 
 
@@ -203,8 +256,16 @@ def main() -> None:
     ap.add_argument("--subset", type=int, default=20)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--ekf-only", action="store_true", help="only the EKF per path-step table")
+    ap.add_argument(
+        "--reference", type=Path, default=None, help="another checkout in the workers' rotation"
+    )
+    ap.add_argument("--scaling-only", action="store_true", help="only 1 against 2 workers")
     a = ap.parse_args()
     print(machine())
+    if a.scaling_only:
+        ceiling(a.passages, a.repeats)
+        scaling(a.passages, a.repeats, a.reference)
+        return
     variants, per = ekf_variants(a.subset)
     res = measure(variants, repeats=a.repeats, warmup=1, per=per)
     ref = list(variants)[-1]
@@ -213,7 +274,8 @@ def main() -> None:
     if a.ekf_only:
         return
     if not a.no_scaling:
-        scaling(a.passages, a.repeats)
+        ceiling(a.passages, a.repeats)
+        scaling(a.passages, a.repeats, a.reference)
     memory(a.passages, a.big)
 
 

@@ -4,6 +4,7 @@ test and the headless-browser check ``tests/browser/check_web_viewer.py``)."""
 from __future__ import annotations
 
 import contextlib
+import signal
 import socket
 import subprocess
 import sys
@@ -58,6 +59,9 @@ def web_viewer(run_dir: str, timeout_s: float = 30.0) -> Iterator[Viewer]:
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
+        # as from a terminal: a test run under nohup would hand down SIGHUP ignored, and bauv
+        # keeps an ignored SIGHUP ignored (nohup bauv ... must survive the terminal)
+        preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_DFL),
     )
     try:
         deadline = time.time() + timeout_s

@@ -17,7 +17,9 @@ completes the batch).
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import gc
 import os
 import shutil
 import signal
@@ -28,7 +30,6 @@ from pathlib import Path
 import click
 import tomli_w
 
-from bauv_sim.config import load_config, to_plain
 from bauv_sim.errors import BauvSimError, ConfigError
 from nav.errors import NavError
 
@@ -68,6 +69,7 @@ def list_cmd() -> None:
 )
 def show_cmd(name: str, overrides: tuple[str, ...], files: tuple[str, ...], doc: bool) -> None:
     """Print the resolved scenario of NAME as TOML (every field, with its default)."""
+    from bauv_sim.config import load_config, to_plain
     from tasks.core import registry
 
     exp = registry.get(name)
@@ -133,6 +135,12 @@ def run_cmd(
     quiet: bool,
 ) -> None:
     """Run experiment or mission NAME and write its run folder."""
+    from tasks.core import workers as workers_mod
+
+    workers_mod.prepare_batch_process()  # before numpy is imported, here and in the workers
+    if executor == "local" and workers > 1:
+        # before the project's imports: the workers' fork server imports it meanwhile
+        workers_mod.start_fork_server(name)
     from tasks.core.runner import run
 
     out_dir, summary = run(
@@ -275,8 +283,13 @@ def main(argv: list[str] | None = None) -> None:
     finished blocks and stops its workers, the viewer stops the rerun server it started. A signal
     ignored when ``bauv`` starts (``nohup``) stays ignored.
     """
-    from tasks.core.runner import BatchFailed, BatchInterrupted, os_error_text
+    from tasks.core.errors import BatchFailed, BatchInterrupted
+    from tasks.core.files import os_error_text
 
+    # last at exit (atexit runs last in, first out): the interpreter's final garbage collections
+    # would scan every object of the project, ~0.1 s of a kinematic batch (issue 13); whatever
+    # bauv writes is closed by then
+    atexit.register(gc.freeze)
     for sig in _stop_signals():
         with contextlib.suppress(ValueError):  # not the main thread
             signal.signal(sig, _interrupt)

@@ -55,3 +55,9 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def os_error_text(exc: OSError) -> str:
+    """An :class:`OSError` in a few words: its reason and the file it names."""
+    reason = exc.strerror or type(exc).__name__
+    return f"{reason}: {exc.filename!r}" if exc.filename else reason

@@ -34,16 +34,7 @@ from pydantic import BaseModel
 
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
-
-FAMILIES: dict[str, str] = {
-    "paper-000": "tasks.paper000",
-    "paper-001": "tasks.paper001",
-    "paper-003": "tasks.paper003",
-    "paper-004": "tasks.paper004",
-    "mission": "tasks.missions",
-    "vehicle": "tasks.vehicle",
-}
-"""Family of names (the part before ``/``) -> the package whose import registers them."""
+from tasks.core.catalog import FAMILIES
 
 EXPERIMENT_PACKAGES = tuple(FAMILIES.values())
 """The packages whose import registers every experiment and mission."""

@@ -5,16 +5,18 @@ block is computed by :meth:`Experiment.run_block` in a worker, encoded there as 
 (:mod:`tasks.core.store`, a format that cannot execute code when read) and written to
 ``<out>/blocks/block-NNNNNN.zip`` as soon as it finishes, then its sha256 to
 ``block-NNNNNN.sha256`` (``sha256sum -c`` reads it); both are written atomically, and a block
-counts as saved only when both files are there. When every block is saved,
-:meth:`Experiment.report` reads them back **in block order** and writes the outputs. Because a
-run's numbers depend only on ``(scenario, seed, run index)``, blocks are reduced in a fixed order
-and the encoding keeps every bit, the outputs are bit-identical whatever the executor and worker
-count, and a batch interrupted and resumed with ``--resume`` equals one run straight through.
+counts as saved only when both files are there. :meth:`Experiment.report` reads them back **in
+block order** and writes the outputs: after the last block on one local worker, and in a thread
+of this process on worker processes (local or Dask), where it reads each block as soon as it and
+the blocks before it are saved, so its merge overlaps the later blocks. Because a run's numbers
+depend only on ``(scenario, seed, run index)``, blocks are reduced in a fixed order and the
+encoding keeps every bit, the outputs are bit-identical whatever the executor and worker count,
+and a batch interrupted and resumed with ``--resume`` equals one run straight through.
 
 Executors: ``local`` (in-process for one worker, else a :class:`ProcessPoolExecutor` whose workers
 are forked warm from a fork server with the experiment preloaded, or spawned where there is
-none) and ``dask`` (``distributed.Client(address)``, or a local cluster with
-``workers`` single-threaded processes when no address is given).
+none; :mod:`tasks.core.workers`) and ``dask`` (``distributed.Client(address)``, or a local
+cluster with ``workers`` single-threaded processes when no address is given).
 
 The run folder holds ``run.json`` (``state`` is ``incomplete`` until the report is written, then
 ``complete``), ``scenario.toml`` (the resolved scenario: ``bauv run NAME --scenario FILE`` repeats
@@ -37,13 +39,9 @@ import contextlib
 import datetime as _dt
 import hashlib
 import json
-import multiprocessing
 import os
 import re
-import signal
-import sys
 import threading
-import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,10 +51,12 @@ import tomli_w
 import tomllib
 
 from bauv_sim.config import Config, load_config, to_plain, validate
-from bauv_sim.errors import BauvSimError, ConfigError
+from bauv_sim.errors import ConfigError
 from bauv_sim.rng import check_seed
 from tasks.core import registry, store
-from tasks.core.files import atomic_write_bytes
+from tasks.core import workers as workers_mod
+from tasks.core.errors import BatchFailed, BatchInterrupted, OutputError
+from tasks.core.files import atomic_write_bytes, os_error_text
 from tasks.core.registry import Experiment, ReportContext, ReportSummary
 
 RUN_FILE = "run.json"
@@ -69,14 +69,6 @@ FORMAT_VERSION = 2
 code when loaded); 2 keeps plain-data blocks with a sha256 file each and the scenario's sha256."""
 STATES = ("incomplete", "complete")
 _HEX64 = re.compile(r"[0-9a-f]{64}")
-
-
-class BatchInterrupted(BauvSimError):
-    """The batch was interrupted (SIGINT); finished blocks are kept; ``--resume`` completes it."""
-
-
-class BatchFailed(BauvSimError):
-    """One or more blocks raised; the others were kept."""
 
 
 @dataclass(frozen=True)
@@ -374,17 +366,6 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
         raise ConfigError(f"{where}: cannot create the run folder ({reason})") from None
 
 
-def os_error_text(exc: OSError) -> str:
-    """An :class:`OSError` in a few words: its reason and the file it names."""
-    reason = exc.strerror or type(exc).__name__
-    return f"{reason}: {exc.filename!r}" if exc.filename else reason
-
-
-class OutputError(BauvSimError):
-    """A file of the run folder could not be written during the batch (e.g. the disk is full);
-    the blocks saved before are kept and ``--resume`` completes the batch."""
-
-
 def _read_record(out_dir: Path) -> dict[str, Any]:
     path = out_dir / RUN_FILE
     if not path.is_file():
@@ -585,95 +566,6 @@ def _completed(futures: dict[cf.Future, int]) -> Iterator[cf.Future]:
         yield from cf.as_completed(futures)  # which drops its references as it yields
 
 
-PARENT_POLL_S = 0.5
-"""How often a local worker checks that the ``bauv`` process that started it is alive, s."""
-
-
-def _process_alive(pid: int) -> bool:
-    """Whether a process exists (signal 0 delivers nothing, it only checks)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def _pool_context(preload: Sequence[str]) -> multiprocessing.context.BaseContext:
-    """The start method of local workers: ``forkserver`` with the experiment's modules preloaded
-    where the platform has it, else ``spawn``.
-
-    A spawned worker starts a fresh interpreter and imports the project again (about a second,
-    issue 13); the fork server imports the preloaded modules once and forks each worker from
-    itself, so a worker starts warm. Neither inherits bauv's own threads, locks or open
-    files, which ``fork`` would.
-    """
-    if "forkserver" in multiprocessing.get_all_start_methods():
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["tasks.core.runner", *preload])
-        return ctx
-    return multiprocessing.get_context("spawn")
-
-
-def _start_fork_server(name: str) -> None:
-    """Start the local workers' fork server now, with the package of ``name``'s family
-    preloaded, so that it imports the project on another core while this process plans the
-    batch (otherwise both happen one after the other). Nothing happens for an unknown family
-    (the plan reports it) or where there is no fork server.
-    """
-    package = registry.FAMILIES.get(name.split("/", 1)[0])
-    if package is None or "forkserver" not in multiprocessing.get_all_start_methods():
-        return
-    from multiprocessing import forkserver
-
-    _pool_context((package,))
-    with contextlib.suppress(OSError):
-        forkserver.ensure_running()
-
-
-def _die_with_parent(parent_pid: int) -> None:
-    """Initializer of a local worker process: exit when the process that started it is gone.
-
-    ``bauv`` may be stopped by a signal it cannot handle (SIGKILL); its workers must not go on
-    computing blocks nobody will save (and keep the resource tracker alive with them). On Linux
-    the kernel sends the worker SIGKILL when its parent dies (``PR_SET_PDEATHSIG``); everywhere a
-    daemon thread also polls the parent's pid every :data:`PARENT_POLL_S` seconds.
-
-    Args:
-        parent_pid: pid of the process that created the pool.
-    """
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            import ctypes
-
-            # the process that forked this worker: bauv itself, or its fork server, which
-            # exits when bauv does
-            pr_set_pdeathsig = 1
-            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
-    if not _process_alive(parent_pid):  # bauv died before the line above
-        os._exit(1)
-
-    def watch() -> None:
-        while _process_alive(parent_pid):
-            time.sleep(PARENT_POLL_S)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="bauv-parent-watch", daemon=True).start()
-
-
-def _terminate_workers(ex: cf.ProcessPoolExecutor) -> None:
-    """Shut a process pool down and stop its workers now (their running blocks are lost)."""
-    procs = list((getattr(ex, "_processes", None) or {}).values())
-    ex.shutdown(wait=False, cancel_futures=True)
-    for proc in procs:
-        with contextlib.suppress(Exception):
-            proc.terminate()
-    for proc in procs:
-        with contextlib.suppress(Exception):
-            proc.join(timeout=5)
-
-
 EXECUTORS = ("local", "dask")
 DASK_CONNECT_TIMEOUT_S = 10.0
 """How long ``--executor dask --address ...`` waits for the scheduler before giving up, s."""
@@ -726,7 +618,7 @@ def make_executor(
         workers: worker processes (local, and local Dask cluster), >= 1.
         address: a Dask scheduler address (``tcp://host:8786``) or ``None``.
         preload: modules local workers import before they are forked (the experiment's), see
-            :func:`_pool_context`.
+            :func:`tasks.core.workers.pool_context`.
 
     Yields:
         The executor; it is shut down on exit.
@@ -742,15 +634,15 @@ def make_executor(
             return
         ex = cf.ProcessPoolExecutor(
             max_workers=workers,
-            mp_context=_pool_context(preload),
-            initializer=_die_with_parent,
+            mp_context=workers_mod.pool_context(preload),
+            initializer=workers_mod.init_worker,
             initargs=(os.getpid(),),
         )
         try:
             yield ex
         except BaseException:
             # interrupted or failed: stop the blocks being computed now, not after they finish
-            _terminate_workers(ex)
+            workers_mod.terminate_workers(ex)
             raise
         else:
             ex.shutdown(wait=False, cancel_futures=True)
@@ -787,6 +679,97 @@ def make_executor(
             cluster.close()
 
 
+class _Abandoned(BaseException):
+    """Raised in an overlapped report when the batch cannot complete (a block failed or could not
+    be saved, or the batch was interrupted): the report stops without writing its outputs. Not an
+    :class:`Exception`, so that a report's own ``except Exception`` does not swallow it."""
+
+
+class _Arrivals:
+    """Which blocks are saved, for a report that reads them in block order while the others are
+    still being computed (:class:`_OverlappedReport`)."""
+
+    def __init__(self, saved: set[int]):
+        self._cond = threading.Condition()
+        self._saved = set(saved)
+        self._abandoned = False
+
+    def saved(self, index: int) -> None:
+        """Block ``index`` is saved (its file and its sha256 file are written)."""
+        with self._cond:
+            self._saved.add(index)
+            self._cond.notify_all()
+
+    def abandon(self) -> None:
+        """The batch will not complete: a reader waiting for a block raises :class:`_Abandoned`."""
+        with self._cond:
+            self._abandoned = True
+            self._cond.notify_all()
+
+    def wait(self, index: int) -> None:
+        """Wait until block ``index`` is saved.
+
+        Raises:
+            _Abandoned: if the batch was abandoned first.
+        """
+        with self._cond:
+            while index not in self._saved and not self._abandoned:
+                self._cond.wait()
+            if index not in self._saved:
+                raise _Abandoned
+
+
+class _OverlappedReport:
+    """:meth:`Experiment.report` in a thread of this process, started when the blocks are handed
+    to worker processes: it reads each block as soon as it and the blocks before it are saved,
+    so its merge (and whatever it does before the merge) overlaps the computation of the later
+    blocks instead of following it (issue 13). It reads the blocks in block order, from their
+    files, as the report after the batch does, so its outputs are the same bytes; it holds no
+    more blocks than that report (the one it merges)."""
+
+    def __init__(self, plan: BatchPlan, out_dir: Path, progress: bool, arrivals: _Arrivals):
+        self._arrivals = arrivals
+        self.summary: ReportSummary | None = None
+        self.error: BaseException | None = None
+
+        def blocks() -> Iterator[Any]:
+            for i in range(len(plan.blocks)):
+                arrivals.wait(i)
+                yield load_block(plan, out_dir, i)
+
+        ctx = ReportContext(
+            plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress
+        )
+
+        def target() -> None:
+            try:
+                self.summary = plan.experiment.report(ctx)
+            except _Abandoned:
+                pass
+            except BaseException as exc:  # handed to the main thread
+                self.error = exc
+
+        self._thread = threading.Thread(target=target, name="bauv-report", daemon=True)
+        self._thread.start()
+
+    def abandon(self) -> None:
+        """Stop the report (it is waiting for a block that will not come) and wait for it."""
+        self._arrivals.abandon()
+        self._thread.join(timeout=ABANDON_WAIT_S)
+
+    def result(self) -> ReportSummary:
+        """Wait for the report once every block is saved; its exception is raised here."""
+        self._thread.join()
+        if self.error is not None:
+            raise self.error
+        assert self.summary is not None
+        return self.summary
+
+
+ABANDON_WAIT_S = 10.0
+"""How long an abandoned overlapped report may take to stop (it is between two blocks), s."""
+
+
 def execute(
     plan: BatchPlan,
     out_dir: Path,
@@ -797,6 +780,10 @@ def execute(
     pool: cf.Executor | None = None,
 ) -> ReportSummary:
     """Compute the missing blocks of a prepared batch and write its report.
+
+    With worker processes (a local pool, Dask) the report runs in a thread of this process
+    meanwhile, merging each block once it and the blocks before it are saved
+    (:class:`_OverlappedReport`); on one local worker (inline) it follows the blocks.
 
     Args:
         plan: the batch.
@@ -823,6 +810,8 @@ def execute(
     done_runs = plan.n_runs - sum(len(plan.blocks[i]) for i in todo)
     data = to_plain(plan.scenario)
     failures: list[str] = []
+    overlapped: _OverlappedReport | None = None
+    arrivals = _Arrivals(set(range(len(plan.blocks))) - set(todo))
     bar = tqdm(
         total=plan.n_runs,
         initial=done_runs,
@@ -849,6 +838,8 @@ def execute(
                     ): i
                     for i in todo
                 }
+                if not isinstance(ex, InlineExecutor):
+                    overlapped = _OverlappedReport(plan, out_dir, progress, arrivals)
                 try:
                     for fut in _completed(futures):
                         # forget the future once its block is handled: its result (the block)
@@ -869,6 +860,7 @@ def execute(
                             for f in futures:
                                 f.cancel()
                             raise _output_error(plan, out_dir, f"block {i}", exc) from None
+                        arrivals.saved(i)
                         bar.update(len(plan.blocks[i]))
                 except KeyboardInterrupt:
                     for f in futures:
@@ -876,13 +868,21 @@ def execute(
                     raise
     except KeyboardInterrupt:
         bar.close()
+        if overlapped is not None:
+            overlapped.abandon()
         n_done = sum(_saved(out_dir, i) for i in range(len(plan.blocks)))
         raise BatchInterrupted(
             f"interrupted: {n_done} of {len(plan.blocks)} blocks are saved in {out_dir}; "
             f"complete the batch with: bauv run {plan.experiment.name} --resume --out {out_dir}"
         ) from None
+    except BaseException:
+        if overlapped is not None:
+            overlapped.abandon()
+        raise
     bar.close()
     if failures:
+        if overlapped is not None:
+            overlapped.abandon()
         raise BatchFailed(
             f"{len(failures)} block(s) failed; the other blocks are saved in {out_dir} and "
             "--resume retries the failed ones:\n  " + "\n  ".join(failures)
@@ -893,12 +893,17 @@ def execute(
             yield load_block(plan, out_dir, i)
 
     try:
-        summary = plan.experiment.report(
-            ReportContext(
-                plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress
+        if overlapped is not None:
+            summary = overlapped.result()
+        else:
+            summary = plan.experiment.report(
+                ReportContext(
+                    plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress
+                )
             )
-        )
     except KeyboardInterrupt:
+        if overlapped is not None:
+            overlapped.abandon()
         raise BatchInterrupted(
             f"interrupted while writing the report: all {len(plan.blocks)} blocks are saved in "
             f"{out_dir}; write the report with: bauv run {plan.experiment.name} --resume "
@@ -948,7 +953,7 @@ def run(
     """
     check_executor(executor, workers, address)
     if executor == "local" and workers > 1:
-        _start_fork_server(name)
+        workers_mod.start_fork_server(name)
     if resume:
         if out_dir is None:
             raise ConfigError("--resume needs --out: the folder of the batch to complete")

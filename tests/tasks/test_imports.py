@@ -8,7 +8,17 @@ import json
 import subprocess
 import sys
 
-HEAVY = ("mujoco", "dm_control", "matplotlib", "rerun", "scipy.stats", "trimesh")
+HEAVY = (
+    "mujoco",
+    "dm_control",
+    "matplotlib",
+    "rerun",
+    "scipy.stats",
+    "scipy.spatial",
+    "trimesh",
+    "numpy",
+    "pydantic",
+)
 
 
 def _modules_after(code: str) -> dict[str, bool]:
@@ -31,7 +41,8 @@ def test_a_kinematic_run_without_figures_and_recording_imports_nothing_heavy(tmp
     )
     loaded = _modules_after(code)
     assert (out / "metrics.json").is_file()
-    assert not any(loaded[m] for m in ("mujoco", "dm_control", "matplotlib", "rerun")), loaded
+    heavy = ("mujoco", "dm_control", "matplotlib", "rerun", "scipy.stats", "scipy.spatial")
+    assert not any(loaded[m] for m in heavy), loaded
 
 
 def test_figures_import_matplotlib_when_drawn(tmp_path):
@@ -63,3 +74,62 @@ def test_bauv_list_imports_no_experiment():
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "mission/survey" in res.stdout
     assert json.loads(res.stdout.strip().splitlines()[-1]) == []
+
+
+def test_the_command_line_and_the_workers_module_import_nothing_heavy():
+    """``bauv`` starts its workers' fork server before the project's imports (issue 13): the CLI
+    module and :mod:`tasks.core.workers` import neither numpy nor pydantic."""
+    loaded = _modules_after("import tasks.core.cli, tasks.core.workers, tasks.core.errors")
+    assert not any(loaded.values()), loaded
+
+
+def test_bauv_run_starts_the_fork_server_before_the_project_imports(tmp_path):
+    """With ``--workers 2`` the fork server is started while nothing heavy is imported yet, so it
+    imports the project on the other core while ``bauv`` does (its imports were on the critical
+    path of a 2-worker batch), and with numpy's huge pages turned off for it to inherit; the batch
+    still completes."""
+    out = tmp_path / "run"
+    code = (
+        "import json, os, sys\n"
+        "os.environ.pop('NUMPY_MADVISE_HUGEPAGE', None)\n"
+        "from multiprocessing import forkserver\n"
+        "seen = []\n"
+        "real = forkserver.ensure_running\n"
+        "def probe():\n"
+        "    seen.append(sorted(m for m in ('numpy', 'pydantic', 'tasks.core.runner') "
+        "if m in sys.modules) + [os.environ.get('NUMPY_MADVISE_HUGEPAGE')])\n"
+        "    return real()\n"
+        "forkserver.ensure_running = probe\n"
+        "from tasks.core.cli import main\n"
+        "try:\n"
+        f"    main(['run', 'paper-000/test-1', '--runs', '4', '--workers', '2', '--quiet', "
+        f"'--out', {str(out)!r}, '--set', 'runner.block_size=2', '--set', "
+        "'report.figures=false', '--set', 'report.recording=false'])\n"
+        "except SystemExit as e:\n"
+        "    assert not e.code, e.code\n"
+        "print(json.dumps(seen))\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    seen = json.loads(res.stdout.strip().splitlines()[-1])
+    assert seen and seen[0] == ["0"], seen  # nothing heavy yet; numpy's huge pages off
+    assert (out / "metrics.json").is_file()
+
+
+def test_bauv_spares_the_final_garbage_collections_at_exit():
+    """At exit ``bauv`` freezes the objects it holds (``gc.freeze``), so the interpreter's final
+    collections do not scan the whole project (~0.1 s of a kinematic batch): the freeze runs after
+    every other exit handler registered by then, and before one registered earlier."""
+    code = (
+        "import atexit, gc\n"
+        "atexit.register(lambda: print('frozen', gc.get_freeze_count()))\n"
+        "from tasks.core.cli import main\n"
+        "try:\n"
+        "    main(['list'])\n"
+        "except SystemExit as e:\n"
+        "    assert not e.code, e.code\n"
+        "print('frozen before exit', gc.get_freeze_count())\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    lines = res.stdout.strip().splitlines()
+    assert lines[-2] == "frozen before exit 0", lines[-2:]
+    assert lines[-1].startswith("frozen ") and int(lines[-1].split()[-1]) > 1000, lines[-1]

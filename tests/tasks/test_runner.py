@@ -1,6 +1,8 @@
 """Same seed, same numbers, bit for bit: repeated, on 1 or N workers, on Dask, after a resume."""
 
+import concurrent.futures as cf
 import hashlib
+import itertools
 import json
 import os
 import pathlib
@@ -9,6 +11,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -357,6 +360,132 @@ def test_one_worker_saves_each_block_as_it_finishes(reference, tmp_path, monkeyp
     monkeypatch.setattr(runner, "_run_block_in_worker", real)
     run("paper-000/test-2", seed=5, out_dir=out, resume=True, progress=False)
     assert _bytes(out) == reference
+
+
+class _Handshake(cf.Executor):
+    """Worker processes played by a thread that computes the blocks in order and starts block
+    ``k`` only once the report has read block ``k - 1`` (or :data:`HANDSHAKE_WAIT_S` passed)."""
+
+    def __init__(self, read, log):
+        self._calls = []
+        self._read, self._log = read, log
+        self._thread = threading.Thread(target=self._work, daemon=True)
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut = cf.Future()
+        self._calls.append((fut, fn, args))
+        if len(self._calls) == 1:
+            self._thread.start()
+        return fut
+
+    def _work(self):
+        deadline = time.monotonic() + HANDSHAKE_WAIT_S
+        for k in itertools.count():
+            while k >= len(self._calls):
+                time.sleep(0.001)
+            fut, fn, args = self._calls[k]
+            if k > 0:
+                self._read[k - 1].wait(max(0.0, deadline - time.monotonic()))
+            self._log.append(("compute", k))
+            fut.set_running_or_notify_cancel()
+            fut.set_result(fn(*args))
+            if k == N_HANDSHAKE_BLOCKS - 1:
+                return
+
+
+HANDSHAKE_WAIT_S = 10.0
+N_HANDSHAKE_BLOCKS = 5
+
+
+def _planned(out, seed=5):
+    from tasks.core import runner
+
+    plan = runner.plan_batch("paper-000/test-2", 30, seed, SMALL)
+    assert len(plan.blocks) == N_HANDSHAKE_BLOCKS
+    runner.prepare_out_dir(plan, out)
+    return plan
+
+
+def test_the_report_merges_each_block_while_the_next_ones_are_computed(
+    reference, tmp_path, monkeypatch
+):
+    """With worker processes the report reads block ``k`` (in block order) before block ``k + 1``
+    is computed: its merge overlaps the batch instead of following it (issue 13); the metrics
+    are the bytes of the one-worker batch."""
+    from tasks.core import runner
+
+    log, read = [], [threading.Event() for _ in range(N_HANDSHAKE_BLOCKS)]
+    real_load = runner.load_block
+
+    def load(plan, out_dir, index):
+        log.append(("read", index))
+        read[index].set()
+        return real_load(plan, out_dir, index)
+
+    monkeypatch.setattr(runner, "load_block", load)
+    out = tmp_path / "a"
+    runner.execute(_planned(out), out, progress=False, pool=_Handshake(read, log))
+    assert _bytes(out) == reference
+    for k in range(1, N_HANDSHAKE_BLOCKS):
+        assert log.index(("read", k - 1)) < log.index(("compute", k)), log
+    assert [i for what, i in log if what == "read"] == list(range(N_HANDSHAKE_BLOCKS))
+
+
+class _Synchronous(cf.Executor):
+    """Worker processes played by the calling thread, at submission (not the inline executor)."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut = cf.Future()
+        fut.set_running_or_notify_cancel()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except Exception as exc:
+            fut.set_exception(exc)
+        return fut
+
+
+def _report_threads():
+    return [t for t in threading.enumerate() if t.name == "bauv-report"]
+
+
+@pytest.mark.parametrize("fault", ["block-raises", "interrupted"])
+def test_a_batch_that_cannot_complete_stops_its_overlapped_report(tmp_path, monkeypatch, fault):
+    """A block that raises (or a Ctrl-C while blocks are saved) on worker processes: the
+    finished blocks are kept, no report is written, and the report's thread is gone."""
+    from tasks.core import runner
+
+    if fault == "block-raises":
+        real = runner._run_block_in_worker
+
+        def third_raises(*args):
+            if args[3][0] == 14:
+                raise RuntimeError("block 2 broke")
+            return real(*args)
+
+        monkeypatch.setattr(runner, "_run_block_in_worker", third_raises)
+        expected = runner.BatchFailed
+    else:
+        real_save, saves = runner._save_block, []
+
+        def interrupt_third(out_dir, index, payload):
+            saves.append(index)
+            if len(saves) == 3:
+                raise KeyboardInterrupt
+            real_save(out_dir, index, payload)
+
+        monkeypatch.setattr(runner, "_save_block", interrupt_third)
+        expected = runner.BatchInterrupted
+    out = tmp_path / "a"
+    with pytest.raises(expected):
+        runner.execute(_planned(out), out, progress=False, pool=_Synchronous())
+    assert not _report_threads()
+    assert not (out / "metrics.json").exists()
+    assert json.loads((out / "run.json").read_text())["state"] == "incomplete"
+    saved = sorted(p.name for p in (out / "blocks").glob("*.sha256"))
+    if fault == "block-raises":  # every block that did not fail
+        assert saved == [f"block-00000{i}.sha256" for i in (0, 1, 3, 4)]
+    else:  # the two saved before the Ctrl-C (the blocks finish in any order)
+        assert saved == sorted(f"block-00000{i}.sha256" for i in saves[:2])
 
 
 @pytest.mark.parametrize("umask", [0o022, 0o027])

@@ -1,0 +1,86 @@
+"""Local worker processes: the memory a block frees is kept for the next block, and ``bauv run``
+has numpy leave transparent huge pages alone unless told otherwise (issue 13: page faults were a
+fixed cost of every block and a large one of every process's first block)."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tasks.core import workers
+from tasks.core.runner import make_executor
+
+glibc = pytest.mark.skipif(
+    not sys.platform.startswith("linux") or platform.libc_ver()[0] != "glibc",
+    reason="mallopt of glibc",
+)
+
+SIZES = (3_000_000, 1_000_000, 500_000, 2_000_000)
+"""The arrays of one synthetic block (float64: 24, 8, 4 and 16 MB), allocated and freed."""
+
+
+def faults_per_round(rounds: int = 4) -> list[int]:
+    """Minor page faults of this process while it allocates, fills and frees :data:`SIZES`,
+    per round (the kernel's count, an independent witness of memory returned and taken again).
+    """
+    out = []
+    for _ in range(rounds):
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        arrays = [np.ones(n) for n in SIZES]
+        del arrays
+        out.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+    return out
+
+
+def _fresh_process(keep: bool) -> list[int]:
+    code = (
+        "import json\n"
+        "from tasks.core import workers\n"
+        "from tests.tasks.test_workers import faults_per_round\n"
+        f"assert workers.keep_freed_memory() if {keep} else True\n"
+        "print(json.dumps(faults_per_round()))\n"
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, workers.HUGEPAGE_VARIABLE: "0"},
+    )
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+@glibc
+def test_freed_memory_is_kept_for_the_next_block():
+    """After :func:`keep_freed_memory` only the first round faults its pages in; without it
+    every round does again (the control: the test can see the difference)."""
+    kept, default = _fresh_process(True), _fresh_process(False)
+    assert kept[0] > 2000 and default[0] > 2000, (kept, default)  # 4 KiB pages of ~50 MB
+    assert max(kept[1:]) < 0.01 * kept[0], kept
+    assert min(default[1:]) > 0.5 * default[0], default
+
+
+@glibc
+def test_local_workers_keep_freed_memory(tmp_path):
+    """The pool's initializer applies it in every worker process."""
+    with make_executor("local", 2, None, ("tests.tasks.test_workers",)) as ex:
+        rounds = [ex.submit(faults_per_round) for _ in range(2)]
+        for fut in rounds:
+            counts = fut.result(timeout=120)
+            assert max(counts[1:]) < 0.01 * counts[0], counts
+
+
+def test_bauv_run_turns_numpy_huge_pages_off_unless_set():
+    env: dict[str, str] = {}
+    workers.prepare_batch_process(env)
+    assert env == {workers.HUGEPAGE_VARIABLE: "0"}
+    mine = {workers.HUGEPAGE_VARIABLE: "1"}
+    workers.prepare_batch_process(mine)
+    assert mine == {workers.HUGEPAGE_VARIABLE: "1"}
