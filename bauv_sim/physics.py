@@ -135,8 +135,10 @@ class BauvPhysics(mjcf.Physics):
     """MuJoCo physics of one or more BAUVs, with named accessors and actuation.
 
     Build it with :func:`bauv_sim.build.build_physics` (``dm_control.mjcf`` scenes, several
-    vehicles) or :meth:`from_scene_xml` (the plain ``models/bauv/scene.xml``). On every (re)load the
-    model is prepared by :func:`bauv_sim.hydro.prepare_model` (added-mass artefact removed).
+    vehicles) or :meth:`from_scene_xml` (the plain ``models/bauv/scene.xml``). The fluid forces
+    beyond MuJoCo's drag are the engine plugin ``bauv.hydro``, one instance per vehicle, declared
+    in the model (:mod:`bauv_sim.hydro`); on every (re)load each vehicle is matched to its
+    instance, whose water the sea sets each tick (:meth:`set_water_world`).
     """
 
     _control_tick_s: float = DEFAULT_CONTROL_TICK_S
