@@ -16,8 +16,9 @@ The defaults are seed 004's (section 6): 8 x 8 beams, ``gamma^i`` uniformly over
   (:class:`HarmonicSeabed`), by root finding along each ray (:meth:`HarmonicSeabed.ray_ranges`):
   a march whose steps are the first root of a parabola bounding ``psi`` from below along the ray
   (the curvature of eq. 24 is bounded by its coefficients), so that no step passes the first
-  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m); grazing rays finish
-  with a Lipschitz march and safeguarded Newton-bisection.
+  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m), in C
+  (``harmonic_rays.c``); grazing rays finish with a Lipschitz march and safeguarded
+  Newton-bisection.
 * Physics world: MuJoCo's ``mj_multiRay`` against the scene's seabed heightfield, through
   :meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances` (the only code that reads MuJoCo
   arrays); the beams start at the ``sonar`` site of the vehicle model. The direction of motion
@@ -36,6 +37,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import importlib.machinery
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -87,7 +89,7 @@ def _march_library_path() -> Path:
 
 
 @functools.cache
-def _march_library() -> ctypes._CFuncPtr:
+def _march_library() -> Callable[..., int]:
     """``bauv_harmonic_march`` of the C library with its argument types (loaded once per
     process, on first use)."""
     march = ctypes.CDLL(str(_march_library_path())).bauv_harmonic_march
@@ -307,9 +309,11 @@ class HarmonicSeabed:
         echo past ``max_range_m``. It starts where the ray enters the slab ``|z + a0| <= sum_l
         (hypot(a_l, b_l) + hypot(c_l, d_l))`` that holds the seabed. The harmonics ``l = 2..K``
         come from those of ``l = 1`` by the angle-addition recurrence (4 sines and cosines per
-        evaluation). A ray that grazes a crest converges slowly (a double root): rays not
-        resolved in :data:`CURVATURE_STEPS` steps finish with the first-order march
-        (:meth:`_lipschitz_ranges`).
+        evaluation). The march runs in C, one ray at a time (:meth:`_curvature_march`,
+        ``bauv_sim/sensors/harmonic_rays.c``; the numpy march it replaced, vectorised over the
+        rays, is the tests' reference and gives the same ranges). A ray that grazes a crest
+        converges slowly (a double root): rays not resolved in :data:`CURVATURE_STEPS` steps
+        finish with the first-order march (:meth:`_lipschitz_ranges`, numpy).
 
         Args:
             origin_m: ray origins, shape (P, ..., 3), m, world.
@@ -327,7 +331,8 @@ class HarmonicSeabed:
 
         Raises:
             ConfigError: for rays of another number of paths, a zero or non-finite direction,
-                or a first-order march that does not finish in ``max_iterations`` steps.
+                a first-order march that does not finish in ``max_iterations`` steps, or a C
+                march that is not built.
         """
         o, e = np.broadcast_arrays(np.asarray(origin_m, float), np.asarray(directions, float))
         shape = o.shape[:-1]
