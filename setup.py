@@ -1,9 +1,14 @@
-"""Build of the MuJoCo engine plugin ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``).
+"""Build of the two C libraries; everything else is declared in ``pyproject.toml``.
 
-Everything else is declared in ``pyproject.toml``. The plugin is a shared library that MuJoCo
-loads with ``mj_loadPluginLibrary`` (``bauv_sim.hydro.load_plugin``); it is compiled against the
-headers of the MuJoCo release pinned in ``pyproject.toml`` (its ``mjModel``/``mjData`` layouts) and
-linked to that release's library, found in the ``mujoco`` package of the build environment.
+* The MuJoCo engine plugin ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``): a shared library that
+  MuJoCo loads with ``mj_loadPluginLibrary`` (``bauv_sim.hydro.load_plugin``); it is compiled
+  against the headers of the MuJoCo release pinned in ``pyproject.toml`` (its ``mjModel``/``mjData``
+  layouts) and linked to that release's library, found in the ``mujoco`` package of the build
+  environment.
+* The harmonic seabed's ray march (``bauv_sim/sensors/harmonic_rays.c``): a plain C library (no
+  Python API) that ``bauv_sim.sensors.multibeam`` loads with ``ctypes``. No fast-math and no FMA
+  contraction (its ranges are those of the numpy code it replaced, to rounding, on any machine),
+  no ``-march`` (the build runs on any x86_64).
 """
 
 from __future__ import annotations
@@ -35,6 +40,12 @@ setup(
             library_dirs=[_libdir],
             libraries=[":" + _lib],
             extra_compile_args=["-O2", "-std=c11", "-D_POSIX_C_SOURCE=200809L", "-Wall"],
-        )
+        ),
+        Extension(
+            "bauv_sim.sensors._harmonic_rays",
+            sources=["bauv_sim/sensors/harmonic_rays.c"],
+            extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
+            libraries=["m"],
+        ),
     ]
 )

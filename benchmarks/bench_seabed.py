@@ -2,16 +2,20 @@
 the rays against a physics scene's heightfield, and a row-2 path-step.
 
 * ``rays``: :meth:`bauv_sim.sensors.multibeam.HarmonicSeabed.ray_ranges` (the curvature-bounded
-  march) against its first-order march (:meth:`HarmonicSeabed._lipschitz_ranges`, the Lipschitz
-  march and safeguarded Newton that was the whole method before), on seed 004's 8 x 8 beams from
-  10 m below the surface over seabeds ~30 m deep (section 6), per ray. Both give the same first
-  crossings (``tests/bauv_sim/test_multibeam.py``).
+  march, in C: ``bauv_sim/sensors/harmonic_rays.c``) against the same march in numpy (vectorised
+  over the rays, the implementation before the C one, kept as the tests' reference in
+  ``tests/bauv_sim/multibeam_reference.py``) and against the first-order march
+  (:meth:`HarmonicSeabed._lipschitz_ranges`, the Lipschitz march and safeguarded Newton that was
+  the whole method before that), on seed 004's 8 x 8 beams from 10 m below the surface over
+  seabeds ~30 m deep (section 6), per ray. All give the same first crossings
+  (``tests/bauv_sim/test_multibeam.py``).
 * ``heightfield``: :meth:`bauv_sim.seabed.Seabed.ray_ranges` on ``mission/seed004``'s seabed
   against MuJoCo's ``mj_multiRay`` (:meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances`,
   one image per call as the vehicle's device casts it), per ray.
 * ``row2``: one block of ``paper-004/table-1-seabed``'s test paths (:func:`tasks.paper004.sim.fly`,
   the three filters, one reading, gains trained beforehand), per path-step (three filters count
-  three), an absolute time beside the load.
+  three), an absolute time beside the load, and the same block with the numpy march patched in
+  for ``HarmonicSeabed.ray_ranges`` (what the C march saves in the row).
 
 Usage: ``python benchmarks/bench_seabed.py [--paths 2000] [--steps 60] [--repeats 3]``
 """
@@ -19,15 +23,28 @@ Usage: ``python benchmarks/bench_seabed.py [--paths 2000] [--steps 60] [--repeat
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
-import numpy as np
-from harness import machine, measure, table
+ROOT = Path(__file__).resolve().parents[1]
+for _p in (str(ROOT), str(ROOT / "benchmarks")):
+    if _p not in sys.path:
+        sys.path.insert(0, _p)
 
-from bauv_sim.sensors.multibeam import HarmonicSeabed, MultibeamConfig, beam_directions
+import numpy as np  # noqa: E402
+from harness import machine, measure, table  # noqa: E402
+
+from bauv_sim.sensors.multibeam import (  # noqa: E402
+    HarmonicSeabed,
+    MultibeamConfig,
+    beam_directions,
+)
+from tests.bauv_sim import multibeam_reference  # noqa: E402
 
 
 def rays(paths: int, repeats: int) -> str:
-    """The harmonic seabed's march against the first-order march, per ray."""
+    """The harmonic seabed's march (C) against the numpy march and the first-order march, per
+    ray."""
     rng = np.random.default_rng(0)
     bed = HarmonicSeabed.draw(0, tuple(range(paths)))
     cfg = MultibeamConfig()
@@ -43,13 +60,16 @@ def rays(paths: int, repeats: int) -> str:
     n = len(ee)
     res = measure(
         {
-            "curvature march": lambda: bed.ray_ranges(o[:, None], e, cfg.max_range_m),
+            "curvature march (C)": lambda: bed.ray_ranges(o[:, None], e, cfg.max_range_m),
+            "curvature march (numpy)": lambda: multibeam_reference.ray_ranges(
+                bed, o[:, None], e, cfg.max_range_m
+            ),
             "first-order march": lambda: bed._lipschitz_ranges(
                 oo, ee, path, rmax, cfg.min_step_m, cfg.tol_m, 10_000
             ),
         },
         repeats=repeats,
-        per={"curvature march": n, "first-order march": n},
+        per={"curvature march (C)": n, "curvature march (numpy)": n, "first-order march": n},
     )
     return table(res, reference="first-order march", unit="us per ray", scale=1e6)
 
@@ -98,12 +118,24 @@ def row2(paths: int, steps: int, repeats: int) -> str:
     s = table1.setting(scn, table1.cases(scn)[0])
     g = gains_for(s, 0)
     runs = tuple(range(paths))
+    c_march = HarmonicSeabed.ray_ranges
+
+    def numpy_march() -> None:
+        HarmonicSeabed.ray_ranges = multibeam_reference.ray_ranges  # type: ignore[method-assign]
+        try:
+            fly(s, 0, runs, g, sample_runs=0)
+        finally:
+            HarmonicSeabed.ray_ranges = c_march  # type: ignore[method-assign]
+
     res = measure(
-        {"row 2 block": lambda: fly(s, 0, runs, g, sample_runs=0)},
+        {
+            "row 2 block": lambda: fly(s, 0, runs, g, sample_runs=0),
+            "row 2 block, numpy march": numpy_march,
+        },
         repeats=repeats,
-        per={"row 2 block": paths * steps * 3},
+        per={"row 2 block": paths * steps * 3, "row 2 block, numpy march": paths * steps * 3},
     )
-    return table(res, reference="row 2 block", unit="us per path-step", scale=1e6)
+    return table(res, reference="row 2 block, numpy march", unit="us per path-step", scale=1e6)
 
 
 def main() -> None:

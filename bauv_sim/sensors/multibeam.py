@@ -16,8 +16,9 @@ The defaults are seed 004's (section 6): 8 x 8 beams, ``gamma^i`` uniformly over
   (:class:`HarmonicSeabed`), by root finding along each ray (:meth:`HarmonicSeabed.ray_ranges`):
   a march whose steps are the first root of a parabola bounding ``psi`` from below along the ray
   (the curvature of eq. 24 is bounded by its coefficients), so that no step passes the first
-  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m); grazing rays finish
-  with a Lipschitz march and safeguarded Newton-bisection.
+  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m), in C
+  (``harmonic_rays.c``); grazing rays finish with a Lipschitz march and safeguarded
+  Newton-bisection.
 * Physics world: MuJoCo's ``mj_multiRay`` against the scene's seabed heightfield, through
   :meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances` (the only code that reads MuJoCo
   arrays); the beams start at the ``sonar`` site of the vehicle model. The direction of motion
@@ -33,7 +34,12 @@ never NaN. Measured ranges are clipped at 0.
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import importlib.machinery
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,6 +64,44 @@ BoolArray = NDArray[np.bool_]
 CURVATURE_STEPS = 60
 """Steps of :meth:`HarmonicSeabed.ray_ranges`' curvature-bounded march before a ray still
 unresolved (grazing a crest) is handed to the first-order march."""
+
+
+_MARCH_LIBRARY = "_harmonic_rays"
+"""The C library of :meth:`HarmonicSeabed._curvature_march` (``harmonic_rays.c``, built beside this
+module by ``pip install``, see ``setup.py``)."""
+
+
+def _march_library_path() -> Path:
+    """The built C library beside this module (a Python extension's file name, no Python API).
+
+    Raises:
+        ConfigError: if it was not built.
+    """
+    here = Path(__file__).parent
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        path = here / (_MARCH_LIBRARY + suffix)
+        if path.is_file():
+            return path
+    raise ConfigError(
+        f"the harmonic seabed's ray march {here / _MARCH_LIBRARY}*.so is not built: reinstall "
+        "the package (pip install -e .)"
+    )
+
+
+@functools.cache
+def _march_library() -> Callable[..., int]:
+    """``bauv_harmonic_march`` of the C library with its argument types (loaded once per
+    process, on first use)."""
+    march = ctypes.CDLL(str(_march_library_path())).bauv_harmonic_march
+    f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
+    i64 = np.ctypeslib.ndpointer(np.int64, flags="C_CONTIGUOUS")
+    f64_out = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS, WRITEABLE")
+    u8_out = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS, WRITEABLE")
+    n, x = ctypes.c_int64, ctypes.c_double
+    march.argtypes = [n, f64, f64, i64, n, *[f64] * 9, x, x, x, x, x, n]
+    march.argtypes += [f64_out, u8_out, u8_out, f64_out]
+    march.restype = n
+    return march
 
 
 class MultibeamConfig(Config):
@@ -265,9 +309,11 @@ class HarmonicSeabed:
         echo past ``max_range_m``. It starts where the ray enters the slab ``|z + a0| <= sum_l
         (hypot(a_l, b_l) + hypot(c_l, d_l))`` that holds the seabed. The harmonics ``l = 2..K``
         come from those of ``l = 1`` by the angle-addition recurrence (4 sines and cosines per
-        evaluation). A ray that grazes a crest converges slowly (a double root): rays not
-        resolved in :data:`CURVATURE_STEPS` steps finish with the first-order march
-        (:meth:`_lipschitz_ranges`).
+        evaluation). The march runs in C, one ray at a time (:meth:`_curvature_march`,
+        ``bauv_sim/sensors/harmonic_rays.c``; the numpy march it replaced, vectorised over the
+        rays, is the tests' reference and gives the same ranges). A ray that grazes a crest
+        converges slowly (a double root): rays not resolved in :data:`CURVATURE_STEPS` steps
+        finish with the first-order march (:meth:`_lipschitz_ranges`, numpy).
 
         Args:
             origin_m: ray origins, shape (P, ..., 3), m, world.
@@ -285,7 +331,8 @@ class HarmonicSeabed:
 
         Raises:
             ConfigError: for rays of another number of paths, a zero or non-finite direction,
-                or a first-order march that does not finish in ``max_iterations`` steps.
+                a first-order march that does not finish in ``max_iterations`` steps, or a C
+                march that is not built.
         """
         o, e = np.broadcast_arrays(np.asarray(origin_m, float), np.asarray(directions, float))
         shape = o.shape[:-1]
@@ -299,54 +346,10 @@ class HarmonicSeabed:
         if not np.all(np.isfinite(norm) & (norm > 0)) or not np.all(np.isfinite(o)):
             raise ConfigError("ray_ranges: origins must be finite, directions finite and non-zero")
         e = e / norm[:, None]
-        wx, wy = self._w()
-        m2 = (
-            e[:, 0] ** 2 * (wx**2 * np.hypot(self.a, self.b)).sum(-1)[path]
-            + e[:, 1] ** 2 * (wy**2 * np.hypot(self.c, self.d)).sum(-1)[path]
-        )
-        K = self.a.shape[1]
-        r = np.zeros(path.size)
-        hit = np.zeros(path.size, bool)
-        # start where the ray enters the slab that holds the seabed (psi > 0 above its top)
-        top = -self.a0_m + self.relief_bound()[path]
-        above = o[:, 2] > top
-        with np.errstate(divide="ignore"):
-            s0 = np.where(above & (e[:, 2] < 0), (o[:, 2] - top) / -e[:, 2], 0.0)
-        gid = np.flatnonzero(~(above & (e[:, 2] >= 0)) & (s0 <= max_range_m))
-        # the live rays' state, one contiguous array per quantity (compacted as rays finish)
-        st = [o[gid, 0], o[gid, 1], o[gid, 2], e[gid, 0], e[gid, 1], e[gid, 2], m2[gid], s0[gid]]
-        st += [getattr(self, c)[path[gid], lv] for c in "abcd" for lv in range(K)]
-        live = np.ones(gid.size, bool)
-        for _ in range(CURVATURE_STEPS):
-            if gid.size == 0:
-                break
-            ox, oy, oz, ex, ey, ez, mi, si = st[:8]
-            f, g = self._psi_slope(ox + si * ex, oy + si * ey, oz + si * ez, ex, ey, ez, st[8:])
-            below = f <= 0  # at the origin: no echo; later: a rounding step onto the root
-            fp = np.maximum(f, 0.0)
-            root = np.sqrt(g * g + 2.0 * mi * fp)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                h = np.where(g > 0, (g + root) / mi, 2.0 * f / (root - g))
-                # the upper parabola f + f' h + M2 h^2 / 2 crosses zero at h_up: the first root
-                # is in [h, h_up]
-                h_up = 2.0 * f / (np.sqrt(g * g - 2.0 * mi * fp) - g)
-            h = np.where(np.isnan(h), np.inf, h)
-            close = (g < 0) & (h_up - h <= tol_m)
-            h = np.where(close, 0.5 * (h + h_up), h)
-            nxt = si + h
-            found = live & np.where(below, si > 0, (close | (h <= tol_m)) & (nxt <= max_range_m))
-            gone = live & np.where(below, si == 0, nxt > max_range_m)
-            r[gid[found]] = np.where(below, si, nxt)[found]
-            hit[gid[found]] = True
-            live &= ~(found | gone)
-            st[7] = np.where(live, nxt, si)
-            left = int(live.sum())
-            if left < 0.5 * gid.size:  # compact
-                gid = gid[live]
-                st = [a[live] for a in st]
-                live = np.ones(left, bool)
-        if gid.size and live.any():  # rays grazing a crest: the first-order march from there
-            gid, si = gid[live], st[7][live]
+        r, hit, unresolved, si = self._curvature_march(o, e, path, max_range_m, tol_m)
+        gid = np.flatnonzero(unresolved)
+        if gid.size:  # rays grazing a crest: the first-order march from where the march stopped
+            si = si[gid]
             L, h1 = self._lipschitz_ranges(
                 o[gid] + si[:, None] * e[gid],
                 e[gid],
@@ -360,38 +363,59 @@ class HarmonicSeabed:
             hit[gid] = h1
         return np.where(hit, r, 0.0).reshape(shape), hit.reshape(shape)
 
-    def _psi_slope(
-        self, x: Array, y: Array, z: Array, ex: Array, ey: Array, ez: Array, coef: list[Array]
-    ) -> tuple[Array, Array]:
-        """``psi`` and its derivative ``grad psi . e`` along rays.
+    def _curvature_march(
+        self, o: Array, e: Array, path: NDArray[np.int64], max_range_m: float, tol_m: float
+    ) -> tuple[Array, BoolArray, BoolArray, Array]:
+        """The curvature-bounded march of :meth:`ray_ranges`, :data:`CURVATURE_STEPS` steps per
+        ray, in C (``bauv_sim/sensors/harmonic_rays.c``, one ray at a time).
 
         Args:
-            x, y, z: points, each shape (r,), m.
-            ex, ey, ez: the rays' unit directions, each shape (r,).
-            coef: the rays' coefficients, ``a_1..a_K, b_1..b_K, c_1..c_K, d_1..d_K``, each (r,).
+            o: ray origins, shape (r, 3), m, world.
+            e: unit ray directions, shape (r, 3), world.
+            path: each ray's seabed, shape (r,), in ``[0, P)``.
+            max_range_m: no echo beyond this distance, m.
+            tol_m: width at which the root is taken, m.
 
         Returns:
-            ``(psi, dpsi/ds)``, each shape (r,).
+            ``(range_m, hit, unresolved, s_m)``, each shape (r,): the range (m, 0 without hit),
+            whether the ray found the seabed, whether it is still unresolved after
+            :data:`CURVATURE_STEPS` steps, and for those the distance reached (m, else 0).
+
+        Raises:
+            ConfigError: if the C library is not built.
         """
-        K = len(coef) // 4
+        march = _march_library()
         wx, wy = self._w()
-        px, py = self.period_x_m, self.period_y_m
-        tx = wx[0] * (x - px * np.round(x / px))  # reduced to [-pi, pi]: cheaper sines
-        ty = wy[0] * (y - py * np.round(y / py))
-        sx1, cx1, sy1, cy1 = np.sin(tx), np.cos(tx), np.sin(ty), np.cos(ty)
-        sx, cx, sy, cy = sx1, cx1, sy1, cy1
-        f = self.a0_m + z
-        gx = 0.0
-        gy = 0.0
-        for lv in range(K):
-            if lv:  # sin and cos of (l + 1) theta by angle addition
-                sx, cx = sx * cx1 + cx * sx1, cx * cx1 - sx * sx1
-                sy, cy = sy * cy1 + cy * sy1, cy * cy1 - sy * sy1
-            a, b, c, d = coef[lv], coef[K + lv], coef[2 * K + lv], coef[3 * K + lv]
-            f = f + (a * sx + b * cx) + (c * sy + d * cy)
-            gx = gx + wx[lv] * (a * cx - b * sx)
-            gy = gy + wy[lv] * (c * cy - d * sy)
-        return f, ez + ex * gx + ey * gy
+        n = path.size
+        r = np.zeros(n)
+        hit = np.zeros(n, np.uint8)
+        unresolved = np.zeros(n, np.uint8)
+        s = np.zeros(n)
+        coef = [np.ascontiguousarray(getattr(self, c), dtype=float) for c in "abcd"]
+        march(
+            n,
+            np.ascontiguousarray(o, dtype=float),
+            np.ascontiguousarray(e, dtype=float),
+            np.ascontiguousarray(path, dtype=np.int64),
+            self.a.shape[1],
+            *coef,
+            np.ascontiguousarray(wx),
+            np.ascontiguousarray(wy),
+            -self.a0_m + self.relief_bound(),
+            (wx**2 * np.hypot(self.a, self.b)).sum(-1),
+            (wy**2 * np.hypot(self.c, self.d)).sum(-1),
+            self.a0_m,
+            self.period_x_m,
+            self.period_y_m,
+            max_range_m,
+            tol_m,
+            CURVATURE_STEPS,
+            r,
+            hit,
+            unresolved,
+            s,
+        )
+        return r, hit.view(np.bool_), unresolved.view(np.bool_), s
 
     def _lipschitz_ranges(
         self,

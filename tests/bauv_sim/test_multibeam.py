@@ -17,6 +17,8 @@ from bauv_sim.sensors.multibeam import (
 )
 from bauv_sim.sensors.rig import SensorRig
 
+from . import multibeam_reference
+
 
 def _psi(sbd, p, pts):
     """Eq. 24 written out here, for path p at points (..., 3)."""
@@ -266,6 +268,111 @@ def test_harmonic_seabed_refuses_mismatched_rays():
     bed = HarmonicSeabed.draw(1, (0, 1))
     with pytest.raises(ConfigError, match="seabeds"):
         bed.ray_ranges(np.zeros((3, 1, 3)), np.array([[[0.0, 0.0, -1.0]]] * 3), 10.0)
+
+
+def _direction(elevation, azimuth):
+    """Unit vectors (..., 3) from elevation (up from the horizontal) and azimuth, rad."""
+    ce = np.cos(elevation)
+    return np.stack([ce * np.cos(azimuth), ce * np.sin(azimuth), np.sin(elevation)], axis=-1)
+
+
+def _test_rays(seed, paths):
+    """Seed 004's 8 x 8 beams plus random rays over ``paths`` random seabeds: grazing, upward,
+    level, vertical, in any direction, un-normalised, from below the seabed and from the surface.
+    Returns the seabeds, origins (P, R, 3) m and directions (P, R, 3)."""
+    rng = np.random.default_rng(seed)
+    bed = HarmonicSeabed.draw(seed, tuple(range(paths)))
+    x = rng.uniform(-100, 300, paths)
+    y = rng.uniform(-50, 50, paths)
+    z = rng.uniform(-26, -5, paths)
+    att = np.column_stack([rng.normal(0, 0.05, paths), rng.uniform(-np.pi, np.pi, paths)])
+    beams = beam_directions(MultibeamConfig(), att).reshape(paths, 64, 3)
+    grazing = _direction(rng.uniform(-0.25, -0.01, (paths, 40)), rng.uniform(-4, 4, (paths, 40)))
+    grazing *= rng.uniform(0.2, 5.0, (paths, 40, 1))  # any length: normalised by ray_ranges
+    up = _direction(rng.uniform(0.0, 1.5, (paths, 6)), rng.uniform(-4, 4, (paths, 6)))
+    vertical = np.broadcast_to([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]], (paths, 2, 3))
+    anywhere = rng.normal(size=(paths, 20, 3))
+    # tangent to the seabed at a random point, passing 1e-7 m above or below it: on a crest a
+    # near-double root, which the curvature march leaves to the first-order march
+    px, py = (
+        x[:, None] + rng.uniform(-10, 10, (paths, 12)),
+        y[:, None] + rng.uniform(-10, 10, (paths, 12)),
+    )
+    pz = bed.height(px, py)
+    az = rng.uniform(-4, 4, (paths, 12))
+    gx, gy = bed.gradient(np.stack([px, py, pz], axis=-1))[..., :2].transpose(2, 0, 1)
+    tangent = np.stack([np.cos(az), np.sin(az), -(gx * np.cos(az) + gy * np.sin(az))], axis=-1)
+    tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+    lift = np.where(np.arange(12) % 2, 1e-7, -1e-7)
+    touch = np.stack([px, py, pz + lift], axis=-1) - 15.0 * tangent
+    e = np.concatenate([beams, grazing, up, vertical, tangent, anywhere], axis=1)
+    o = np.repeat(np.column_stack([x, y, z])[:, None], e.shape[1], axis=1)
+    o[:, 112:124] = touch
+    # the last 10: from below the seabed (no echo) and from the surface (above the slab)
+    below = o[:, -10:-5]
+    below[..., 2] = bed.height(below[..., 0], below[..., 1]) - rng.uniform(0, 3, (paths, 5))
+    o[:, -5:, 2] = 0.0
+    return bed, o, e
+
+
+@pytest.mark.parametrize("steps", [60, 4], ids=["curvature", "handed-over"])
+@pytest.mark.parametrize("max_range_m", [100.0, 20.0])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_c_march_equals_the_numpy_reference(seed, max_range_m, steps, monkeypatch):
+    # the C march against the numpy march it replaced (tests/bauv_sim/multibeam_reference.py):
+    # the same first crossings to rounding, the same hits; rays unresolved after `steps` go on
+    # in the first-order march from where the march stopped, in both
+    monkeypatch.setattr(multibeam, "CURVATURE_STEPS", steps)
+    handed = []
+    first_order = HarmonicSeabed._lipschitz_ranges
+
+    def spy(self, o, *args):
+        handed.append(len(o))
+        return first_order(self, o, *args)
+
+    bed, o, e = _test_rays(seed, 30)
+    want_L, want_hit = multibeam_reference.ray_ranges(bed, o, e, max_range_m)
+    monkeypatch.setattr(HarmonicSeabed, "_lipschitz_ranges", spy)
+    L, hit = bed.ray_ranges(o, e, max_range_m)
+    assert L.shape == hit.shape == o.shape[:2]
+    assert np.array_equal(hit, want_hit)
+    np.testing.assert_allclose(L, want_L, rtol=0, atol=1e-9)
+    assert np.all(L[~hit] == 0)
+    # every kind of ray is there: echoes, none within range, none upward or from below
+    assert 0.2 < hit.mean() < 0.95
+    assert not hit[:, 104:110].any() and not hit[:, -10:-5].any()
+    assert sum(handed) > (200 if steps == 4 else 0)
+
+
+@pytest.mark.parametrize(
+    ("origin", "direction", "kwargs"),
+    [
+        ([0.0, 0.0, -10.0], [0.0, 0.0, 0.0], {}),
+        ([0.0, 0.0, -10.0], [np.nan, 0.0, -1.0], {}),
+        ([np.inf, 0.0, -10.0], [0.0, 0.0, -1.0], {}),
+        ([0.0, 0.0, -10.0], [0.2, 0.0, -1.0], {"max_iterations": 2}),
+    ],
+    ids=["zero", "nan", "infinite-origin", "unfinished"],
+)
+def test_c_march_refuses_bad_rays_as_the_reference(origin, direction, kwargs, monkeypatch):
+    monkeypatch.setattr(multibeam, "CURVATURE_STEPS", 0)  # the first-order march: 2 steps are few
+    bed = HarmonicSeabed.draw(3, (0,))
+    o, e = np.array([[origin]]), np.array([[direction]])
+    with pytest.raises(ConfigError) as want:
+        multibeam_reference.ray_ranges(bed, o, e, 100.0, **kwargs)
+    with pytest.raises(ConfigError) as got:
+        bed.ray_ranges(o, e, 100.0, **kwargs)
+    assert str(got.value) == str(want.value)
+
+
+def test_a_missing_c_march_is_an_error_that_says_how_to_build_it(monkeypatch):
+    monkeypatch.setattr(multibeam, "_MARCH_LIBRARY", "_no_such_library")
+    multibeam._march_library.cache_clear()
+    try:
+        with pytest.raises(ConfigError, match=r"not built: reinstall the package"):
+            HarmonicSeabed.draw(1, (0,)).ray_ranges(np.zeros((1, 3)), np.array([[0, 0, -1.0]]), 5)
+    finally:
+        multibeam._march_library.cache_clear()
 
 
 def test_online_multibeam_follows_the_moving_hull():
