@@ -1,4 +1,4 @@
-"""Build of the two C libraries; everything else is declared in ``pyproject.toml``.
+"""Build of the three C libraries; everything else is declared in ``pyproject.toml``.
 
 * The MuJoCo engine plugin ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``): a shared library that
   MuJoCo loads with ``mj_loadPluginLibrary`` (``bauv_sim.hydro.load_plugin``); it is compiled
@@ -9,6 +9,9 @@
   Python API) that ``bauv_sim.sensors.multibeam`` loads with ``ctypes``. No fast-math and no FMA
   contraction (its ranges are those of the numpy code it replaced, to rounding, on any machine),
   no ``-march`` (the build runs on any x86_64).
+* The seabed shift's per-path arithmetic (``nav/seabed_shift.c``: Appendix A's slope fit and
+  eq. 15 of seed 004 with its covariance): a plain C library that ``nav.seabed`` loads with
+  ``ctypes``, compiled as the ray march.
 """
 
 from __future__ import annotations
@@ -44,6 +47,12 @@ setup(
         Extension(
             "bauv_sim.sensors._harmonic_rays",
             sources=["bauv_sim/sensors/harmonic_rays.c"],
+            extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
+            libraries=["m"],
+        ),
+        Extension(
+            "nav._seabed_shift",
+            sources=["nav/seabed_shift.c"],
             extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
             libraries=["m"],
         ),

@@ -62,13 +62,17 @@ References:
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import importlib.machinery
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from nav.errors import NavInputError
+from nav.errors import NavError, NavInputError
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -83,6 +87,55 @@ SINGULAR_FLOOR = 1e-9
 """Absolute singular-value floor of the shift's least squares (eq. 15): singular values of A
 below ``SINGULAR_FLOOR * sqrt(m)`` (``m`` beams, each row of A of order 1: its z component is 1)
 count as zero, whatever ``rcond``."""
+
+
+_SHIFT_LIBRARY = "_seabed_shift"
+"""The C library of :func:`fit_slopes` and :func:`shift_estimate` (``seabed_shift.c``, built
+beside this module by ``pip install``, see ``setup.py``)."""
+
+
+def _shift_library_path() -> Path:
+    """The built C library beside this module (a Python extension's file name, no Python API).
+
+    Raises:
+        NavError: if it was not built.
+    """
+    here = Path(__file__).parent
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        path = here / (_SHIFT_LIBRARY + suffix)
+        if path.is_file():
+            return path
+    raise NavError(
+        f"the seabed shift's C library {here / _SHIFT_LIBRARY}*.so is not built: reinstall "
+        "the package (pip install -e .)"
+    )
+
+
+@dataclass(frozen=True)
+class _ShiftLibrary:
+    fit: ctypes._CFuncPtr  # bauv_seabed_fit
+    shift: ctypes._CFuncPtr  # bauv_seabed_shift
+
+
+@functools.cache
+def _shift_library() -> _ShiftLibrary:
+    """``bauv_seabed_fit`` and ``bauv_seabed_shift`` of the C library with their argument types
+    (loaded once per process, on first use)."""
+    lib = ctypes.CDLL(str(_shift_library_path()))
+    f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
+    u8 = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")
+    f64_out = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS, WRITEABLE")
+    i64_out = np.ctypeslib.ndpointer(np.int64, flags="C_CONTIGUOUS, WRITEABLE")
+    u8_out = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS, WRITEABLE")
+    n, x, opt = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
+    fit = lib.bauv_seabed_fit
+    fit.argtypes = [n, n, f64, u8, n, n, x, x, x, f64_out, u8_out, u8_out]
+    fit.restype = n
+    shift = lib.bauv_seabed_shift
+    shift.argtypes = [n, n, f64, f64, opt, f64, f64, u8, u8, n, x, x, x, x, opt]
+    shift.argtypes += [f64_out, f64_out, i64_out, i64_out, u8_out, f64_out]
+    shift.restype = None
+    return _ShiftLibrary(fit, shift)
 
 
 @dataclass(frozen=True)
@@ -299,6 +352,12 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
     each path in least squares, then returns ``grad psi = (sum p_l dpsi_l/dx, sum p_l dpsi_l/dy,
     1)`` at every point.
 
+    The per-path arithmetic runs in C (``nav/seabed_shift.c``: the basis, the normal equations
+    scaled to a unit diagonal, solved by Cholesky); paths whose scaled Gram matrix may have a
+    condition number above :data:`FIT_C_CONDITION` are fitted in numpy
+    (:func:`_least_squares`: LAPACK's eigen-decomposition or the SVD), as are bases of more
+    than :data:`FIT_MAX_FUNCTIONS` functions.
+
     Args:
         points: beam feet, shape (P, m, 3), m, world (z up).
         valid: which points have an echo, shape (P, m).
@@ -307,7 +366,50 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
     Returns:
         ``(grad, ok)``: gradients shape (P, m, 3) (zero where ``ok`` is False), and ``ok``
         shape (P,): the path had more valid points than basis functions.
+
+    Raises:
+        NavError: if the C library is not built.
     """
+    pts = np.ascontiguousarray(points, dtype=float)
+    w = np.asarray(valid, dtype=bool)
+    if w.ndim != 2 or pts.shape != (*w.shape, 3):
+        raise NavInputError(
+            f"fit_slopes: points of shape {pts.shape} and valid of shape {w.shape}, expected "
+            "(P, m, 3) and (P, m)"
+        )
+    if basis.size > FIT_MAX_FUNCTIONS:
+        return _fit_slopes_numpy(pts, w, basis)
+    P, m = w.shape
+    grad = np.empty((P, m, 3))
+    ok = np.empty(P, np.uint8)
+    to_numpy = np.empty(P, np.uint8)
+    kind = {"harmonic": 0, "plane": 1, "quadratic": 2}[basis.kind]
+    flagged = _shift_library().fit(
+        P,
+        m,
+        pts,
+        np.ascontiguousarray(w, dtype=np.uint8),
+        kind,
+        basis.harmonics,
+        float(basis.period_x_m),
+        float(basis.period_y_m),
+        FIT_C_CONDITION,
+        grad,
+        ok,
+        to_numpy,
+    )
+    if flagged < 0:
+        raise NavError("fit_slopes: the C fit ran out of memory")
+    if flagged:  # less well conditioned: numpy (LAPACK) on those paths
+        bad = np.flatnonzero(to_numpy)
+        grad[bad] = _fit_slopes_numpy(pts[bad], w[bad], basis)[0]
+    return grad, ok.view(np.bool_)
+
+
+def _fit_slopes_numpy(
+    points: Array, valid: BoolArray, basis: SlopeBasis
+) -> tuple[Array, BoolArray]:
+    """:func:`fit_slopes` in numpy (the ill-conditioned paths and the large bases)."""
     pts = np.asarray(points, dtype=float)
     w = np.asarray(valid, dtype=bool)
     n_valid = w.sum(axis=1)
@@ -330,6 +432,17 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
 
 FIT_RCOND = 1e-10
 """Relative singular-value cut-off of Appendix A's fit (:func:`fit_slopes`)."""
+
+FIT_C_CONDITION = 1e4
+"""Largest condition number of the scaled Gram matrix of Appendix A's fit solved in C
+(:func:`fit_slopes`, by the bound ``max_row_sum(G) trace(G^-1)``); the C solution (Cholesky)
+and numpy's (LAPACK's eigen-decomposition) differ by about the condition number times the
+rounding error, so up to here they agree to ~1e-11, and the paths beyond it (about 5 per cent
+of seed 004's) keep numpy's numbers."""
+
+FIT_MAX_FUNCTIONS = 64
+"""Most basis functions of Appendix A's fit in C (``FIT_MAX`` of ``nav/seabed_shift.c``); a
+larger basis (a harmonic one with more than 15 harmonics) is fitted in numpy."""
 
 GRAM_CONDITION = 1e12
 """Largest condition number of the Jacobi-scaled Gram matrix ``A^T A`` that
@@ -492,13 +605,10 @@ def shift_estimate(
     if not (np.all(np.isfinite(L0[w0])) and np.all(np.isfinite(L1[w1]))):
         raise NavInputError("ranges_m / next_ranges_m: non-finite range on a beam with an echo")
     m = geometry.shape[0] * geometry.shape[1]
-    L0f = np.where(use, L0, 0.0).reshape(P, m)
-    dL = np.where(use, L1 - L0, 0.0).reshape(P, m)  # step 1: dL = L_{k+1} - L_k
     e = geometry.directions(att0).reshape(P, m, 3)  # eq. 8
+    de = None
     if reading == "turning":  # step 2: eq. 10
         de = geometry.direction_change(att0, att1, exact=delta_e == "exact").reshape(P, m, 3)
-    else:
-        de = np.zeros_like(e)
     usef = use.reshape(P, m)
     if slopes is None:  # step 3: Appendix A on every foot of image k
         origin = np.zeros((P, 3)) if position_m is None else np.asarray(position_m, dtype=float)
@@ -506,29 +616,97 @@ def shift_estimate(
         w0f = w0.reshape(P, m)
         feet = origin[:, None, :] + np.where(w0f, L0.reshape(P, m), 0.0)[..., None] * e  # eq. 8
         grad, fit_ok = fit_slopes(feet, w0f, basis or SlopeBasis.seed004())
-        grad = np.where(usef[..., None], grad, 0.0)
     else:
         grad = _check_images("slopes", np.asarray(slopes, dtype=float), (*L0.shape, 3))
-        grad = np.where(usef[..., None], grad.reshape(P, m, 3), 0.0)
+        grad = grad.reshape(P, m, 3)
         fit_ok = np.ones(P, bool)
+    cmd = None
+    if commanded_shift_m is not None:
+        cmd = _check_images("commanded_shift_m", np.asarray(commanded_shift_m, dtype=float), (P, 3))
+    if rcond * 1e8 < 1.0:  # a cut-off below what eigenvalues of A^T A resolve: the SVD
+        return _shift_svd(
+            grad,
+            e,
+            de,
+            L0,
+            L1,
+            usef,
+            fit_ok,
+            covariance,
+            sigma_range_m,
+            fallback_var_m2,
+            rcond,
+            cmd,
+        )
+    # steps 4-5 in C (nav/seabed_shift.c): eq. 12 and 14 over the used beams, eq. 15 by the
+    # singular values of A from the eigen-decomposition of the 3 x 3 A^T A with an absolute floor
+    # (rank-deficient A: minimum-norm shift), and the stated covariance
+    shift = np.empty((P, 3))
+    cov = np.empty((P, 3, 3))
+    beams = np.empty(P, np.int64)
+    rank = np.empty(P, np.int64)
+    ok = np.empty(P, np.uint8)
+    rms = np.empty(P)
+    de_c = None if de is None else np.ascontiguousarray(de)
+    cmd_c = None if cmd is None else np.ascontiguousarray(cmd)
+    _shift_library().shift(
+        P,
+        m,
+        np.ascontiguousarray(grad),
+        np.ascontiguousarray(e),
+        None if de_c is None else de_c.ctypes.data,
+        np.ascontiguousarray(L0.reshape(P, m)),
+        np.ascontiguousarray(L1.reshape(P, m)),
+        np.ascontiguousarray(usef, dtype=np.uint8),
+        np.ascontiguousarray(fit_ok, dtype=np.uint8),
+        int(covariance == "residual"),
+        float(sigma_range_m),
+        float(fallback_var_m2),
+        float(rcond),
+        SINGULAR_FLOOR,
+        None if cmd_c is None else cmd_c.ctypes.data,
+        shift,
+        cov,
+        beams,
+        rank,
+        ok,
+        rms,
+    )
+    return ShiftEstimate(shift, cov, beams, rank, ok.view(np.bool_), rms)
+
+
+def _shift_svd(
+    grad: Array,
+    e: Array,
+    de: Array | None,
+    L0: Array,
+    L1: Array,
+    usef: BoolArray,
+    fit_ok: BoolArray,
+    covariance: CovarianceKind,
+    sigma_range_m: float,
+    fallback_var_m2: float,
+    rcond: float,
+    cmd: Array | None,
+) -> ShiftEstimate:
+    """Steps 4-5 of :func:`shift_estimate` in numpy with the SVD of A, for ``rcond`` below what
+    the eigenvalues of ``A^T A`` resolve (arguments as there, flattened to (P, m, ...))."""
+    P, m = usef.shape
+    if de is None:
+        de = np.zeros_like(e)
+    L0f = np.where(usef, L0.reshape(P, m), 0.0)
+    dL = np.where(usef, (L1 - L0).reshape(P, m), 0.0)  # step 1: dL = L_{k+1} - L_k
+    grad = np.where(usef[..., None], grad, 0.0)
     # step 4: eq. 12 and 14 (masked beams give zero rows)
     A = grad
     B = -np.einsum("pmc,pmc->pm", grad, de * L0f[..., None] + e * dL[..., None])
     beams = usef.sum(axis=1)
     ok = fit_ok & (beams >= 3)
-    # step 5: eq. 15 by the singular values of A with an absolute floor (rank-deficient A:
-    # minimum-norm shift), from the eigen-decomposition of the 3 x 3 A^T A: A = U S V^T with
-    # A^T A = V S^2 V^T and U^T B = S^-1 V^T A^T B
+    # step 5: eq. 15 by the SVD of A with an absolute floor (rank-deficient A: minimum-norm shift)
     At = A.transpose(0, 2, 1)
-    lam, V = np.linalg.eigh(At @ A)  # ascending
-    s = np.sqrt(np.maximum(lam[:, ::-1], 0.0))  # descending, as an SVD's
-    Vt = V[:, :, ::-1].transpose(0, 2, 1)
-    floor = np.maximum(SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1)), rcond * s[:, 0])[:, None]
-    if rcond * 1e8 < 1.0:  # a cut-off below what eigenvalues of A^T A resolve: the SVD
-        _, s, Vt = np.linalg.svd(A, full_matrices=False)  # (P,3), (P,3,3)
-        floor = np.maximum(SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1)), rcond * s[:, 0])
-        floor = floor[:, None]
-    keep = s > floor
+    _, s, Vt = np.linalg.svd(A, full_matrices=False)  # (P,3), (P,3,3)
+    floor = np.maximum(SINGULAR_FLOOR * np.sqrt(np.maximum(beams, 1)), rcond * s[:, 0])
+    keep = s > floor[:, None]
     rank = keep.sum(axis=1)
     s_inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
     atb = np.einsum("pcm,pm->pc", At, B)
@@ -547,23 +725,14 @@ def shift_estimate(
         s2 = rss / dof
         cov = np.einsum("pcd,pc,pce->pde", Vt, s2[:, None] * s_inv**2, Vt)
         # never below the range-noise propagation
-        cov = np.where(
-            (np.trace(cov, axis1=1, axis2=2) >= np.trace(cov_noise, axis1=1, axis2=2))[
-                :, None, None
-            ],
-            cov,
-            cov_noise,
-        )
+        trace_ok = np.trace(cov, axis1=1, axis2=2) >= np.trace(cov_noise, axis1=1, axis2=2)
+        cov = np.where(trace_ok[:, None, None], cov, cov_noise)
     else:
         cov = cov_noise
     unobserved = np.where(keep, 0.0, fallback_var_m2)
     cov = cov + np.einsum("pcd,pc,pce->pde", Vt, unobserved, Vt)
     eye = np.broadcast_to(np.eye(3) * fallback_var_m2, (P, 3, 3))
-    if commanded_shift_m is None:
-        shift = np.where(ok[:, None], shift, 0.0)
-    else:
-        cmd = _check_images("commanded_shift_m", np.asarray(commanded_shift_m, dtype=float), (P, 3))
-        shift = np.where(ok[:, None], shift, cmd)
+    shift = np.where(ok[:, None], shift, 0.0 if cmd is None else cmd)
     cov = np.where(ok[:, None, None], cov, eye)
     rms = np.where(ok, np.sqrt(rss / np.maximum(beams, 1)), 0.0)
     return ShiftEstimate(shift, cov, beams, np.where(ok, rank, 0), ok, rms)
