@@ -14,8 +14,10 @@ the rays against a physics scene's heightfield, and a row-2 path-step.
   one image per call as the vehicle's device casts it), per ray.
 * ``row2``: one block of ``paper-004/table-1-seabed``'s test paths (:func:`tasks.paper004.sim.fly`,
   the three filters, one reading, gains trained beforehand), per path-step (three filters count
-  three), an absolute time beside the load, and the same block with the numpy march patched in
-  for ``HarmonicSeabed.ray_ranges`` (what the C march saves in the row).
+  three), an absolute time beside the load, the same block with the numpy march patched in
+  for ``HarmonicSeabed.ray_ranges`` (what the C march saves in the row), and with the numpy seabed
+  shift patched in for :func:`nav.seabed.shift_estimate` (``tests/nav/seabed_reference.py``, the
+  implementation before the C one in ``nav/seabed_shift.c``: what that saves in the row).
 
 Usage: ``python benchmarks/bench_seabed.py [--paths 2000] [--steps 60] [--repeats 3]``
 """
@@ -40,6 +42,7 @@ from bauv_sim.sensors.multibeam import (  # noqa: E402
     beam_directions,
 )
 from tests.bauv_sim import multibeam_reference  # noqa: E402
+from tests.nav import seabed_reference  # noqa: E402
 
 
 def rays(paths: int, repeats: int) -> str:
@@ -110,7 +113,7 @@ def heightfield(repeats: int) -> str:
 def row2(paths: int, steps: int, repeats: int) -> str:
     """A block of row 2's test paths (three filters), per path-step."""
     from tasks.core.runner import plan_batch
-    from tasks.paper004 import table1
+    from tasks.paper004 import seabed, table1
     from tasks.paper004.sim import fly, gains_for
 
     over = [f"path.duration_s={float(steps)}", "filters.train_paths=200"]
@@ -127,14 +130,21 @@ def row2(paths: int, steps: int, repeats: int) -> str:
         finally:
             HarmonicSeabed.ray_ranges = c_march  # type: ignore[method-assign]
 
-    res = measure(
-        {
-            "row 2 block": lambda: fly(s, 0, runs, g, sample_runs=0),
-            "row 2 block, numpy march": numpy_march,
-        },
-        repeats=repeats,
-        per={"row 2 block": paths * steps * 3, "row 2 block, numpy march": paths * steps * 3},
-    )
+    c_shift = seabed.shift_estimate
+
+    def numpy_shift() -> None:
+        seabed.shift_estimate = seabed_reference.shift_estimate
+        try:
+            fly(s, 0, runs, g, sample_runs=0)
+        finally:
+            seabed.shift_estimate = c_shift
+
+    variants = {
+        "row 2 block": lambda: fly(s, 0, runs, g, sample_runs=0),
+        "row 2 block, numpy march": numpy_march,
+        "row 2 block, numpy shift": numpy_shift,
+    }
+    res = measure(variants, repeats=repeats, per={k: paths * steps * 3 for k in variants})
     return table(res, reference="row 2 block, numpy march", unit="us per path-step", scale=1e6)
 
 
