@@ -3,9 +3,9 @@
 //
 // A plain C library without Python API, loaded with ctypes (nav/seabed.py, _shift_library).
 // Python checks the input, computes the beam vectors e and their change de (eq. 8, 10), and keeps
-// the rare branches in numpy: Appendix A's fit where its scaled Gram matrix has a condition
-// number above 1e4 (bauv_seabed_fit flags those paths, a few per cent on seed 004's paths) and
-// the SVD of eq. 15 for rcond < 1e-8.
+// the rare branches in numpy: Appendix A's fit where its scaled Gram matrix may have a condition
+// number above nav.seabed.FIT_C_CONDITION = 1e4 (bauv_seabed_fit flags those paths, about 5 per
+// cent of seed 004's) and the SVD of eq. 15 for rcond < 1e-8.
 //
 // Appendix A (bauv_seabed_fit). Path p has m beam feet x_j = (x, y, z) with valid_j (an echo). The
 // seabed psi(x) = z + sum_l p_l psi_l(x, y) is fitted to the valid feet in least squares (eq. A1
@@ -38,13 +38,14 @@
 // with the covariance of nav.seabed's module docstring: the range-noise propagation
 // sum_j Ap_j var_j Ap_j^T (Ap = V diag(s_inv^2) V^T A^T, var_j = sigma^2 ((g.(de - e))^2 +
 // (g.e)^2)), the residual one s^2 V diag(s_inv^2) V^T (s^2 = RSS / max(m_used - rank, 1)) unless
-// its trace is below the former's, plus fallback along the directions not kept.
+// its trace is below the former's, plus fallback along the directions not kept. A path with
+// fewer than 3 used beams or no slope fit states no shift: cmd (or zero) with fallback * I.
 //
 // Every operation follows the numpy implementation it replaced (kept in
 // tests/nav/seabed_reference.py); sums may run in another order, the fit is solved by Cholesky
 // and eq. 15's eigen-decomposition is Jacobi's rather than LAPACK's, so results agree to rounding
-// times the condition number. IEEE 754
-// double, no fast-math, no FMA contraction (compile with -ffp-contract=off).
+// times the condition numbers (about 1e-11 relative on seed 004's images), not bit for bit.
+// IEEE 754 double, no fast-math, no FMA contraction (compile with -ffp-contract=off).
 
 #include <float.h>
 #include <math.h>
