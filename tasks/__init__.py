@@ -18,8 +18,8 @@ packages named in :data:`tasks.core.registry.EXPERIMENT_PACKAGES`. Depends on :m
 from nav._exports import lazy_exports
 
 _EXPORTS: dict[str, tuple[str, str]] = {
-    "BatchFailed": ("tasks.core.runner", "BatchFailed"),
-    "BatchInterrupted": ("tasks.core.runner", "BatchInterrupted"),
+    "BatchFailed": ("tasks.core.errors", "BatchFailed"),
+    "BatchInterrupted": ("tasks.core.errors", "BatchInterrupted"),
     "BatchPlan": ("tasks.core.runner", "BatchPlan"),
     "Column": ("tasks.core.export", "Column"),
     "Experiment": ("tasks.core.registry", "Experiment"),

@@ -5,8 +5,8 @@ Nothing here knows a particular experiment or mission."""
 from nav._exports import lazy_exports
 
 _EXPORTS: dict[str, tuple[str, str]] = {
-    "BatchFailed": ("tasks.core.runner", "BatchFailed"),
-    "BatchInterrupted": ("tasks.core.runner", "BatchInterrupted"),
+    "BatchFailed": ("tasks.core.errors", "BatchFailed"),
+    "BatchInterrupted": ("tasks.core.errors", "BatchInterrupted"),
     "BatchPlan": ("tasks.core.runner", "BatchPlan"),
     "Column": ("tasks.core.export", "Column"),
     "Experiment": ("tasks.core.registry", "Experiment"),
