@@ -1,5 +1,6 @@
 """Start-up: a kinematic run imports only what it needs (issue 13: MuJoCo, dm_control, matplotlib
-and rerun are not imported by ``bauv run paper-000/test-1`` with figures and recording off), and
+and rerun are not imported by ``bauv run paper-000/test-1`` with figures and recording off, nor
+scipy's special functions), and
 ``bauv list`` imports no experiment package."""
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ HEAVY = (
     "rerun",
     "scipy.stats",
     "scipy.spatial",
+    "scipy.special",
     "trimesh",
     "numpy",
     "pydantic",
@@ -42,6 +44,8 @@ def test_a_kinematic_run_without_figures_and_recording_imports_nothing_heavy(tmp
     loaded = _modules_after(code)
     assert (out / "metrics.json").is_file()
     heavy = ("mujoco", "dm_control", "matplotlib", "rerun", "scipy.stats", "scipy.spatial")
+    # nor scipy.special (0.2 s of CPU): the NEES band's chi-square quantiles are computed without
+    heavy += ("scipy.special",)
     assert not any(loaded[m] for m in heavy), loaded
 
 
@@ -83,23 +87,23 @@ def test_the_command_line_and_the_workers_module_import_nothing_heavy():
     assert not any(loaded.values()), loaded
 
 
-def test_bauv_run_starts_the_fork_server_before_the_project_imports(tmp_path):
-    """With ``--workers 2`` the fork server is started while nothing heavy is imported yet, so it
-    imports the project on the other core while ``bauv`` does (its imports were on the critical
-    path of a 2-worker batch), and with numpy's huge pages turned off for it to inherit; the batch
-    still completes."""
+def test_bauv_run_forks_its_workers_after_its_imports_and_before_its_threads(tmp_path):
+    """With ``--workers 2`` on Linux the workers are forked from ``bauv`` itself (issue 13: a
+    fork server's own start and imports were on the critical path of a 2-worker batch): when it
+    forks it has imported the experiment (the workers start with it), runs no other thread (a
+    forked child would keep the locks another thread held; the progress bar's monitor and the
+    report's thread start after), and has numpy's huge pages turned off for them to inherit; no
+    fork server is started, and the batch completes."""
     out = tmp_path / "run"
     code = (
-        "import json, os, sys\n"
+        "import json, os, sys, threading\n"
         "os.environ.pop('NUMPY_MADVISE_HUGEPAGE', None)\n"
-        "from multiprocessing import forkserver\n"
         "seen = []\n"
-        "real = forkserver.ensure_running\n"
         "def probe():\n"
-        "    seen.append(sorted(m for m in ('numpy', 'pydantic', 'tasks.core.runner') "
-        "if m in sys.modules) + [os.environ.get('NUMPY_MADVISE_HUGEPAGE')])\n"
-        "    return real()\n"
-        "forkserver.ensure_running = probe\n"
+        "    seen.append([threading.active_count(), 'tasks.paper000.passage' in sys.modules, "
+        "os.environ.get('NUMPY_MADVISE_HUGEPAGE')])\n"
+        "os.register_at_fork(before=probe)\n"
+        "from multiprocessing import forkserver\n"
         "from tasks.core.cli import main\n"
         "try:\n"
         f"    main(['run', 'paper-000/test-1', '--runs', '4', '--workers', '2', '--quiet', "
@@ -107,11 +111,12 @@ def test_bauv_run_starts_the_fork_server_before_the_project_imports(tmp_path):
         "'report.figures=false', '--set', 'report.recording=false'])\n"
         "except SystemExit as e:\n"
         "    assert not e.code, e.code\n"
-        "print(json.dumps(seen))\n"
+        "print(json.dumps([seen, forkserver._forkserver._forkserver_pid]))\n"
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    seen = json.loads(res.stdout.strip().splitlines()[-1])
-    assert seen and seen[0] == ["0"], seen  # nothing heavy yet; numpy's huge pages off
+    seen, server = json.loads(res.stdout.strip().splitlines()[-1])
+    assert seen == [[1, True, "0"], [1, True, "0"]], seen  # two workers, as described
+    assert server is None
     assert (out / "metrics.json").is_file()
 
 
