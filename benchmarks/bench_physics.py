@@ -37,6 +37,8 @@ from bauv_sim.hull import MODEL_DIR  # noqa: E402
 from bauv_sim.physics import BauvPhysics  # noqa: E402
 
 README = ROOT / "benchmarks" / "README.md"
+
+
 def _cruise_hz() -> float:
     from bauv_sim.design.speed_table import load_speed_table
 

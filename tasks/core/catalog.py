@@ -1,7 +1,8 @@
 """Every registered experiment's name and summary, for ``bauv list`` without importing any
 experiment package (the missions import MuJoCo and dm_control), and the package of each family of
 names (:data:`FAMILIES`), which the registry imports on demand and a ``bauv run`` on local workers
-hands to their fork server before it imports anything heavy (:mod:`tasks.core.workers`).
+hands to their fork server (where one is used) before it imports anything heavy
+(:mod:`tasks.core.workers`).
 
 The list is data, ``catalog.json`` beside this module, generated from the registry by ``python -m
 tasks.core.catalog``; ``tests/tasks/test_registry.py`` fails, saying how to regenerate it, when it

@@ -139,7 +139,8 @@ def run_cmd(
 
     workers_mod.prepare_batch_process()  # before numpy is imported, here and in the workers
     if executor == "local" and workers > 1:
-        # before the project's imports: the workers' fork server imports it meanwhile
+        # before the project's imports: where workers come from a fork server (not where bauv
+        # forks them itself), the server imports the project meanwhile
         workers_mod.start_fork_server(name)
     from tasks.core.runner import run
 

@@ -1,5 +1,6 @@
 """Errors of a batch, apart from the runner so that the command line can tell them without
-importing it (``bauv`` starts its workers' fork server before the project's imports)."""
+importing it (where a fork server is used, ``bauv`` starts it before the project's
+imports)."""
 
 from __future__ import annotations
 

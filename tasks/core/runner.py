@@ -14,9 +14,10 @@ encoding keeps every bit, the outputs are bit-identical whatever the executor an
 and a batch interrupted and resumed with ``--resume`` equals one run straight through.
 
 Executors: ``local`` (in-process for one worker, else a :class:`ProcessPoolExecutor` whose workers
-are forked warm from a fork server with the experiment preloaded, or spawned where there is
-none; :mod:`tasks.core.workers`) and ``dask`` (``distributed.Client(address)``, or a local
-cluster with ``workers`` single-threaded processes when no address is given).
+are forked from ``bauv`` itself, which has imported the experiment, before it starts any thread,
+or from a fork server with the experiment preloaded where that is not safe, or spawned where
+there is neither; :mod:`tasks.core.workers`) and ``dask`` (``distributed.Client(address)``, or a
+local cluster with ``workers`` single-threaded processes when no address is given).
 
 The run folder holds ``run.json`` (``state`` is ``incomplete`` until the report is written, then
 ``complete``), ``scenario.toml`` (the resolved scenario: ``bauv run NAME --scenario FILE`` repeats
@@ -812,14 +813,18 @@ def execute(
     failures: list[str] = []
     overlapped: _OverlappedReport | None = None
     arrivals = _Arrivals(set(range(len(plan.blocks))) - set(todo))
-    bar = tqdm(
-        total=plan.n_runs,
-        initial=done_runs,
-        unit="run",
-        desc=plan.experiment.name,
-        disable=None if progress else True,
-        dynamic_ncols=True,
-    )
+
+    def progress_bar() -> Any:
+        return tqdm(
+            total=plan.n_runs,
+            initial=done_runs,
+            unit="run",
+            desc=plan.experiment.name,
+            disable=None if progress else True,
+            dynamic_ncols=True,
+        )
+
+    bar = None if todo else progress_bar()
     try:
         if todo:
             with (
@@ -827,6 +832,8 @@ def execute(
                 if pool is not None
                 else make_executor(executor, workers, address, (type(plan.experiment).__module__,))
             ) as ex:
+                # local workers are forked at the first submit (tasks.core.workers): before this
+                # process starts a thread of its own (the bar's monitor, the report)
                 futures = {
                     ex.submit(
                         _run_block_in_worker,
@@ -838,6 +845,7 @@ def execute(
                     ): i
                     for i in todo
                 }
+                bar = progress_bar()
                 if not isinstance(ex, InlineExecutor):
                     overlapped = _OverlappedReport(plan, out_dir, progress, arrivals)
                 try:
@@ -867,7 +875,8 @@ def execute(
                         f.cancel()
                     raise
     except KeyboardInterrupt:
-        bar.close()
+        if bar is not None:
+            bar.close()
         if overlapped is not None:
             overlapped.abandon()
         n_done = sum(_saved(out_dir, i) for i in range(len(plan.blocks)))
@@ -879,7 +888,8 @@ def execute(
         if overlapped is not None:
             overlapped.abandon()
         raise
-    bar.close()
+    if bar is not None:
+        bar.close()
     if failures:
         if overlapped is not None:
             overlapped.abandon()

@@ -529,7 +529,7 @@ def _alive(procs):
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
 def test_workers_die_with_bauv(tmp_path, sig):
     """``bauv run --workers 2`` stopped by SIGTERM (handled: blocks kept, exit 130) or SIGKILL
-    (not handled) leaves no worker nor resource tracker running."""
+    (not handled) leaves no worker (nor resource tracker, where one runs) running."""
     psutil = pytest.importorskip("psutil")
     args = ["paper-000/test-1", "--runs", "4000", "--workers", "2", "--quiet"]
     args += ["--set=report.figures=false", "--set=report.recording=false"]
@@ -547,10 +547,10 @@ def test_workers_die_with_bauv(tmp_path, sig):
         deadline = time.time() + 60
         while time.time() < deadline:
             children = parent.children(recursive=True)
-            if len(children) >= 3 and (tmp_path / "out" / "blocks").is_dir():
-                break  # two workers, the resource tracker, and work under way
+            if len(children) >= 2 and (tmp_path / "out" / "blocks").is_dir():
+                break  # two workers (and a resource tracker where one is used), work under way
             time.sleep(0.1)
-        assert len(children) >= 3, children
+        assert len(children) >= 2, children
         os.kill(proc.pid, sig)
         proc.wait(timeout=60)
         deadline = time.time() + 20

@@ -94,3 +94,44 @@ def test_bauv_run_turns_numpy_huge_pages_off_unless_set():
     workers.prepare_batch_process(mine)
     assert mine == {workers.HUGEPAGE_VARIABLE: "1"}
 
+
+_START_PROBE = """
+import json, signal, threading
+from tasks.core.runner import make_executor
+
+signal.signal(signal.SIGTERM, lambda *_: None)  # as bauv's own handler
+signal.signal(signal.SIGHUP, signal.SIG_IGN)  # as under nohup
+import tasks.paper000.passage  # bauv has imported the experiment to plan the batch
+stop = threading.Event()
+if {extra_thread}:
+    threading.Thread(target=stop.wait, daemon=True).start()
+with make_executor("local", 2, None, ("tasks.paper000",)) as ex:
+    got = {{
+        "context": ex._mp_context.get_start_method(),
+        "sigterm": ex.submit(signal.getsignal, signal.SIGTERM).result().name,
+        "sighup": ex.submit(signal.getsignal, signal.SIGHUP).result().name,
+        "threads": ex.submit(threading.active_count).result(),
+    }}
+stop.set()
+print(json.dumps(got))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is used on Linux")
+@pytest.mark.parametrize("extra_thread", [False, True], ids=["one thread", "two threads"])
+def test_workers_are_forked_from_bauv_only_when_it_runs_one_thread(extra_thread):
+    """A single-threaded ``bauv`` forks its workers (they start with what it imported); one that
+    runs another thread uses the fork server (a forked child would keep that thread's locks).
+    Either way a worker takes SIGTERM's default action (the runner stops workers with SIGTERM,
+    which ``bauv``'s own handler would turn into an exception the pool catches) and keeps
+    SIGHUP ignored under ``nohup``."""
+    res = subprocess.run(
+        [sys.executable, "-c", _START_PROBE.format(extra_thread=extra_thread)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    got = json.loads(res.stdout.strip().splitlines()[-1])
+    assert got["context"] == ("forkserver" if extra_thread else "fork"), got
+    assert got["sigterm"] == "SIG_DFL" and got["sighup"] == "SIG_IGN", got
+    assert got["threads"] == 2, got  # the worker's parent watch beside its main thread
