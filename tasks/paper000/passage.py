@@ -896,8 +896,6 @@ def _merge_blocks(ctx: ReportContext) -> Paper000Block:
 def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> ReportSummary:
     """Tables, figures, metrics and the recording of a seed 000 test."""
     scn: Paper000Scenario = ctx.scenario  # type: ignore[assignment]
-    # the NEES band first: its chi-square quantiles import scipy.special (~0.3 s), which then
-    # overlaps the blocks still being computed when the runner overlaps the report with them
     lo, hi = nees_band(3, ctx.n_runs, scn.report.consistency_probability)
     tot = _merge_blocks(ctx)
     ref = PAPER_TABLES[exp.test]
