@@ -302,10 +302,39 @@ class UsblMeasurement:
         )
 
     def residual(self, z: Array, hx: Array) -> Array:
-        """Innovation ``z - h(x)`` with the angles wrapped to [-pi, pi) (eq. 19)."""
-        y = np.asarray(z, dtype=float) - hx
+        """Innovation ``z - h(x)`` with the angles wrapped to [-pi, pi) (eq. 19), the measured
+        direction folded back against the prediction.
+
+        A USBL reports a direction past the zenith as the direction over the top (azimuth + pi,
+        elevation pi - beta; :func:`nav.angles.fold_azimuth_elevation`), and past the nadir as
+        (azimuth + pi, -pi - beta). Both spellings are the same direction, but eq. 19's
+        innovation is linear in the angles only in the chart of the prediction: for a vehicle
+        passing over the transceiver, ``(alpha + pi, pi - beta)`` against a prediction at
+        ``(alpha, beta')`` is an azimuth innovation of about pi where the direction differs by
+        a few degrees of elevation. The innovation is therefore taken for both spellings of the
+        measured direction (the pole on the prediction's side: over the top when the predicted
+        elevation is >= 0) and the one with the smaller squared angle residuals in units of the
+        angles' sigmas is kept; away from the poles that is always the measurement as given.
+
+        Args:
+            z: measurements ``(r, alpha, beta)``, shape (n, 3), m, rad, rad.
+            hx: predicted measurements :meth:`h`, shape (n, 3).
+
+        Returns:
+            Innovations, shape (n, 3): m, rad in [-pi, pi), rad in [-pi, pi).
+        """
+        z = np.asarray(z, dtype=float)
+        y = z - hx
         y[..., 1] = wrap_pi(y[..., 1])
         y[..., 2] = wrap_pi(y[..., 2])
+        # the same direction spelled over the pole on the prediction's side
+        b_fold = np.where(hx[..., 2] >= 0.0, np.pi - z[..., 2], -np.pi - z[..., 2])
+        ya_fold = wrap_pi(z[..., 1] + np.pi - hx[..., 1])
+        yb_fold = wrap_pi(b_fold - hx[..., 2])
+        sa2, sb2 = self.sigma_azimuth_rad**2, self.sigma_elevation_rad**2
+        folded = ya_fold**2 / sa2 + yb_fold**2 / sb2 < y[..., 1] ** 2 / sa2 + y[..., 2] ** 2 / sb2
+        y[..., 1] = np.where(folded, ya_fold, y[..., 1])
+        y[..., 2] = np.where(folded, yb_fold, y[..., 2])
         return y
 
     def invert(self, z: ArrayLike) -> Array:

@@ -74,6 +74,47 @@ def test_usbl_vertical_geometry_is_finite_and_drops_azimuth():
     assert np.all(H[:, 1] == 0.0)
 
 
+def _plain_residual(z, hx):
+    # eq. 19 with the angles wrapped, no folding (the measurement as the chart of h reads it)
+    y = np.asarray(z, dtype=float) - hx
+    y[..., 1:] = (y[..., 1:] + np.pi) % (2 * np.pi) - np.pi
+    return y
+
+
+@pytest.mark.parametrize("up", [True, False])
+def test_usbl_residual_folds_a_fix_past_the_pole_back_against_the_prediction(up):
+    """A fix whose elevation error carries it over the zenith (or under the nadir) is reported as
+    the direction over the top (azimuth + pi); its innovation against a prediction on the near
+    side must be the small one of the unfolded direction, not an azimuth innovation of pi."""
+    sign = 1.0 if up else -1.0
+    # predicted vehicle 2 m north of the point straight above (below) the transceiver, 30 m up
+    x = np.array([[TX[0], TX[1] + 2.0, TX[2] + sign * 30.0]])
+    hx = USBL.h(x)
+    a_pred, b_pred = hx[0, 1], hx[0, 2]
+    assert abs(abs(b_pred) - math.pi / 2) < math.radians(4)
+    # the true direction: 8 deg of elevation beyond the pole from the prediction, same azimuth
+    db = sign * math.radians(8.0)
+    b_true = b_pred + db  # past +-90 deg
+    assert abs(b_true) > math.pi / 2
+    # what the USBL reports (its own fold, independent of the model): azimuth + pi, pi - beta
+    a_rep = (a_pred + math.pi) % (2 * math.pi)
+    b_rep = (math.pi - b_true) if up else (-math.pi - b_true)
+    assert abs(b_rep) <= math.pi / 2
+    z = np.array([[hx[0, 0], a_rep, b_rep]])
+    y = USBL.residual(z, hx)
+    assert y[0, 1] == pytest.approx(0.0, abs=1e-12)
+    assert y[0, 2] == pytest.approx(db, abs=1e-12)
+    # the plain wrapped difference is the wrong chart: an azimuth innovation of pi
+    assert abs(_plain_residual(z, hx)[0, 1]) == pytest.approx(math.pi, abs=1e-12)
+
+
+def test_usbl_residual_away_from_the_pole_is_the_wrapped_difference():
+    x = TX + RNG.uniform(-300, 300, (500, 3)) * np.array([1, 1, 0.05])
+    hx = USBL.h(x)
+    z = USBL.h(x + RNG.normal(0, 2.0, x.shape))
+    assert np.array_equal(USBL.residual(z, hx), _plain_residual(z, hx))
+
+
 def test_motion_increment_and_jacobians():
     u = np.column_stack(
         [RNG.uniform(0, 2 * np.pi, 40), RNG.uniform(0.2, 2, 40), RNG.normal(0, 0.3, 40)]
