@@ -48,6 +48,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "dead_reckon": ("nav.dead_reckoning", "dead_reckon"),
     "direct_course": ("nav.guidance", "direct_course"),
     "distance_3d": ("nav.metrics", "distance_3d"),
+    "first_exceedance": ("nav.metrics", "first_exceedance"),
     "gate_limit": ("nav.ekf", "gate_limit"),
     "horizontal_distance": ("nav.metrics", "horizontal_distance"),
     "limited_control": ("nav.local_control", "limited_control"),

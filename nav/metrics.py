@@ -24,6 +24,25 @@ def distance_3d(est: Array, truth: Array) -> Array:
     return np.linalg.norm(np.asarray(est) - np.asarray(truth), axis=-1)
 
 
+def first_exceedance(t_s: Array, error_m: Array, limit_m: float) -> float | None:
+    """The first time an estimate's error exceeds a limit (the estimate has run away).
+
+    Args:
+        t_s: times, shape (T,), s.
+        error_m: the estimate's error against the truth at those times, shape (T,), m.
+        limit_m: the limit, m.
+
+    Returns:
+        The first ``t_s[k]`` with ``error_m[k] > limit_m``, or ``None`` if there is none (a
+        non-finite error counts as beyond any limit).
+    """
+    e = np.asarray(error_m, dtype=float)
+    over = ~(e <= limit_m)
+    if not over.any():
+        return None
+    return float(np.asarray(t_s, dtype=float)[int(np.argmax(over))])
+
+
 def nees(err: Array, P: Array) -> Array:
     """Normalised estimation error squared ``e^T P^-1 e``.
 

@@ -71,7 +71,8 @@ class ReportSummary:
     Attributes:
         text: printed to the console.
         files: the files written, paths relative to the run folder.
-        failures: one line per run that failed (``bauv run`` then exits with status 1).
+        failures: one line per run that failed, or per estimate the experiment found diverged
+            (``bauv run`` then exits with status 1).
     """
 
     text: str

@@ -44,11 +44,19 @@ Two readings had to be chosen for the physics:
   with the leader's stated velocity, so the error is the relative motion during the latency
   (the formation moves together: centimetres).
 
-``--set navigation.method=ga2`` picks the method; ``--set 'navigation.methods=["ga1","ga2",
-"ekf","dr"]'`` flies each run once per method on the same draws (the same seed and run: the
-same start, sensor errors and current) and reports them side by side. A follower without an
-accepted range for ``navigation.dr_warning_s`` (leader out of modem range, messages lost, an
-outage: ``sensors.modem.outages_s``) is on dead reckoning: the report says so.
+The followers fly the range EKF by default: it keeps them on station through the racetrack's
+turn (seed 0: estimate error 1.4 m mean, 4.9 m largest, against 62 m for dead reckoning), and so
+does GA2 (2.5 / 5.1 m), while GA1 as printed (``navigation.jacobian = "printed"``) takes the
+wrong candidate on the circle after the turn and never recovers (106 m mean, 415 m largest:
+worse than dead reckoning). ``--set navigation.method=ga2`` picks the method; ``--set
+'navigation.methods=["ga1","ga2","ekf","dr"]'`` flies each run once per method on the same draws
+(the same seed and run: the same start, sensor errors and current) and reports them side by
+side. A follower without an accepted range for ``navigation.dr_warning_s`` (leader out of modem
+range, messages lost, an outage: ``sensors.modem.outages_s``) is on dead reckoning: the report
+says so. An aided estimate (the leader's EKF, a follower's GA1, GA2 or EKF) farther than
+``navigation.divergence_m`` from the vehicle's true position has diverged: the report and
+``metrics.json`` name it with the time (``divergences``, a ``Diverged runs`` column) and ``bauv
+run`` exits with status 1.
 """
 
 from __future__ import annotations
@@ -93,6 +101,7 @@ from bauv_sim.sensors.modem import ModemConfig, check_slots
 from bauv_sim.sensors.online import Broadcast, lever_arm_from_site
 from bauv_sim.sensors.rig import RigTick, SensorRig
 from nav.guidance import GuidanceCommand
+from nav.metrics import first_exceedance
 from nav.navigator import Estimate
 from nav.relative import FollowerNavigator, GaOptions, hdop
 from tasks.closed_loop.experiment import MissionExperiment
@@ -274,7 +283,12 @@ class LeaderConfig(Config):
 class FollowerNavigationConfig(Config):
     """The followers' navigation (seed 003's method and its settings)."""
 
-    method: Method = Field("ga1", description="ga1, ga2 (eq. 3, 4), the range EKF, or dr")
+    method: Method = Field(
+        "ekf",
+        description="ga1, ga2 (eq. 3, 4), the range EKF, or dr (default: the range EKF, the "
+        "method that keeps the follower on station in the physics; GA1 as printed loses it "
+        "after the leader's turn, models/bauv/README.md and the module docstring)",
+    )
     methods: tuple[Method, ...] = Field(
         (),
         description="fly each run once per method on the same draws (comparison); "
@@ -311,6 +325,13 @@ class FollowerNavigationConfig(Config):
     )
     hdop_warning: float = Field(
         3.0, gt=0, description="warn when the mean HDOP at a follower's fixes exceeds this"
+    )
+    divergence_m: float = Field(
+        25.0,
+        gt=0,
+        description="an aided estimate (the leader's EKF; a follower's GA1, GA2 or EKF) farther "
+        "than this from the vehicle's true position has diverged: the report names it and "
+        "`bauv run` exits with status 1 (dead reckoning is reported by its error), m",
     )
 
 
@@ -857,7 +878,8 @@ def follower_metrics(
 ) -> dict[str, float]:
     """Errors of a follower's estimate (and of its pure DR) against its truth, and its true
     distance to the true station point (from the leader's true position and true course), m;
-    fix counts."""
+    fix counts; ``diverged_at_s``, the first time the estimate was farther than
+    ``navigation.divergence_m`` from the truth (only when it was)."""
     lead, f = run.vehicles[LEADER], run.vehicles[name]
     n = min(len(lead["t"]), len(f["t"]))
     tick = scn.timing.control_tick_s
@@ -877,7 +899,9 @@ def follower_metrics(
     fixes = f.fixes.get("modem", {})
     received = len(fixes["t_valid"].values) if fixes else 0
     gaps = f.outcome.get("dr_gaps_s", [])
+    diverged = first_exceedance(f["t"][:n], e_est, scn.navigation.divergence_m)
     return {
+        **({} if diverged is None else {"diverged_at_s": diverged}),
         "est_mean_error_m": float(e_est.mean()),
         "est_max_error_m": float(e_est.max()),
         "est_final_error_m": float(e_est[-1]),
@@ -896,11 +920,31 @@ def follower_metrics(
     }
 
 
-def leader_metrics(run: MissionRun) -> dict[str, float]:
-    """The leader's own navigation (its broadcast's error) and fix counts."""
-    s = run.vehicles[LEADER].summary
+def leader_metrics(scn: SwarmScenario, run: MissionRun) -> dict[str, float]:
+    """The leader's own navigation (its broadcast's error) and fix counts; ``diverged_at_s``
+    as for a follower (:func:`follower_metrics`)."""
+    lead = run.vehicles[LEADER]
+    s = lead.summary
     keys = ("ekf_mean_error_m", "ekf_max_error_m", "usbl_fixes", "usbl_rejected", "duration_s")
-    return {k: s[k] for k in keys if k in s}
+    err = np.hypot(*(lead["ekf_pos"][:, :2] - lead["truth_pos"][:, :2]).T)
+    diverged = first_exceedance(lead["t"], err, scn.navigation.divergence_m)
+    out = {k: s[k] for k in keys if k in s}
+    return out if diverged is None else {"diverged_at_s": diverged, **out}
+
+
+def divergences(scn: SwarmScenario, run: int, method: str, metrics) -> list[str]:
+    """One line per aided estimate of a flight that diverged (the leader's EKF and, unless the
+    method is ``dr``, every follower's), from its metrics."""
+    out = []
+    for name, m in metrics.items():
+        if "diverged_at_s" in m and (name == LEADER or method != "dr"):
+            what = "EKF" if name == LEADER else method.upper()
+            out.append(
+                f"run {run} {method} {name}: {what} estimate diverged: farther than "
+                f"{scn.navigation.divergence_m:g} m from the truth from t = "
+                f"{m['diverged_at_s']:.1f} s (navigation.divergence_m)"
+            )
+    return out
 
 
 def flight_warnings(scn: SwarmScenario, method: str, run: MissionRun) -> list[str]:
@@ -937,6 +981,7 @@ class SwarmRunResult:
         flights: per method, the flight.
         metrics: per method, per follower (and ``leader``), the metrics.
         warnings: what the report must say about these flights.
+        diverged: one line per aided estimate that diverged (:func:`divergences`).
     """
 
     run: int
@@ -944,11 +989,12 @@ class SwarmRunResult:
     flights: dict[str, MissionRun]
     metrics: dict[str, dict[str, dict[str, float]]]
     warnings: list[str]
+    diverged: list[str]
 
 
 def fly_run(scn: SwarmScenario, seed: int, run: int) -> SwarmRunResult:
     """Fly one run with every method of the scenario and compute its metrics."""
-    flights, metrics, warnings, failed = {}, {}, [], None
+    flights, metrics, warnings, diverged, failed = {}, {}, [], [], None
     stations = station_offsets(scn)
     for method in scn.methods():
         res = fly(SwarmMission(method), scn, seed, run)
@@ -956,13 +1002,14 @@ def fly_run(scn: SwarmScenario, seed: int, run: int) -> SwarmRunResult:
         flights[method] = res
         m: dict[str, dict[str, float]] = {}
         if LEADER in res.vehicles and len(res.vehicles[LEADER]["t"]):
-            m[LEADER] = leader_metrics(res)
+            m[LEADER] = leader_metrics(scn, res)
             for name, st in zip(FOLLOWERS, stations, strict=False):
                 if name in res.vehicles:
                     m[name] = follower_metrics(scn, res, name, st)
         metrics[method] = m
         warnings += flight_warnings(scn, method, res)
-    return SwarmRunResult(run, failed, flights, metrics, warnings)
+        diverged += divergences(scn, run, method, m)
+    return SwarmRunResult(run, failed, flights, metrics, warnings, diverged)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -988,6 +1035,8 @@ class SwarmMetrics(BaseModel):
     n_runs: int
     n_failed: int
     failures: list[str]
+    n_diverged: int = Field(description="aided estimates that diverged (navigation.divergence_m)")
+    divergences: list[str]
     methods: list[str]
     current: str
     followers: list[FollowerRow] = Field(description="per follower and method, means over runs")
@@ -1030,10 +1079,11 @@ ROW_KEYS = (
     ("fixes_accepted", "Ranges accepted"),
     ("fixes_refused", "Ranges refused"),
     ("mean_fix_hdop", "Mean HDOP at fixes"),
+    ("diverged_runs", "Diverged runs"),
 )
 
 
-COUNT_KEYS = frozenset({"fixes_accepted", "fixes_refused", "usbl_fixes"})
+COUNT_KEYS = frozenset({"fixes_accepted", "fixes_refused", "usbl_fixes", "diverged_runs"})
 """Row keys that count events: printed as whole numbers when the mean over runs is one."""
 
 
@@ -1058,6 +1108,10 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
     names = FOLLOWERS[: len(stations)]
 
     def mean(method: str, vehicle: str, key: str) -> float | None:
+        if key == "diverged_runs":  # a count over the runs, not a mean
+            if method == "dr":
+                return None
+            return float(sum("diverged_at_s" in r.metrics[method].get(vehicle, {}) for r in ok))
         vals = [r.metrics[method][vehicle][key] for r in ok if vehicle in r.metrics[method]]
         return float(np.mean(vals)) if vals else None
 
@@ -1082,7 +1136,8 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
         }
         for m in methods
     }
-    warnings = [w for r in runs for w in r.warnings]
+    diverged = [w for r in ok for w in r.diverged]
+    warnings = diverged + [w for r in runs for w in r.warnings]
     failures = [r.failed for r in runs if r.failed]
     metrics = SwarmMetrics(
         experiment=exp.name,
@@ -1090,6 +1145,8 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
         n_runs=ctx.n_runs,
         n_failed=len(failures),
         failures=failures,
+        n_diverged=len(diverged),
+        divergences=diverged,
         methods=methods,
         current=f"{scn.current.kind}",
         followers=rows,
@@ -1158,7 +1215,7 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
                 files.append(record_swarm(exp.name, scn, flight, methods[0], ctx.out_dir))
     text = "".join(t.to_text() + "\n" for t in tables)
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"
-    return ReportSummary(text, tuple(files))
+    return ReportSummary(text, tuple(files), tuple(failures + diverged))
 
 
 COLORS_V = [(0, 0, 0), (0, 114, 178), (213, 94, 0), (0, 158, 115), (230, 159, 0)]

@@ -119,3 +119,12 @@ def test_chi2_quantile_closed_forms_and_scipy():
     np.testing.assert_allclose(chi2_ppf(np.array([0.1, 0.9]), 3), chi2.ppf([0.1, 0.9], 3), 1e-14)
     assert chi2_ppf(0.0, 3) == 0.0 and chi2_ppf(1.0, 3) == np.inf
     assert np.isnan(chi2_ppf(1.5, 3)) and np.isnan(chi2_ppf(0.5, 0))
+
+
+def test_first_exceedance_is_the_first_time_beyond_the_limit():
+    from nav.metrics import first_exceedance
+
+    t = np.arange(6) * 0.5
+    assert first_exceedance(t, np.array([0.0, 1.0, 2.0, 0.5, 3.0, 0.0]), 1.5) == 1.0
+    assert first_exceedance(t, np.array([0.0, 1.0, 1.5, 0.5, 1.5, 0.0]), 1.5) is None
+    assert first_exceedance(t, np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0]), 1.5) == 0.5
