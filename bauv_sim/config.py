@@ -10,6 +10,8 @@ allowed (:class:`~bauv_sim.errors.ConfigError`).
 from __future__ import annotations
 
 import copy
+import os
+import re
 import types
 import typing
 from collections.abc import Iterable, Mapping
@@ -24,6 +26,166 @@ from pydantic import BaseModel, ConfigDict
 from bauv_sim.errors import ConfigError
 
 C = TypeVar("C", bound="Config")
+
+MAX_NESTING = 32
+"""The deepest nesting of tables and arrays a scenario may have (a mission scenario uses 5:
+``guidance.waypoints`` is an array of tables inside a table). Checked on the text before TOML is
+parsed and on the data before it is merged or validated: both recurse once per level, and a
+5,000-deep array would exhaust Python's recursion limit."""
+MAX_TOML_BYTES = 4 * 2**20
+"""The largest scenario file or ``--set`` value, bytes (a 10,000-way-point mission is ~0.8 MB)."""
+MAX_ARRAY_ITEMS = 100_000
+"""The most elements of one array in a scenario."""
+MAX_STRING_CHARS = 10_000
+"""The longest string (value or key) in a scenario, characters."""
+
+
+def check_structure(data: Any, source: str) -> None:
+    """Refuse data too deep, too long or too large to be a scenario, before anything recurses
+    into it (an iterative walk: no recursion of its own).
+
+    Args:
+        data: nested mappings, lists, tuples and scalars (as read from TOML or given in Python).
+        source: how messages name where the data came from, e.g. ``"scenario file 'a.toml'"``.
+
+    Raises:
+        ConfigError: naming the path of the first offending element, what it holds and the
+            limit (:data:`MAX_NESTING`, :data:`MAX_ARRAY_ITEMS`, :data:`MAX_STRING_CHARS`).
+    """
+    stack: list[tuple[Any, tuple[str, ...]]] = [(data, ())]
+    while stack:
+        node, path = stack.pop()
+        where = ".".join(path) or "(top level)"
+        if isinstance(node, str):
+            if len(node) > MAX_STRING_CHARS:
+                raise ConfigError(
+                    f"{source}: {where} is a string of {len(node)} characters; at most "
+                    f"{MAX_STRING_CHARS} allowed"
+                )
+            continue
+        if not isinstance(node, Mapping | list | tuple):
+            continue
+        if len(path) >= MAX_NESTING:
+            raise ConfigError(
+                f"{source}: tables or arrays nested more than {MAX_NESTING} deep at "
+                f"{'.'.join(path[:3])}...; at most {MAX_NESTING} levels allowed"
+            )
+        if isinstance(node, Mapping):
+            for key, value in node.items():
+                if isinstance(key, str) and len(key) > MAX_STRING_CHARS:
+                    raise ConfigError(
+                        f"{source}: a key of {len(key)} characters in {where}; at most "
+                        f"{MAX_STRING_CHARS} allowed"
+                    )
+                stack.append((value, (*path, str(key)[:40])))
+        else:
+            if len(node) > MAX_ARRAY_ITEMS:
+                raise ConfigError(
+                    f"{source}: {where} is an array of {len(node)} elements; at most "
+                    f"{MAX_ARRAY_ITEMS} allowed"
+                )
+            stack.extend((v, (*path, str(i))) for i, v in enumerate(node))
+
+
+_TOML_SPECIAL = re.compile(r"[][{}\"'#\n]")
+_BASIC_END = re.compile(r'["\\\n]')
+_ML_BASIC_END = re.compile(r'["\\]')
+
+
+def check_toml_text(text: str, source: str) -> None:
+    """Refuse TOML text whose arrays and inline tables nest deeper than :data:`MAX_NESTING`,
+    before :mod:`tomllib` (which recurses once per level, without a limit) parses it.
+
+    Brackets are counted outside strings and comments, following TOML's string grammar (basic
+    strings with escapes, literal strings, their multi-line forms whose closing delimiter may be
+    preceded by one or two quotes of the content). Where the text is not valid TOML the count
+    may differ from a parser's only after the first error, where :mod:`tomllib` stops.
+
+    Raises:
+        ConfigError: naming the line where the nesting exceeds the limit.
+    """
+    depth, i, n = 0, 0, len(text)
+    while True:
+        m = _TOML_SPECIAL.search(text, i)
+        if m is None:
+            return
+        ch, i = m.group(), m.end()
+        if ch in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                line = text.count("\n", 0, i) + 1
+                raise ConfigError(
+                    f"{source}: arrays or inline tables nested more than {MAX_NESTING} deep at "
+                    f"line {line}; at most {MAX_NESTING} levels allowed"
+                )
+        elif ch in "]}":
+            depth = max(depth - 1, 0)
+        elif ch == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif ch == "'":
+            if text.startswith("''", i):  # multi-line literal: ends at a run of 3 to 5 quotes
+                j = text.find("'''", i + 2)
+                i = n if j < 0 else j + 3
+                while i < n and text[i] == "'":
+                    i += 1
+            else:
+                j = min(k for k in (text.find("'", i), text.find("\n", i), n) if k >= 0)
+                i = j + 1
+        elif ch == '"':
+            if text.startswith('""', i):  # multi-line basic: escapes; ends at 3 to 5 quotes
+                i += 2
+                while True:
+                    e = _ML_BASIC_END.search(text, i)
+                    if e is None:
+                        i = n
+                        break
+                    if e.group() == "\\":
+                        i = e.end() + 1
+                        continue
+                    run = e.start()
+                    while run < n and text[run] == '"':
+                        run += 1
+                    i = run
+                    if run - e.start() >= 3:
+                        break
+            else:
+                while True:
+                    e = _BASIC_END.search(text, i)
+                    if e is None:
+                        i = n
+                        break
+                    if e.group() == "\\":
+                        i = e.end() + 1
+                        continue
+                    i = e.end()
+                    break
+        if i >= n:
+            return
+
+
+def loads_toml(text: str, source: str) -> dict[str, Any]:
+    """Parse TOML text after the structure checks (:func:`check_toml_text`, then
+    :func:`check_structure` on the result: dotted keys nest without brackets).
+
+    Args:
+        text: the TOML document.
+        source: how messages name it.
+
+    Raises:
+        ConfigError: on text too large (:data:`MAX_TOML_BYTES`), nested too deep, or not TOML.
+    """
+    if len(text) > MAX_TOML_BYTES:
+        raise ConfigError(
+            f"{source}: {len(text)} characters; a scenario is at most {MAX_TOML_BYTES} bytes"
+        )
+    check_toml_text(text, source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    check_structure(data, source)
+    return data
 
 
 class Config(BaseModel):
@@ -94,6 +256,85 @@ def _number_problem(annotation: Any, value: Any) -> tuple[str, str] | None:
     return None
 
 
+def _shown(value: Any) -> str:
+    """``repr`` of a value for a message, cut to 60 characters."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def check_model(model: Any) -> None:
+    """Refuse a ``model`` argument that is not a :class:`Config` subclass.
+
+    Raises:
+        ConfigError: naming the argument, its value and type, and what is allowed.
+    """
+    if not (isinstance(model, type) and issubclass(model, Config)):
+        what = "an instance" if isinstance(model, Config) else type(model).__name__
+        raise ConfigError(
+            f"model = {_shown(model)} ({what}): must be a Config subclass (a scenario type, "
+            "e.g. get_experiment(name).scenario_type)"
+        )
+
+
+def check_overrides(overrides: Any, name: str = "overrides") -> tuple[str, ...]:
+    """The ``dotted.key=value`` overrides as a tuple, after checking their types.
+
+    A single string is refused rather than read one character at a time (or guessed to be one
+    override): the argument is a list, ``["a.b=1"]``.
+
+    Args:
+        overrides: an iterable of strings (not a string itself).
+        name: the argument's name in messages.
+
+    Raises:
+        ConfigError: naming the argument, its value's type and what is allowed.
+    """
+    if isinstance(overrides, str | bytes):
+        raise ConfigError(
+            f"{name} = {_shown(overrides)}: a single {type(overrides).__name__}; must be a list "
+            f"of KEY=VALUE strings, e.g. [{overrides!r:.40}]"
+        )
+    if overrides is None or not isinstance(overrides, Iterable) or isinstance(overrides, Mapping):
+        raise ConfigError(
+            f"{name} = {_shown(overrides)} ({type(overrides).__name__}): must be a list of "
+            "KEY=VALUE strings, e.g. ['sensors.usbl.period_s=20'] (or () for none)"
+        )
+    out = tuple(overrides)
+    for i, text in enumerate(out):
+        if not isinstance(text, str):
+            raise ConfigError(
+                f"{name}[{i}] = {_shown(text)} ({type(text).__name__}): must be a KEY=VALUE "
+                "string, e.g. 'sensors.usbl.period_s=20'"
+            )
+    return out
+
+
+def check_files(files: Any, name: str = "files") -> tuple[str | Path, ...]:
+    """The scenario files as a tuple, after checking their types.
+
+    Raises:
+        ConfigError: for a single path (a ``str`` or ``Path``: the argument is a list,
+            ``["a.toml"]``), a non-iterable, or an element that is not a path.
+    """
+    if isinstance(files, str | bytes | os.PathLike):
+        raise ConfigError(
+            f"{name} = {_shown(files)}: a single path; must be a list of TOML files, e.g. "
+            f"[{str(files)!r:.40}]"
+        )
+    if files is None or not isinstance(files, Iterable) or isinstance(files, Mapping):
+        raise ConfigError(
+            f"{name} = {_shown(files)} ({type(files).__name__}): must be a list of TOML file "
+            "paths (or () for none)"
+        )
+    out = tuple(files)
+    for i, f in enumerate(out):
+        if not isinstance(f, str | os.PathLike):
+            raise ConfigError(
+                f"{name}[{i}] = {_shown(f)} ({type(f).__name__}): must be a path (str or Path)"
+            )
+    return out
+
+
 def parse_override(text: str) -> tuple[list[str], Any]:
     """Parse one ``dotted.key=value`` override.
 
@@ -107,8 +348,13 @@ def parse_override(text: str) -> tuple[list[str], Any]:
         ``(path, value)`` with the dotted key split into its parts.
 
     Raises:
-        ConfigError: if there is no ``=`` or the key is empty.
+        ConfigError: if ``text`` is not a string, there is no ``=`` or the key is empty.
     """
+    if not isinstance(text, str):
+        raise ConfigError(
+            f"override = {_shown(text)} ({type(text).__name__}): must be a KEY=VALUE string, "
+            "e.g. 'sensors.usbl.period_s=20'"
+        )
     key, sep, raw = text.partition("=")
     key = key.strip()
     if not sep or not key or any(not part for part in key.split(".")):
@@ -116,10 +362,15 @@ def parse_override(text: str) -> tuple[list[str], Any]:
             f"override {text!r}: expected KEY=VALUE with a dotted KEY, e.g. usbl.period_s=20"
         )
     raw = raw.strip()
+    source = f"override {key}"
+    if len(raw) > MAX_TOML_BYTES:
+        raise ConfigError(f"{source}: a value of {len(raw)} characters; at most {MAX_TOML_BYTES}")
+    check_toml_text(raw, source)
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw
+    check_structure(value, source)
     return key.split("."), value
 
 
@@ -134,8 +385,10 @@ def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[s
         A new nested dict.
 
     Raises:
-        ConfigError: if an override addresses inside a value that is not a table.
+        ConfigError: if an override is not a string, or addresses inside a value that is not a
+            table.
     """
+    overrides = check_overrides(overrides)
     out = copy.deepcopy(dict(data))
     for text in overrides:
         path, value = parse_override(text)
@@ -170,24 +423,35 @@ def apply_overrides(data: Mapping[str, Any], overrides: Iterable[str]) -> dict[s
 def read_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file.
 
+    Before :mod:`tomllib` parses the file: at most :data:`MAX_TOML_BYTES` are read, and the
+    nesting of its arrays and inline tables is checked (:func:`loads_toml`).
+
     Raises:
-        ConfigError: naming the file when it is missing, unreadable, not UTF-8 or not TOML.
+        ConfigError: naming the file when it is missing, unreadable, not UTF-8, not TOML, larger
+            than :data:`MAX_TOML_BYTES`, or too deep, long or large to be a scenario
+            (:func:`check_structure`).
     """
     p = Path(path)
+    source = f"scenario file {str(p)!r}"
     try:
         with p.open("rb") as fh:
-            return tomllib.load(fh)
+            raw = fh.read(MAX_TOML_BYTES + 1)
     except FileNotFoundError:
-        raise ConfigError(f"scenario file {str(p)!r}: not found") from None
+        raise ConfigError(f"{source}: not found") from None
+    except OSError as exc:
+        raise ConfigError(f"{source}: cannot read it ({exc.strerror})") from None
+    if len(raw) > MAX_TOML_BYTES:
+        raise ConfigError(
+            f"{source}: larger than {MAX_TOML_BYTES} bytes, the most a scenario file may hold"
+        )
+    try:
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(
-            f"scenario file {str(p)!r}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
-            f"offset {exc.start}); TOML files are UTF-8"
+            f"{source}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+            f"{exc.start}); TOML files are UTF-8"
         ) from None
-    except OSError as exc:
-        raise ConfigError(f"scenario file {str(p)!r}: cannot read it ({exc.strerror})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"scenario file {str(p)!r}: {exc}") from None
+    return loads_toml(text, source)
 
 
 def validate(model: type[C], data: Mapping[str, Any], what: str = "scenario") -> C:
@@ -202,12 +466,21 @@ def validate(model: type[C], data: Mapping[str, Any], what: str = "scenario") ->
         The validated model instance.
 
     Raises:
-        ConfigError: naming the first invalid field, its value and what is allowed.
+        ConfigError: naming the first invalid field, its value and what is allowed; or data too
+            deep, long or large to be a configuration (:func:`check_structure`); or a ``model``
+            that is not a :class:`Config` subclass or ``data`` that is not a mapping.
     """
+    check_model(model)
+    if not isinstance(data, Mapping):
+        raise ConfigError(
+            f"data = {_shown(data)} ({type(data).__name__}): must be a mapping of field names "
+            "to values (a dict, as read from TOML)"
+        )
+    check_structure(data, what)
     try:
         return model.model_validate(data)
     except pydantic.ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, what)) from None
+        raise ConfigError(format_validation_error(exc, what, model)) from None
 
 
 def load_config(
@@ -230,8 +503,20 @@ def load_config(
         The validated, frozen model.
 
     Raises:
-        ConfigError: on a bad file, override or value.
+        ConfigError: on a bad file, override or value; or an argument of the wrong type (a
+            ``model`` that is not a :class:`Config` subclass, a ``base`` that is not a mapping,
+            a single string given for ``files`` or ``overrides``, which take lists), naming the
+            argument, its type and what is allowed.
     """
+    check_model(model)
+    if base is not None and not isinstance(base, Mapping):
+        raise ConfigError(
+            f"base = {_shown(base)} ({type(base).__name__}): must be a mapping of scenario "
+            "fields (an experiment's preset, a dict) or None"
+        )
+    files = check_files(files)
+    overrides = check_overrides(overrides)
+    check_structure(base or {}, "base")
     data = merge(model_defaults(model), base or {})
     for f in files:
         data = merge(data, read_toml(f))
@@ -277,14 +562,142 @@ def to_plain(cfg: BaseModel) -> dict[str, Any]:
     return cfg.model_dump(mode="json", exclude_none=True)
 
 
-def format_validation_error(exc: pydantic.ValidationError, what: str) -> str:
-    """One line per problem: ``what: field.path = value: message``."""
+def _annotation_at(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> Any:
+    """The type annotation of the field at ``loc`` (field names and array indices) under
+    ``model``, or ``None`` where it cannot be told (a union of models, an unknown name)."""
+    ann: Any = model
+    for part in loc:
+        ann = _without_none(ann)
+        if isinstance(ann, type) and issubclass(ann, BaseModel):
+            field = ann.model_fields.get(str(part))
+            if field is None:
+                return None
+            ann = field.annotation
+        elif typing.get_origin(ann) is tuple and isinstance(part, int):
+            args = typing.get_args(ann)
+            if len(args) == 2 and args[1] is Ellipsis:
+                ann = args[0]
+            elif part < len(args):
+                ann = args[part]
+            else:
+                return None
+        else:
+            return None
+    return _without_none(ann)
+
+
+def _without_none(ann: Any) -> Any:
+    """``X`` for ``X | None``; the annotation itself otherwise."""
+    if typing.get_origin(ann) in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(ann) if a is not type(None)]
+        if len(args) == 1:
+            return args[0]
+    return ann
+
+
+def _table_of(model: type[BaseModel]) -> str:
+    """``a table with fields a, b (required) and c, d`` for a model's fields."""
+    required = [n for n, f in model.model_fields.items() if f.is_required()]
+    optional = [n for n, f in model.model_fields.items() if not f.is_required()]
+    text = "a table"
+    if required:
+        text += f" with {', '.join(required)} (required)"
+        if optional:
+            text += f" and {', '.join(optional)}"
+    elif optional:
+        text += f" of {', '.join(optional)}"
+    return text
+
+
+def _kind_of(ann: Any) -> str:
+    """What a value of annotation ``ann`` is, in a scenario file's words."""
+    ann = _without_none(ann)
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return _table_of(ann)
+    if typing.get_origin(ann) is tuple:
+        args = typing.get_args(ann)
+        if len(args) == 2 and args[1] is Ellipsis:
+            return f"an array of {_plural(args[0])}"
+        if len({_plural(a) for a in args}) == 1:
+            return f"an array of {len(args)} {_plural(args[0])}"
+        return f"an array of {len(args)} elements"
+    return {float: "a number", int: "an integer", bool: "true or false", str: "a string"}.get(
+        ann, "a value of another type"
+    )
+
+
+def _plural(ann: Any) -> str:
+    """Elements of annotation ``ann``, plural (``numbers``, ``tables with ...``)."""
+    ann = _without_none(ann)
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return "tables" + _table_of(ann).removeprefix("a table")
+    return {float: "numbers", int: "integers", bool: "booleans", str: "strings"}.get(ann, "values")
+
+
+def _shape_message(err: Mapping[str, Any], model: type[BaseModel] | None) -> tuple[tuple, str]:
+    """The location and the words of a type or length error, in terms of the scenario's types
+    (pydantic's "Input should be a valid tuple" names Python types, not TOML's)."""
+    loc, kind, ctx = tuple(err["loc"]), err["type"], err.get("ctx") or {}
+    if kind in ("too_short", "too_long"):
+        bound = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
+        word = "at least" if kind == "too_short" else "at most"
+        items = "element" if bound == 1 else "elements"
+        return loc, f"must have {word} {bound} {items}, has {ctx.get('actual_length')}"
+    if kind == "missing" and loc and isinstance(loc[-1], int):
+        parent = _annotation_at(model, loc[:-1])
+        has = f", has {len(err['input'])}" if isinstance(err.get("input"), list | tuple) else ""
+        return loc[:-1], (
+            f"must be {_kind_of(parent)}" if parent is not None else "too short"
+        ) + has
+    ann = _annotation_at(model, loc)
+    if ann is None:
+        return loc, err["msg"]
+    return loc, f"must be {_kind_of(ann)}"
+
+
+_SHAPE_ERRORS = {
+    "tuple_type",
+    "list_type",
+    "model_type",
+    "model_attributes_type",
+    "dict_type",
+    "too_short",
+    "too_long",
+    "float_type",
+    "int_type",
+    "bool_type",
+    "bool_parsing",
+    "string_type",
+}
+
+
+def format_validation_error(
+    exc: pydantic.ValidationError, what: str, model: type[BaseModel] | None = None
+) -> str:
+    """One line: the first problem, ``what: field.path = value: what is allowed``, and how many
+    more there are.
+
+    A length error that pydantic adds to an array whose elements failed ("Tuple should have at
+    least 1 item after validation, not 0", counted over the valid elements) is dropped: the
+    elements' own errors say what is wrong. Type and length errors are worded in the scenario
+    file's terms (arrays, tables with their fields, numbers) when ``model`` is given.
+    """
+    errors = exc.errors(include_url=False)
+    locs = [tuple(e["loc"]) for e in errors]
+    errors = [
+        e
+        for e in errors
+        if not (
+            e["type"] in ("too_short", "too_long")
+            and any(len(o) > len(e["loc"]) and o[: len(e["loc"])] == tuple(e["loc"]) for o in locs)
+        )
+    ]
     lines = []
-    for err in exc.errors(include_url=False):
+    for err in errors:
         loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
         msg = err["msg"]
         if err["type"] == "extra_forbidden":
-            lines.append(f"{what}: unknown field {loc!r} (value {err['input']!r})")
+            lines.append(f"{what}: unknown field {loc!r} (value {_shown(err['input'])})")
             continue
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, ") :]
@@ -293,14 +706,26 @@ def format_validation_error(exc: pydantic.ValidationError, what: str) -> str:
             where = ".".join([*(str(p) for p in err["loc"]), str(ctx.get("field"))])
             lines.append(f"{what}: {where} = {ctx.get('value')}: {msg}")
             continue
+        val = err.get("input")
+        if err["type"] in _SHAPE_ERRORS or (
+            err["type"] == "missing" and err["loc"] and isinstance(err["loc"][-1], int)
+        ):
+            at, msg = _shape_message(err, model)
+            loc = ".".join(str(p) for p in at) or "(top level)"
+            if err["type"] == "missing":
+                lines.append(f"{what}: {loc} = {_shown(val)}: {msg}")
+                continue
         if err["type"] == "missing":
             lines.append(f"{what}: {loc}: required field is missing")
             continue
-        val = err.get("input")
         if not err["loc"]:
             lines.append(f"{what}: {msg}")
         elif isinstance(val, dict):
             lines.append(f"{what}: {loc}: {msg}")
         else:
-            lines.append(f"{what}: {loc} = {val!r}: {msg}")
-    return "\n".join(lines)
+            lines.append(f"{what}: {loc} = {_shown(val)}: {msg}")
+    lines = list(dict.fromkeys(lines))
+    if len(lines) > 1:
+        more = len(lines) - 1
+        return f"{lines[0]} (and {more} more problem{'s' if more > 1 else ''})"
+    return lines[0] if lines else f"{what}: invalid"

@@ -42,11 +42,35 @@ DEFAULT_SEABED_FILE = SEABED_DIR / "default.bin"
 """The heightfield of the default scene (``models/bauv/scene.xml``)."""
 
 
+MAX_HALF_EXTENT_M = 10_000.0
+"""The largest half side of a seabed grid, m. The world frame is a local tangent plane (flat ENU,
+:mod:`bauv_sim.frames`); at 10 km from its origin the sea surface has fallen r^2 / (2 R) = 7.8 m
+below it (R = 6371 km), more than the water depth at the scenes' origin (6 m), and the error grows
+as r^2: a seabed farther out is not the sea the simulator's frame describes."""
+
+MIN_CELL_M = 0.01
+"""The finest seabed grid spacing, m: 1 cm, 200 cells along the 2 m vehicle; finer triangles add
+nothing to its contacts or to a multibeam whose range noise is centimetres, and only grow the
+grid (:data:`GRID_BYTES_PER_POINT` per point)."""
+
+GRID_BYTES_PER_POINT = 48.0
+"""Peak memory of :func:`generate` per grid point, bytes: the two coordinate grids, the relief and
+the working arrays of one plane wave, six float64 arrays at once (tracemalloc: 48.2 B per point on
+a 2001 x 2001 grid). Building a scene holds less on top of the finished grid (the float32
+heightfield and its bytes), so this is the peak of a process that builds one."""
+
+
 class SeabedConfig(Config):
     """Parameters of a generated seabed (see the module docstring)."""
 
-    half_extent_m: float = Field(1000.0, gt=0, description="half side of the square grid, m")
-    cell_m: float = Field(10.0, gt=0, description="grid spacing, m")
+    half_extent_m: float = Field(
+        1000.0,
+        gt=0,
+        le=MAX_HALF_EXTENT_M,
+        description="half side of the square grid, m (at most 10 km: the world frame is a flat "
+        "tangent plane)",
+    )
+    cell_m: float = Field(10.0, ge=MIN_CELL_M, description="grid spacing, m (at least 1 cm)")
     depth_at_origin_m: float = Field(6.0, gt=0, description="depth at (0, 0), m")
     slope: float = Field(0.005, ge=0, le=0.5, description="radial increase of depth, m per m")
     relief_std_m: float = Field(1.0, ge=0, description="standard deviation of the relief, m")
@@ -75,6 +99,20 @@ class SeabedConfig(Config):
     def n(self) -> int:
         """Grid points per side (odd: the origin is a grid point)."""
         return 2 * round(self.half_extent_m / self.cell_m) + 1
+
+    @property
+    def grid_bytes(self) -> float:
+        """Peak memory of generating this seabed, bytes (:data:`GRID_BYTES_PER_POINT` per grid
+        point), for the batch's memory check before any grid is allocated."""
+        return GRID_BYTES_PER_POINT * float(self.n) ** 2
+
+    @property
+    def grid_text(self) -> str:
+        """The fields that size the grid, as a memory check names them."""
+        return (
+            f"seabed.half_extent_m = {self.half_extent_m:g} with seabed.cell_m = "
+            f"{self.cell_m:g} m ({self.n} x {self.n} grid points)"
+        )
 
 
 @dataclass(frozen=True)

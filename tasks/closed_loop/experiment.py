@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from bauv_sim import seabed
 from bauv_sim.build import VEHICLE_CLEARANCE_M
@@ -13,6 +14,15 @@ from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario
 from tasks.closed_loop.world import WaypointMission, fly
 from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary
+
+MESH_BYTES_PER_CELL = 600.0
+"""Memory of the recording's seabed mesh per grid cell of the mission area, bytes (the report
+builds it from Python tuples, :func:`tasks.closed_loop.report.record_mission`: 512 B per cell
+measured with tracemalloc on 600 x 600 points, plus the arrays rerun is given)."""
+
+MESH_MARGIN_M = 160.0
+"""How far the recorded mission area reaches beyond the way-points, the start and the transceiver,
+m: the report's 60 m around the track, and 100 m for the track's excursions past them."""
 
 BYTES_PER_TICK = 500.0
 """A run's memory per control tick, bytes: its per-tick columns measured 411 B per tick on
@@ -46,6 +56,25 @@ def check_in_water(scenario: MissionScenario) -> None:
             )
 
 
+def _mesh_bytes(scenario: MissionScenario) -> float:
+    """Memory of the recording's seabed mesh, bytes: the grid cells of the mission area (the
+    way-points, the start and the transceiver, :data:`MESH_MARGIN_M` around them, within the
+    grid); 0 without a recording or way-points."""
+    report, guidance = getattr(scenario, "report", None), getattr(scenario, "guidance", None)
+    if not getattr(report, "recording", False) or guidance is None:
+        return 0.0
+    c = scenario.seabed
+    pts = [(w.east_m, w.north_m) for w in guidance.waypoints]
+    pts.append((scenario.start.east_m, scenario.start.north_m))
+    pts.append((scenario.transceiver_east_m, scenario.transceiver_north_m))
+    sides = []
+    for axis in (0, 1):
+        lo = max(min(p[axis] for p in pts) - MESH_MARGIN_M, -c.half_extent_m)
+        hi = min(max(p[axis] for p in pts) + MESH_MARGIN_M, c.half_extent_m)
+        sides.append(max(hi - lo, 0.0) / c.cell_m + 1)
+    return MESH_BYTES_PER_CELL * sides[0] * sides[1]
+
+
 @dataclass(frozen=True)
 class MissionExperiment(Experiment):
     """A registered closed-loop mission (one run per block).
@@ -56,6 +85,9 @@ class MissionExperiment(Experiment):
 
     scenario_type = MissionScenario
     metrics_type = MissionMetrics
+    report_seabed: ClassVar[bool] = True
+    """Whether the report generates the scene's seabed (the recording's mesh of the mission
+    area, :func:`tasks.closed_loop.report.record_mission`), for :meth:`memory`."""
     design: MissionDesign = field(default_factory=WaypointMission)
 
     def flight(
@@ -71,8 +103,13 @@ class MissionExperiment(Experiment):
         :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` where the seabed grid covers them).
 
         Raises:
-            ConfigError: naming the field, its value and what is allowed.
+            ConfigError: naming the field, its value and what is allowed; or a batch whose
+                estimated memory is above the limit (checked first: the checks below generate
+                the seabed grid).
         """
+        from tasks.core.runner import check_memory
+
+        check_memory(self, scenario, n_runs)
         if scenario.report.record_run >= n_runs:
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
@@ -87,17 +124,25 @@ class MissionExperiment(Experiment):
 
     def memory(self, scenario: MissionScenario, n_runs: int) -> list[MemoryTerm]:
         """Estimated peak memory, bytes: a run of ``timing.max_duration_s`` in the worker that
-        flies it, and every run in the report (which reads them all)."""
+        flies it, and every run in the report (which reads them all); the seabed grid of the
+        scene, generated in the worker for every run (:attr:`~bauv_sim.seabed.SeabedConfig.
+        grid_bytes`), and in the process that checks the batch and writes the report, with the
+        recording's mesh of the mission area (:data:`MESH_BYTES_PER_CELL`)."""
         t = scenario.timing
         ticks = t.max_duration_s / t.control_tick_s + 1
         what = (
             f"timing.max_duration_s = {t.max_duration_s:g} with timing.control_tick_s = "
             f"{t.control_tick_s:g} s ({ticks:.3g} ticks)"
         )
-        return [
+        bed = scenario.seabed
+        terms = [
             MemoryTerm(BYTES_PER_TICK * ticks, True, what),
             MemoryTerm(BYTES_PER_TICK * ticks * n_runs, False, f"{what} for runs = {n_runs}"),
+            MemoryTerm(bed.grid_bytes, True, bed.grid_text),
         ]
+        if self.report_seabed:
+            terms.append(MemoryTerm(bed.grid_bytes + _mesh_bytes(scenario), False, bed.grid_text))
+        return terms
 
     def run_block(
         self, scenario: MissionScenario, seed: int, runs: tuple[int, ...]

@@ -434,12 +434,65 @@ def build_environment(
     )
 
 
+def check_fly_arguments(design: Any, scenario: Any, seed: Any, run: Any) -> None:
+    """Refuse arguments of :func:`fly` of the wrong type with one :class:`ConfigError` naming
+    the argument, its type and what is allowed (not an ``AttributeError`` from inside the
+    world).
+
+    Raises:
+        ConfigError: on the first bad argument.
+    """
+    import numbers
+
+    from bauv_sim.config import Config
+    from bauv_sim.errors import ConfigError
+    from bauv_sim.rng import check_seed
+
+    def refuse(arg: str, value: Any, allowed: str) -> None:
+        raise ConfigError(f"{arg} = {value!r:.60} ({type(value).__name__}): must be {allowed}")
+
+    missing = [
+        m for m in ("vehicle_names", "scene", "build") if not callable(getattr(design, m, None))
+    ]
+    if isinstance(design, type) or missing:
+        refuse(
+            "design",
+            design,
+            "a mission design instance with vehicle_names, scene and build (e.g. "
+            "WaypointMission(), or get_experiment(name).design)",
+        )
+    if not isinstance(scenario, Config) or not isinstance(
+        getattr(scenario, "timing", None), Config
+    ):
+        refuse(
+            "scenario",
+            scenario,
+            "a validated mission scenario with a timing section (load_config("
+            "exp.scenario_type, exp.preset, ...))",
+        )
+    check_seed(seed)
+    if isinstance(run, bool) or not isinstance(run, numbers.Integral) or run < 0:
+        refuse("run", run, "an integer >= 0 (the run's index in the batch)")
+
+
 def fly(design: P.MissionDesign, scenario: Any, seed: int, run: int) -> MissionRun:
     """Fly one run to its end, its time limit, or a failure.
 
     A physics or navigation failure does not raise: it is returned in :attr:`MissionRun.failed`
     with the simulation time, with the data up to it, so that a Monte Carlo batch completes.
+
+    Args:
+        design: the mission design (e.g. :class:`WaypointMission`, ``exp.design``).
+        scenario: its validated scenario (:func:`bauv_sim.config.load_config`), with a
+            ``timing`` section.
+        seed: batch seed, an integer in [0, 2**63 - 1].
+        run: run index, an integer >= 0.
+
+    Raises:
+        ConfigError: for an argument of the wrong type (naming it, its type and what is
+            allowed), before anything is built.
     """
+    check_fly_arguments(design, scenario, seed, run)
     env = build_environment(design, scenario, seed, run)
     world: MissionWorld = env.task
     ts = env.reset()

@@ -172,9 +172,36 @@ def run_cmd(
 
 
 def rerun_command() -> list[str]:
-    """How to start the rerun viewer of the installed rerun-sdk."""
+    """How to start the rerun viewer of the installed rerun-sdk: on Linux its binary itself,
+    where the ``rerun_cli`` package ships it (or ``RERUN_CLI_PATH``, which rerun's own launcher
+    honours), so that the server is this process's child and :func:`run_viewer` can tie its life
+    to ours; else the ``rerun`` launcher, a Python script that starts the binary as its child."""
+    binary = os.environ.get("RERUN_CLI_PATH")
+    if not binary:
+        with contextlib.suppress(ImportError):
+            import rerun_cli
+
+            binary = str(Path(rerun_cli.__file__).parent / "rerun")
+    if binary and sys.platform.startswith("linux") and os.access(binary, os.X_OK):
+        return [binary]
     exe = shutil.which("rerun", path=str(Path(sys.executable).parent)) or shutil.which("rerun")
     return [exe] if exe else [sys.executable, "-m", "rerun"]
+
+
+PR_SET_PDEATHSIG = 1
+"""``prctl`` option: the signal a process receives when the thread that created it ends
+(``linux/prctl.h``)."""
+
+
+def _die_with(parent_pid: int) -> None:
+    """In the viewer's process, between fork and exec: have the kernel send it SIGKILL when
+    ``bauv`` ends, however it ends (SIGKILL included, which no handler sees), and exit at once
+    if ``bauv`` is already gone. The setting survives ``exec`` (``prctl(2)``)."""
+    import ctypes
+
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent_pid:
+        os._exit(1)
 
 
 def view_command(
@@ -206,11 +233,18 @@ def view_command(
 def run_viewer(cmd: list[str]) -> int:
     """Run the viewer in its own process group and take the whole group down with us.
 
-    The ``rerun`` launcher starts the viewer binary as a child; stopping only the launcher (or
-    this process) would leave the server running. SIGINT, SIGTERM, SIGHUP (the terminal closed)
-    and normal exit all stop the group.
+    SIGINT, SIGTERM, SIGHUP (the terminal closed) and normal exit stop the group (where the
+    ``rerun`` launcher is used, it starts the viewer binary as a child: stopping only the
+    launcher would leave the server running). SIGKILL of ``bauv`` cannot be caught: on Linux the
+    viewer starts with ``PR_SET_PDEATHSIG`` set to SIGKILL, and it is the binary itself
+    (:func:`rerun_command`; a launcher's child would not inherit the setting), so the server
+    ends with ``bauv`` however ``bauv`` ends. Elsewhere a killed ``bauv`` leaves it running.
     """
-    proc = subprocess.Popen(cmd, start_new_session=True)
+    linux = sys.platform.startswith("linux")
+    parent = os.getpid()
+    proc = subprocess.Popen(
+        cmd, start_new_session=True, preexec_fn=(lambda: _die_with(parent)) if linux else None
+    )
 
     def stop(*_: object) -> None:
         with contextlib.suppress(ProcessLookupError):

@@ -169,7 +169,13 @@ def register(experiment: Experiment) -> Experiment:
     Raises:
         ValueError: if the name is taken by another experiment, or its family (the part before
             ``/``) is not one of :data:`FAMILIES`.
+        ConfigError: if ``experiment`` is not an :class:`Experiment` (a ``ValueError`` too).
     """
+    if not isinstance(experiment, Experiment):
+        raise ConfigError(
+            f"experiment = {experiment!r:.60} ({type(experiment).__name__}): must be an "
+            "Experiment instance (tasks.core.registry.Experiment or a subclass)"
+        )
     family = experiment.name.split("/", 1)[0]
     if family not in FAMILIES:
         raise ValueError(
@@ -204,8 +210,14 @@ def get(name: str) -> Experiment:
     the known ones).
 
     Raises:
-        ConfigError: naming the unknown name and listing the known ones.
+        ConfigError: naming the unknown name and listing the known ones, or a ``name`` that is not
+            a string.
     """
+    if not isinstance(name, str):
+        raise ConfigError(
+            f"name = {name!r:.60} ({type(name).__name__}): must be an experiment name (a str), "
+            "e.g. 'mission/short'; experiment_names() lists them"
+        )
     if name not in _REGISTRY:
         package = FAMILIES.get(name.split("/", 1)[0])
         if package is not None:

@@ -937,6 +937,53 @@ def _output_error(plan: BatchPlan, out_dir: Path, what: str, exc: OSError) -> Ou
     )
 
 
+def check_run_arguments(
+    name: Any,
+    n_runs: Any,
+    seed: Any,
+    out_dir: Any,
+    overrides: Any,
+    scenario_files: Any,
+    address: Any,
+    resume: Any,
+    progress: Any,
+) -> tuple[tuple[str, ...], tuple[str | Path, ...]]:
+    """The types of :func:`run`'s arguments, checked before anything starts (the executor
+    options are :func:`check_executor`'s): a ``None`` or a wrong type is a :class:`ConfigError`
+    naming the argument, its type and what is allowed, never an ``AttributeError`` from deep
+    inside; a single string given for ``overrides`` or ``scenario_files`` (which take lists) is
+    refused, not read one character at a time.
+
+    Returns:
+        ``(overrides, scenario_files)`` as tuples.
+
+    Raises:
+        ConfigError: on the first argument of the wrong type.
+    """
+    import numbers
+
+    from bauv_sim.config import check_files, check_overrides
+
+    def refuse(arg: str, value: Any, allowed: str) -> None:
+        raise ConfigError(f"{arg} = {value!r:.60} ({type(value).__name__}): must be {allowed}")
+
+    if not isinstance(name, str):
+        refuse("name", name, "an experiment name (a str), e.g. 'mission/short'")
+    for arg, value in (("n_runs", n_runs), ("seed", seed)):
+        if value is not None and (
+            isinstance(value, bool) or not isinstance(value, numbers.Integral)
+        ):
+            refuse(arg, value, "an integer or None (the default)")
+    if out_dir is not None and not isinstance(out_dir, str | os.PathLike):
+        refuse("out_dir", out_dir, "a folder path (str or Path) or None (the default folder)")
+    if address is not None and not isinstance(address, str):
+        refuse("address", address, "a Dask scheduler address (a str) or None")
+    for arg, value in (("resume", resume), ("progress", progress)):
+        if not isinstance(value, bool):
+            refuse(arg, value, "True or False")
+    return check_overrides(overrides, "overrides"), check_files(scenario_files, "scenario_files")
+
+
 def run(
     name: str,
     n_runs: int | None = None,
@@ -961,6 +1008,9 @@ def run(
         BatchInterrupted: on SIGINT (finished blocks are kept).
         BatchFailed: if a block raised.
     """
+    overrides, scenario_files = check_run_arguments(
+        name, n_runs, seed, out_dir, overrides, scenario_files, address, resume, progress
+    )
     check_executor(executor, workers, address)
     if executor == "local" and workers > 1:
         workers_mod.start_fork_server(name)

@@ -91,7 +91,7 @@ from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario, NavigationConfig
 from tasks.closed_loop.world import fly, place_vehicle, scenario_sea, single_vehicle_scene, streams
 from tasks.core import store
-from tasks.core.registry import ReportContext, ReportSummary, register
+from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 
 if TYPE_CHECKING:
     from tasks.paper004.sim import LoopSetting
@@ -929,12 +929,24 @@ def check_multibeam(scn: Seed004Scenario, bed: seabed.Seabed) -> None:
         )
 
 
+HEIGHTFIELD_KEPT_BYTES_PER_POINT = 16.0
+"""What the surrogate's heightfield keeps per grid point, bytes
+(:func:`tasks.paper004.seabed.heightfield`, cached: the depths and MuJoCo's float32 heights
+in float64; tracemalloc: 16.4 B per point, 48.4 B at its peak while generated)."""
+
+IMAGE_BYTES_PER_PATH_BEAM = 470.0
+"""Peak memory of the surrogate's multibeam images and seabed shift per path and beam, bytes
+(:class:`tasks.paper004.seabed.HeightfieldPrediction`: the rays' march over the heightfield,
+the two images, eq. 15; tracemalloc: 468-472 B for 8 x 8 to 32 x 32 beams)."""
+
+
 @dataclass(frozen=True)
 class Seed004Experiment(MissionExperiment):
     """Seed 004's filters steering the physical BAUV (one flight per filter and run)."""
 
     scenario_type = Seed004Scenario
     metrics_type = Seed004Metrics
+    report_seabed = False  # its report records no seabed mesh
 
     def filters(self, scn: Seed004Scenario) -> tuple[str, ...]:
         f = scn.navigation.filter
@@ -945,6 +957,38 @@ class Seed004Experiment(MissionExperiment):
         each)."""
         f = self.filters(scenario)[0]
         return Seed004Mission(f, gains_for(scenario, seed) if f == "cmnf" else None), scenario
+
+    def memory(self, scenario: Seed004Scenario, n_runs: int) -> list[MemoryTerm]:
+        """The mission's terms (:meth:`MissionExperiment.memory`), and with the seabed
+        prediction and the CMNF the surrogate's (:func:`surrogate`): its heightfield, kept in the
+        process while the scene's own grid is generated (:data:`HEIGHTFIELD_KEPT_BYTES_PER_POINT`),
+        and the multibeam images of ``seed004.train_paths`` training paths at once
+        (:data:`IMAGE_BYTES_PER_PATH_BEAM`), in the worker; in the report too, which trains the
+        gains again where the worker's are not at hand and flies
+        ``seed004.surrogate_test_paths`` paths."""
+        terms = super().memory(scenario, n_runs)
+        if scenario.navigation.prediction != "seabed" or "cmnf" not in self.filters(scenario):
+            return terms
+        bed, mb, c = scenario.seabed, scenario.multibeam, scenario.seed004
+        kept = HEIGHTFIELD_KEPT_BYTES_PER_POINT * float(bed.n) ** 2
+        beams = mb.beams_elevation * mb.beams_azimuth
+        train = IMAGE_BYTES_PER_PATH_BEAM * c.train_paths * beams
+        test = IMAGE_BYTES_PER_PATH_BEAM * c.surrogate_test_paths * beams
+        images = (
+            f"seed004.train_paths = {c.train_paths} imaged with multibeam.beams_elevation x "
+            f"beams_azimuth = {mb.beams_elevation} x {mb.beams_azimuth} beams"
+        )
+        return [
+            *terms,
+            MemoryTerm(kept, True, f"{bed.grid_text} (the surrogate's heightfield)"),
+            MemoryTerm(kept, False, f"{bed.grid_text} (the surrogate's heightfield)"),
+            MemoryTerm(train, True, images),
+            MemoryTerm(
+                train + test,
+                False,
+                f"{images}, seed004.surrogate_test_paths = {c.surrogate_test_paths}",
+            ),
+        ]
 
     def check(self, scenario: Seed004Scenario, n_runs: int) -> None:
         super().check(scenario, n_runs)

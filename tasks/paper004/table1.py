@@ -522,6 +522,12 @@ def steep_beacons(scn: Paper004Scenario) -> list[tuple[int, float]]:
 # The experiment
 
 
+IMAGE_BYTES_PER_PATH_BEAM = 140.0
+"""Peak memory of the seabed-sensing prediction per path and beam, bytes
+(:class:`tasks.paper004.seabed.SeabedPrediction`: the harmonic seabed's rays, the two images and
+eq. 15; tracemalloc: 133-140 B for 8 x 8 and 16 x 16 beams)."""
+
+
 @dataclass(frozen=True)
 class Paper004Experiment(Experiment):
     """Seed 004 on the kinematic world (module docstring)."""
@@ -569,6 +575,33 @@ class Paper004Experiment(Experiment):
                 f"filters.train_paths = {scenario.filters.train_paths}",
             ),
             MemoryTerm(8.0 * n_cases * 3 * steps * 30, False, timing),
+            *self._image_memory(scenario, block),
+        ]
+
+    def _image_memory(self, scenario: Paper004Scenario, block: int) -> list[MemoryTerm]:
+        """The seabed-sensing prediction's multibeam images (row 2): every training path of a
+        case, then every test path of a block, imaged at once (:data:`IMAGE_BYTES_PER_PATH_BEAM`
+        per path and beam); none for the prediction by virtue of the system."""
+        if all(c.prediction == "system" for c in cases(scenario)):
+            return []
+        mb = scenario.multibeam
+        beams = mb.beams_elevation * mb.beams_azimuth
+        shape = (
+            f"multibeam.beams_elevation x beams_azimuth = {mb.beams_elevation} x "
+            f"{mb.beams_azimuth} beams"
+        )
+        paths = scenario.filters.train_paths
+        return [
+            MemoryTerm(
+                IMAGE_BYTES_PER_PATH_BEAM * paths * beams,
+                True,
+                f"filters.train_paths = {paths} imaged with {shape}",
+            ),
+            MemoryTerm(
+                IMAGE_BYTES_PER_PATH_BEAM * block * beams,
+                True,
+                f"runner.block_size = {block} paths imaged with {shape}",
+            ),
         ]
 
     def run_block(self, scenario: Paper004Scenario, seed: int, runs: tuple[int, ...]):
