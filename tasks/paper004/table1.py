@@ -60,7 +60,7 @@ from bauv_sim.kinematic.seed004 import (
     check_beacons,
 )
 from bauv_sim.sensors.multibeam import MultibeamConfig
-from nav.cmnf import CmnfGains
+from nav.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains
 from nav.local_control import ControlLimits
 from nav.pcrb import pcrb
 from tasks.core import store
@@ -103,6 +103,14 @@ class FilterConfig(Config):
     )
     floor: float = Field(
         1e-9, ge=0, le=1e-3, description="CMNF pseudo-inverses' absolute singular-value floor"
+    )
+    clip_sigmas: float = Field(
+        DEFAULT_CLIP_SIGMAS,
+        ge=0,
+        le=1e6,
+        description="CMNF: clip its basic correction at median +- this many robust sigmas of "
+        "the training paths, per step and feature (nav.cmnf.clip_bounds); 0: unclipped, the "
+        "paper's filter, whose gains near a beacon a few paths with extreme tangents set",
     )
     train_paths: int = Field(
         100_000, ge=10, le=1_000_000, description="CMNF training paths (the paper: 1e5)"
@@ -263,6 +271,7 @@ def setting(scn: Paper004Scenario, case: Case) -> LoopSetting:
         correction=scn.filters.correction,
         upmf_form=scn.filters.upmf_form,
         floor=scn.filters.floor,
+        clip_sigmas=scn.filters.clip_sigmas or None,
         train_paths=scn.filters.train_paths,
         prediction=case.prediction,
         multibeam=None if case.prediction == "system" else scn.multibeam,
@@ -327,6 +336,8 @@ def reduce_block(scn: Paper004Scenario, seed: int, runs: tuple[int, ...]) -> Pap
                 "p_tilde": g.p_tilde,
                 "p_hat": g.p_hat,
             }
+            if g.beta_lo is not None and g.beta_hi is not None:
+                gains[c.label] |= {"beta_lo": g.beta_lo, "beta_hi": g.beta_hi}
     return Paper004Block(tuple(runs), tuple(c.label for c in cases(scn)), sums, gains)
 
 
@@ -350,6 +361,12 @@ class FilterResult(BaseModel):
     )
     diverged_paths: int
     absent_pairs: int
+    worse_than_prediction: list[int] = Field(
+        default_factory=list,
+        description="steps k where on the test paths E||X_k - X^_k||^2 exceeds the "
+        "prediction's E||X_k - X~_k||^2: the correction made the estimate worse (for the "
+        "CMNF: gains that do not generalise beyond their training paths)",
+    )
     paper_m2: float | None = None
     ratio_to_paper: float | None = None
 
@@ -452,6 +469,8 @@ def filter_result(
         level = float("nan")
     jbar = float(np.nanmax(J)) if ok.any() else float("nan")
     ratio = stated[1:] / mse[1:]
+    pred = np.where(ok, s.pred_err2[fi] / safe, np.nan) if s.pred_err2.size else None
+    worse = [] if pred is None else [int(k) for k in np.flatnonzero(mse[1:] > pred[1:]) + 1]
     return FilterResult(
         filter=name,
         j_bar_m2=_f(jbar),
@@ -462,6 +481,7 @@ def filter_result(
         stated_to_actual=_f(float(np.nanmax(ratio))) if ok.any() else None,
         diverged_paths=int(s.diverged[fi]),
         absent_pairs=int(s.absent[fi].sum()),
+        worse_than_prediction=worse,
         paper_m2=paper,
         ratio_to_paper=_f(jbar / paper) if paper else None,
     )
@@ -536,6 +556,13 @@ class Paper004Experiment(Experiment):
     def check(self, scenario: Paper004Scenario, n_runs: int) -> None:
         check_beacons(scenario.beacons)
         scenario.guidance.control_limits()
+        unknowns = 2 * len(scenario.beacons) + 1
+        if scenario.filters.gains_dir is None and scenario.filters.train_paths <= unknowns:
+            raise ConfigError(
+                f"filters.train_paths = {scenario.filters.train_paths}: with "
+                f"{len(scenario.beacons)} beacons a CMNF gain row has {unknowns} unknowns; "
+                f"must be > {unknowns}"
+            )
         if scenario.filters.gains_dir is not None and not Path(scenario.filters.gains_dir).is_dir():
             raise ConfigError(f"filters.gains_dir = {scenario.filters.gains_dir!r}: not a folder")
         if self.kind == "near-beacon":
@@ -619,6 +646,15 @@ def report_paper004(exp: Paper004Experiment, ctx: ReportContext) -> ReportSummar
                 shift_error=_shift_errors(s) if c.prediction != "system" else [],
             )
         )
+        cm = frs[FILTERS.index("CMNF")]
+        if cm.worse_than_prediction:
+            k = cm.worse_than_prediction[0]
+            warnings.append(
+                f"{c.label}: CMNF: on the test paths its correction made the estimate worse than "
+                f"its own prediction at {len(cm.worse_than_prediction)} step(s) from k = {k}: its "
+                f"gains, trained on {st.train_paths} paths (filters.clip_sigmas = "
+                f"{scn.filters.clip_sigmas:g}), do not generalise; train on more paths"
+            )
         for f in frs:
             if f.diverged_paths:
                 warnings.append(
@@ -899,6 +935,7 @@ def _save_gains(ctx: ReportContext, scn: Paper004Scenario, cs, gains: dict) -> l
                 "seed": ctx.seed,
                 "correction": s.correction,
                 "floor": s.floor,
+                "clip_sigmas": s.clip_sigmas,
                 "paths": s.train_paths,
             },
         )
