@@ -70,9 +70,9 @@ alpha, squared tangents for beta; the bearing noise variance tan^2(0.5 deg) is 7
 
 DEFAULT_CLIP_SIGMAS = 6.0
 """Half-width of the winsorisation of ``beta`` in robust standard deviations (module docstring):
-a Gaussian feature lies beyond it with probability 2e-9, so none of up to 1e6 training paths is
-clipped on average, while a tangent with Cauchy-like tails is held to the range its gain was
-fitted on."""
+a Gaussian feature lies beyond it with probability 2e-9 (per step and feature, 0.002 of 1e6
+training paths on average), while a tangent with Cauchy-like tails is held to the range its gain
+was fitted on."""
 
 _Z95 = 1.6448536269514722
 """The standard normal's 95th percentile: ``(q95 - q5) / (2 _Z95)`` is a Gaussian's sigma."""
