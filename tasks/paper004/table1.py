@@ -68,6 +68,7 @@ from bauv_sim.sensors.multibeam import MultibeamConfig
 from nav.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains
 from nav.local_control import ControlLimits
 from nav.pcrb import pcrb
+from nav.seabed import SlopeBasis
 from tasks.core import store
 from tasks.core.registry import (
     Experiment,
@@ -584,6 +585,15 @@ class Paper004Experiment(Experiment):
             )
         if scenario.filters.gains_dir is not None and not Path(scenario.filters.gains_dir).is_dir():
             raise ConfigError(f"filters.gains_dir = {scenario.filters.gains_dir!r}: not a folder")
+        mb = scenario.multibeam
+        beams = mb.beams_elevation * mb.beams_azimuth
+        size = SlopeBasis.seed004().size  # the row 2 prediction's Appendix A fit
+        if any(p != "system" for p in scenario.sweep.prediction) and beams <= size:
+            raise ConfigError(
+                f"multibeam.beams_elevation x multibeam.beams_azimuth = {mb.beams_elevation} x "
+                f"{mb.beams_azimuth}: Appendix A's harmonic fit of the seabed prediction has "
+                f"{size} unknowns; need more than {size} beams"
+            )
         if self.kind == "near-beacon":
             v = scenario.report.documented_variance_m2
             if v not in scenario.sweep.initial_variance_m2:

@@ -248,6 +248,11 @@ def _bauv(tmp_path, name, *args):
             "filters.train_paths = 11: with 5 beacons a CMNF gain row has 11 unknowns",
         ),
         ("paper-004/table-1", ["--set", "filters.clip_sigmas=-1.0"], "filters.clip_sigmas"),
+        (
+            "paper-004/table-1-seabed",
+            ["--set", "multibeam.beams_elevation=3", "--set", "multibeam.beams_azimuth=3"],
+            "3 x 3: Appendix A's harmonic fit of the seabed prediction has 9 unknowns",
+        ),
     ],
 )
 def test_cli_refuses_bad_input_in_one_line(tmp_path, name, args, pattern):
