@@ -107,7 +107,7 @@ def _march_library() -> Callable[..., int]:
 _MARCH_STATUS = {
     -1: "a buffer shorter than its shape (n, paths, harmonics) says",
     -2: "a ray's path index outside [0, paths)",
-    -3: "a count below its minimum (rays >= 0, paths >= 1, harmonics >= 1)",
+    -3: "a count out of range (rays >= 0, paths >= 1, harmonics >= 1, no size overflow)",
 }
 """The C march's refusals (``bauv_harmonic_march``'s negative return values)."""
 
@@ -241,12 +241,16 @@ class HarmonicSeabed:
                 raise ConfigError(f"HarmonicSeabed.{name}: non-finite coefficient; need finite m")
             arr.flags.writeable = False
             object.__setattr__(self, name, arr)
-        if not np.isfinite(self.a0_m):
-            raise ConfigError(f"HarmonicSeabed.a0_m = {self.a0_m}: must be finite, m")
-        for name in ("period_x_m", "period_y_m"):
+        for name, positive in (("a0_m", False), ("period_x_m", True), ("period_y_m", True)):
             v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ConfigError(f"HarmonicSeabed.{name} = {v}: must be finite and > 0, m")
+            try:
+                f = float(v)
+            except (TypeError, ValueError):
+                f = float("nan")
+            if not (np.isfinite(f) and (f > 0 or not positive)):
+                rule = "finite and > 0" if positive else "finite"
+                raise ConfigError(f"HarmonicSeabed.{name} = {v!r}: must be {rule}, m")
+            object.__setattr__(self, name, f)
 
     @classmethod
     def draw(
