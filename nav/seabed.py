@@ -126,7 +126,7 @@ class _ShiftLibrary:
     """The two entry points of ``seabed_shift.c`` (argument lists there)."""
 
     fit: Callable[..., int]  # bauv_seabed_fit
-    shift: Callable[..., None]  # bauv_seabed_shift
+    shift: Callable[..., int]  # bauv_seabed_shift
 
 
 @functools.cache
@@ -139,15 +139,41 @@ def _shift_library() -> _ShiftLibrary:
     f64_out = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS, WRITEABLE")
     i64_out = np.ctypeslib.ndpointer(np.int64, flags="C_CONTIGUOUS, WRITEABLE")
     u8_out = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS, WRITEABLE")
+    i64 = np.ctypeslib.ndpointer(np.int64, flags="C_CONTIGUOUS")
     n, x, opt = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
     fit = lib.bauv_seabed_fit
-    fit.argtypes = [n, n, f64, u8, n, n, x, x, x, f64_out, u8_out, u8_out]
+    fit.argtypes = [n, n, f64, u8, n, n, x, x, x, f64_out, u8_out, u8_out, i64, n]
     fit.restype = n
     shift = lib.bauv_seabed_shift
     shift.argtypes = [n, n, f64, f64, opt, f64, f64, u8, u8, n, x, x, x, x, opt]
-    shift.argtypes += [f64_out, f64_out, i64_out, i64_out, u8_out, f64_out]
-    shift.restype = None
+    shift.argtypes += [f64_out, f64_out, i64_out, i64_out, u8_out, f64_out, i64, n]
+    shift.restype = n
     return _ShiftLibrary(fit, shift)
+
+
+_C_STATUS = {
+    -1: "out of memory",
+    -2: "a basis the C fit does not take (more than FIT_MAX functions, harmonics < 1)",
+    -3: "a buffer shorter than its shape (paths, beams) says",
+}
+"""The refusals of ``seabed_shift.c`` (its entry points' negative return values)."""
+
+
+def _sizes(*arrays: Array | None) -> NDArray[np.int64]:
+    """Element counts of the buffers handed to ``seabed_shift.c`` (0 for a NULL one)."""
+    return np.array([0 if a is None else a.size for a in arrays], dtype=np.int64)
+
+
+def _finite(name: str, a: Array, where: BoolArray | None = None) -> Array:
+    """``a`` unchanged, or :class:`NavInputError` naming ``name`` and the first non-finite entry
+    (among ``where`` when given)."""
+    bad = ~np.isfinite(a)
+    if where is not None:
+        bad &= where
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise NavInputError(f"{name}: non-finite value {a[idx]} at index {idx}; must be finite")
+    return a
 
 
 @dataclass(frozen=True)
@@ -294,8 +320,9 @@ class SlopeBasis:
                 raise NavInputError(
                     f"SlopeBasis periods = ({self.period_x_m}, {self.period_y_m}) m: must be > 0"
                 )
-            if self.harmonics < 1:
-                raise NavInputError(f"SlopeBasis.harmonics = {self.harmonics}: must be >= 1")
+            k = self.harmonics
+            if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1:
+                raise NavInputError(f"SlopeBasis.harmonics = {k!r}: must be an integer >= 1")
 
     @classmethod
     def seed004(cls) -> SlopeBasis:
@@ -357,6 +384,37 @@ class SlopeBasis:
         return np.stack(phi, -2), np.stack(dx, -2), np.stack(dy, -2)
 
 
+def check_basis(basis: SlopeBasis, feet: int) -> SlopeBasis:
+    """Refuse a basis with more unknowns than an image has feet (Appendix A's fit).
+
+    The fit of a path needs more valid feet than basis functions (its ``ok``), so with ``m``
+    feet per image at most ``m - 1`` functions can ever be fitted: a harmonic basis of at most
+    ``(m - 2) // 4`` harmonics (``1 + 4 K`` functions), a plane from 4 feet, a quadratic from 7.
+
+    Args:
+        basis: the fit's functions.
+        feet: beams per image, ``m``.
+
+    Returns:
+        ``basis``.
+
+    Raises:
+        NavInputError: if ``basis.size >= feet``.
+    """
+    if basis.size >= feet:
+        what = (
+            f"harmonics = {basis.harmonics} ({basis.size} functions; at most {(feet - 2) // 4} "
+            f"harmonics for {feet} feet)"
+            if basis.kind == "harmonic"
+            else f"{basis.size} functions"
+        )
+        raise NavInputError(
+            f"SlopeBasis {basis.kind!r}, {what}: Appendix A's fit has more unknowns than the "
+            f"{feet} beam feet of an image give equations (it needs more feet than functions)"
+        )
+    return basis
+
+
 def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Array, BoolArray]:
     """Seabed gradient at the beam feet from the feet themselves (seed 004, Appendix A, eq. A1).
 
@@ -380,7 +438,9 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
         shape (P,): the path had more valid points than basis functions.
 
     Raises:
-        NavInputError: if ``points`` and ``valid`` do not match.
+        NavInputError: if ``points`` and ``valid`` do not match, a valid foot is not finite, or
+            the basis has at least as many functions as an image has feet (no path could be
+            fitted; :func:`check_basis`).
         NavError: if the C library is not built.
     """
     pts = np.ascontiguousarray(points, dtype=float)
@@ -390,18 +450,23 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
             f"fit_slopes: points of shape {pts.shape} and valid of shape {w.shape}, expected "
             "(P, m, 3) and (P, m)"
         )
+    P, m = w.shape
+    check_basis(basis, m)
+    _finite("fit_slopes: points (at a valid foot)", pts, np.broadcast_to(w[..., None], pts.shape))
+    if not np.isfinite(pts).all():  # feet without echo take no part: keep their NaN out of C
+        pts = np.where(w[..., None], pts, 0.0)
     if basis.size > FIT_MAX_FUNCTIONS:
         return _fit_slopes_numpy(pts, w, basis)
-    P, m = w.shape
     grad = np.empty((P, m, 3))
     ok = np.empty(P, np.uint8)
     to_numpy = np.empty(P, np.uint8)
     kind = {"harmonic": 0, "plane": 1, "quadratic": 2}[basis.kind]
+    valid_c = np.ascontiguousarray(w, dtype=np.uint8)
     flagged = _shift_library().fit(
         P,
         m,
         pts,
-        np.ascontiguousarray(w, dtype=np.uint8),
+        valid_c,
         kind,
         basis.harmonics,
         float(basis.period_x_m),
@@ -410,9 +475,11 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
         grad,
         ok,
         to_numpy,
+        _sizes(pts, valid_c, grad, ok, to_numpy),
+        5,
     )
     if flagged < 0:
-        raise NavError("fit_slopes: the C fit ran out of memory")
+        raise NavError(f"fit_slopes: the C fit refused: {_C_STATUS.get(flagged, flagged)}")
     if flagged:  # less well conditioned: numpy (LAPACK) on those paths
         bad = np.flatnonzero(to_numpy)
         grad[bad] = _fit_slopes_numpy(pts[bad], w[bad], basis)[0]
@@ -584,7 +651,10 @@ def shift_estimate(
 
     Raises:
         NavInputError: for arrays of the wrong shape, non-finite ranges where there is an echo,
-            an unknown reading, or ``"turning"`` without ``next_attitude_rad``.
+            a non-finite attitude, position, command or slope (at a used beam), a
+            ``sigma_range_m``, ``fallback_var_m2`` or ``rcond`` out of range, a basis with at
+            least as many functions as the image has beams (:func:`check_basis`), an unknown
+            reading, or ``"turning"`` without ``next_attitude_rad``.
         NavError: if the C library (``nav/seabed_shift.c``) is not built.
     """
     L0 = np.asarray(ranges_m, dtype=float)
@@ -602,6 +672,7 @@ def shift_estimate(
         else _check_images("next_echo", next_echo, L0.shape)
     )
     att0 = _check_images("attitude_rad", np.asarray(attitude_rad, dtype=float), (P, 2))
+    _finite("attitude_rad", att0)
     if reading not in ("one_attitude", "turning"):
         raise NavInputError(f"reading = {reading!r}: use 'one_attitude' or 'turning'")
     if reading == "turning":
@@ -610,10 +681,17 @@ def shift_estimate(
         att1 = _check_images(
             "next_attitude_rad", np.asarray(next_attitude_rad, dtype=float), (P, 2)
         )
+        _finite("next_attitude_rad", att1)
     if delta_e not in ("linear", "exact"):
         raise NavInputError(f"delta_e = {delta_e!r}: use 'linear' or 'exact'")
     if covariance not in ("residual", "range_noise"):
         raise NavInputError(f"covariance = {covariance!r}: use 'residual' or 'range_noise'")
+    if not (np.isfinite(sigma_range_m) and sigma_range_m >= 0):
+        raise NavInputError(f"sigma_range_m = {sigma_range_m}: must be finite and >= 0, m")
+    if not (np.isfinite(fallback_var_m2) and fallback_var_m2 > 0):
+        raise NavInputError(f"fallback_var_m2 = {fallback_var_m2}: must be finite and > 0, m^2")
+    if not (np.isfinite(rcond) and 0 <= rcond < 1):
+        raise NavInputError(f"rcond = {rcond}: must be in [0, 1)")
     w0, w1 = w0.astype(bool), w1.astype(bool)
     use = w0 & w1
     if not (np.all(np.isfinite(L0[w0])) and np.all(np.isfinite(L1[w1]))):
@@ -626,17 +704,19 @@ def shift_estimate(
     usef = use.reshape(P, m)
     if slopes is None:  # step 3: Appendix A on every foot of image k
         origin = np.zeros((P, 3)) if position_m is None else np.asarray(position_m, dtype=float)
-        _check_images("position_m", origin, (P, 3))
+        _finite("position_m", _check_images("position_m", origin, (P, 3)))
         w0f = w0.reshape(P, m)
         feet = origin[:, None, :] + np.where(w0f, L0.reshape(P, m), 0.0)[..., None] * e  # eq. 8
         grad, fit_ok = fit_slopes(feet, w0f, basis or SlopeBasis.seed004())
     else:
         grad = _check_images("slopes", np.asarray(slopes, dtype=float), (*L0.shape, 3))
-        grad = grad.reshape(P, m, 3)
+        _finite("slopes (at a beam with an echo in both images)", grad, use[..., None])
+        grad = np.where(use[..., None], grad, 0.0).reshape(P, m, 3)
         fit_ok = np.ones(P, bool)
     cmd = None
     if commanded_shift_m is not None:
         cmd = _check_images("commanded_shift_m", np.asarray(commanded_shift_m, dtype=float), (P, 3))
+        _finite("commanded_shift_m", cmd)
     if rcond * 1e8 < 1.0:  # a cut-off below what eigenvalues of A^T A resolve: the SVD
         return _shift_svd(
             grad,
@@ -661,31 +741,35 @@ def shift_estimate(
     rank = np.empty(P, np.int64)
     ok = np.empty(P, np.uint8)
     rms = np.empty(P)
-    de_c = None if de is None else np.ascontiguousarray(de)
-    cmd_c = None if cmd is None else np.ascontiguousarray(cmd)
-    _shift_library().shift(
-        P,
-        m,
-        np.ascontiguousarray(grad),
-        np.ascontiguousarray(e),
-        None if de_c is None else de_c.ctypes.data,
+    de_c = None if de is None else np.ascontiguousarray(de, dtype=float)
+    cmd_c = None if cmd is None else np.ascontiguousarray(cmd, dtype=float)
+    ins = [
+        np.ascontiguousarray(grad, dtype=float),
+        np.ascontiguousarray(e, dtype=float),
         np.ascontiguousarray(L0.reshape(P, m)),
         np.ascontiguousarray(L1.reshape(P, m)),
         np.ascontiguousarray(usef, dtype=np.uint8),
         np.ascontiguousarray(fit_ok, dtype=np.uint8),
+    ]
+    outs = [shift, cov, beams, rank, ok, rms]
+    status = _shift_library().shift(
+        P,
+        m,
+        *ins[:2],
+        None if de_c is None else de_c.ctypes.data,
+        *ins[2:],
         int(covariance == "residual"),
         float(sigma_range_m),
         float(fallback_var_m2),
         float(rcond),
         SINGULAR_FLOOR,
         None if cmd_c is None else cmd_c.ctypes.data,
-        shift,
-        cov,
-        beams,
-        rank,
-        ok,
-        rms,
+        *outs,
+        _sizes(*ins[:2], de_c, *ins[2:], cmd_c, *outs),
+        14,
     )
+    if status < 0:
+        raise NavError(f"shift_estimate: the C shift refused: {_C_STATUS.get(status, status)}")
     return ShiftEstimate(shift, cov, beams, rank, ok.view(np.bool_), rms)
 
 

@@ -2,7 +2,8 @@
 // nav.seabed.fit_slopes and nav.seabed.shift_estimate, one path at a time.
 //
 // A plain C library without Python API, loaded with ctypes (nav/seabed.py, _shift_library).
-// Python checks the input, computes the beam vectors e and their change de (eq. 8, 10), and keeps
+// Both entry points check the sizes of their buffers (passed beside them) and the basis before
+// they read anything, whatever the caller passes. Python checks the input, computes the beam vectors e and their change de (eq. 8, 10), and keeps
 // the rare branches in numpy: Appendix A's fit where its scaled Gram matrix may have a condition
 // number above nav.seabed.FIT_C_CONDITION = 1e4 (bauv_seabed_fit flags those paths, about 5 per
 // cent of seed 004's) and the SVD of eq. 15 for rcond < 1e-8.
@@ -135,13 +136,25 @@ static void jacobi_eigh(int n, double* a, double* w, double* v) {
 //   to_numpy: (P,), 0/1: fit_ok but the scaled Gram matrix has a condition number above
 //     max_condition; grad of the path is left zero for numpy.
 //
-// Returns the number of paths flagged to_numpy, or -1 if out of memory or the basis too large.
+// sizes: the number of elements of each buffer as allocated by the caller, in the order
+//   points, valid, grad, fit_ok, to_numpy
+// (n_sizes of them, 5); nothing is read or written unless each holds what P and m say (3 P m,
+// P m, 3 P m, P, P).
+//
+// Returns the number of paths flagged to_numpy, or -1 (out of memory), -2 (a basis of more than
+// FIT_MAX functions, K < 1 or an unknown kind), -3 (a buffer shorter than P and m say, P < 0,
+// m < 0, or a size product overflowing).
 int64_t bauv_seabed_fit(int64_t P, int64_t m, const double* points, const uint8_t* valid,
                         int64_t kind, int64_t K, double px, double py, double max_condition,
-                        double* grad,
-                        uint8_t* fit_ok, uint8_t* to_numpy) {
-  const int n = kind == 0 ? (int)(1 + 4 * K) : (kind == 1 ? 3 : 6);
-  if (n > FIT_MAX || n < 1) return -1;
+                        double* grad, uint8_t* fit_ok, uint8_t* to_numpy, const int64_t* sizes,
+                        int64_t n_sizes) {
+  if (kind < 0 || kind > 2 || (kind == 0 && (K < 1 || K > (FIT_MAX - 1) / 4))) return -2;
+  const int n = kind == 0 ? (int)(1 + 4 * K) : (kind == 1 ? 3 : 6);  // K bounded: no overflow
+  if (n_sizes != 5 || !sizes || P < 0 || m < 0) return -3;
+  if (m > 0 && P > INT64_MAX / 3 / m) return -3;
+  const int64_t need[5] = {3 * P * m, P * m, 3 * P * m, P, P};
+  for (int j = 0; j < 5; ++j)
+    if (sizes[j] < need[j]) return -3;
   double* phi = malloc(sizeof(double) * 3 * (size_t)n * (size_t)(m > 0 ? m : 1));
   if (!phi) return -1;
   double* dx = phi + n * m;  // (n, m) each
@@ -297,11 +310,28 @@ int64_t bauv_seabed_fit(int64_t P, int64_t m, const double* points, const uint8_
 //   cmd: shift stated where none is produced (P, 3), m, or NULL for zero.
 //
 // Results: shift (P, 3) m, cov (P, 3, 3) m^2, beams (P,), rank (P,), ok (P,) 0/1, rms (P,) m.
-void bauv_seabed_shift(int64_t P, int64_t m, const double* grad, const double* e,
-                       const double* de, const double* L0, const double* L1, const uint8_t* use,
-                       const uint8_t* fit_ok, int64_t residual, double sigma, double fallback,
-                       double rcond, double singular_floor, const double* cmd, double* shift, double* cov,
-                       int64_t* beams, int64_t* rank, uint8_t* ok, double* rms) {
+//
+// sizes: the number of elements of each buffer as allocated by the caller, in the order
+//   grad, e, de, L0, L1, use, fit_ok, cmd, shift, cov, beams, rank, ok, rms
+// (n_sizes of them, 14; 0 for a NULL de or cmd); nothing is read or written unless each holds what
+// P and m say (3 P m for grad, e, de; P m for L0, L1, use; P for fit_ok and the results beams,
+// rank, ok, rms; 3 P for cmd and shift; 9 P for cov).
+//
+// Returns 0, or -3 (a buffer shorter than P and m say, P < 0, m < 0, or a size product
+// overflowing).
+int64_t bauv_seabed_shift(int64_t P, int64_t m, const double* grad, const double* e,
+                          const double* de, const double* L0, const double* L1,
+                          const uint8_t* use, const uint8_t* fit_ok, int64_t residual,
+                          double sigma, double fallback, double rcond, double singular_floor,
+                          const double* cmd, double* shift, double* cov, int64_t* beams,
+                          int64_t* rank, uint8_t* ok, double* rms, const int64_t* sizes,
+                          int64_t n_sizes) {
+  if (n_sizes != 14 || !sizes || P < 0 || m < 0 || P > INT64_MAX / 9) return -3;
+  if (m > 0 && P > INT64_MAX / 3 / m) return -3;
+  const int64_t need[14] = {3 * P * m, 3 * P * m, de ? 3 * P * m : 0, P * m, P * m, P * m, P,
+                            cmd ? 3 * P : 0, 3 * P, 9 * P, P, P, P, P};
+  for (int j = 0; j < 14; ++j)
+    if (sizes[j] < need[j]) return -3;
   for (int64_t p = 0; p < P; ++p) {
     const double* gp = grad + p * m * 3;
     const double* ep = e + p * m * 3;
@@ -418,4 +448,5 @@ void bauv_seabed_shift(int64_t P, int64_t m, const double* grad, const double* e
       rms[p] = 0.0;
     }
   }
+  return 0;
 }

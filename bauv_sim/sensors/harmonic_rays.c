@@ -3,7 +3,8 @@
 //
 // A plain C library without Python API, loaded with ctypes (bauv_sim/sensors/multibeam.py,
 // _march_library). Python normalises the directions, checks the input and hands the rays this
-// march leaves unresolved to its first-order march (HarmonicSeabed._lipschitz_ranges).
+// march leaves unresolved to its first-order march (HarmonicSeabed._lipschitz_ranges). The march
+// checks the sizes of its buffers and the path indices itself before it reads any of them.
 //
 // The seabed of path p is psi(x) = 0 (water where psi > 0), with
 //
@@ -74,6 +75,7 @@ static void psi_slope(double x, double y, double z, double ex, double ey, double
 //
 // Args (shapes; P paths, K harmonics, all arrays C-contiguous):
 //   n: number of rays.
+//   P: number of paths (seabeds).
 //   o: origins (n, 3), m, world (z up).
 //   e: unit directions (n, 3), world.
 //   path: each ray's seabed (n,), in [0, P).
@@ -90,14 +92,30 @@ static void psi_slope(double x, double y, double z, double ex, double ey, double
 // Results (n each): range (m, 0 without hit), hit (0/1), unresolved (0/1), s (m: the distance
 // the march reached, where the first-order march takes over for an unresolved ray; else 0).
 //
-// Returns the number of unresolved rays.
-int64_t bauv_harmonic_march(int64_t n, const double* o, const double* e, const int64_t* path,
-                            int64_t K,
+// sizes: the number of elements of each buffer as allocated by the caller, in the order
+//   o, e, path, a, b, c, d, wx, wy, top, cxx, cyy, range, hit, unresolved, s_out
+// (n_sizes of them, 16). Nothing is read or written unless every buffer holds what n, P and K say
+// (o, e: 3 n; path and the results: n; a, b, c, d: P K; wx, wy: K; top, cxx, cyy: P) and every
+// path index lies in [0, P): whatever the caller passes, the march stays inside its buffers.
+//
+// Returns the number of unresolved rays, or -1 (a buffer shorter than n, P, K say), -2 (a path
+// index outside [0, P)), -3 (n < 0, P < 1, K < 1, steps < 0, or a size product overflowing).
+int64_t bauv_harmonic_march(int64_t n, int64_t P, const double* o, const double* e,
+                            const int64_t* path, int64_t K,
                             const double* a, const double* b, const double* c,
                             const double* d, const double* wx, const double* wy,
                             const double* top, const double* cxx, const double* cyy, double a0,
                             double px, double py, double max_range, double tol, int64_t steps,
-                            double* range, uint8_t* hit, uint8_t* unresolved, double* s_out) {
+                            double* range, uint8_t* hit, uint8_t* unresolved, double* s_out,
+                            const int64_t* sizes, int64_t n_sizes) {
+  if (n_sizes != 16 || !sizes) return -1;
+  if (n < 0 || P < 1 || K < 1 || steps < 0 || n > INT64_MAX / 3 || K > INT64_MAX / P) return -3;
+  const int64_t need[16] = {3 * n, 3 * n, n, P * K, P * K, P * K, P * K, K, K, P, P, P,
+                            n, n, n, n};
+  for (int j = 0; j < 16; ++j)
+    if (sizes[j] < need[j]) return -1;
+  for (int64_t i = 0; i < n; ++i)
+    if (path[i] < 0 || path[i] >= P) return -2;
   int64_t left = 0;
   for (int64_t i = 0; i < n; ++i) {
     const double ox = o[3 * i], oy = o[3 * i + 1], oz = o[3 * i + 2];

@@ -98,10 +98,18 @@ def _march_library() -> Callable[..., int]:
     f64_out = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS, WRITEABLE")
     u8_out = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS, WRITEABLE")
     n, x = ctypes.c_int64, ctypes.c_double
-    march.argtypes = [n, f64, f64, i64, n, *[f64] * 9, x, x, x, x, x, n]
-    march.argtypes += [f64_out, u8_out, u8_out, f64_out]
+    march.argtypes = [n, n, f64, f64, i64, n, *[f64] * 9, x, x, x, x, x, n]
+    march.argtypes += [f64_out, u8_out, u8_out, f64_out, i64, n]
     march.restype = n
     return march
+
+
+_MARCH_STATUS = {
+    -1: "a buffer shorter than its shape (n, paths, harmonics) says",
+    -2: "a ray's path index outside [0, paths)",
+    -3: "a count out of range (rays >= 0, paths >= 1, harmonics >= 1, no size overflow)",
+}
+"""The C march's refusals (``bauv_harmonic_march``'s negative return values)."""
 
 
 class MultibeamConfig(Config):
@@ -200,6 +208,49 @@ class HarmonicSeabed:
     a0_m: float = 30.0
     period_x_m: float = 20.0
     period_y_m: float = 20.0
+
+    def __post_init__(self) -> None:
+        """Check the coefficients before anything reads them (the C march indexes them by path).
+
+        Raises:
+            ConfigError: if ``a, b, c, d`` are not finite arrays of one shape ``(P >= 1, K >= 1)``,
+                ``a0_m`` is not finite, or a period is not finite and positive.
+        """
+        shape = None
+        for name in "abcd":
+            v = getattr(self, name)
+            try:
+                arr = np.array(v, dtype=float)  # a copy: the seabed stays as checked
+            except (TypeError, ValueError):
+                raise ConfigError(
+                    f"HarmonicSeabed.{name}: {type(v).__name__} is not an array of numbers; "
+                    "need coefficients of shape (paths, harmonics), m"
+                ) from None
+            if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
+                raise ConfigError(
+                    f"HarmonicSeabed.{name}: shape {arr.shape}; need (paths >= 1, harmonics >= 1)"
+                )
+            if shape is None:
+                shape = arr.shape
+            elif arr.shape != shape:
+                raise ConfigError(
+                    f"HarmonicSeabed.{name}: shape {arr.shape}, but a has {shape}: the four "
+                    "coefficient arrays need one shape (paths, harmonics)"
+                )
+            if not np.isfinite(arr).all():
+                raise ConfigError(f"HarmonicSeabed.{name}: non-finite coefficient; need finite m")
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
+        for name, positive in (("a0_m", False), ("period_x_m", True), ("period_y_m", True)):
+            v = getattr(self, name)
+            try:
+                f = float(v)
+            except (TypeError, ValueError):
+                f = float("nan")
+            if not (np.isfinite(f) and (f > 0 or not positive)):
+                rule = "finite and > 0" if positive else "finite"
+                raise ConfigError(f"HarmonicSeabed.{name} = {v!r}: must be {rule}, m")
+            object.__setattr__(self, name, f)
 
     @classmethod
     def draw(
@@ -330,10 +381,18 @@ class HarmonicSeabed:
             seabed within ``max_range_m``, or an origin at or below the seabed).
 
         Raises:
-            ConfigError: for rays of another number of paths, a zero or non-finite direction,
-                a first-order march that does not finish in ``max_iterations`` steps, or a C
-                march that is not built.
+            ConfigError: for rays of another number of paths, a zero or non-finite direction, a
+                non-finite origin, a ``max_range_m``, ``tol_m`` or ``min_step_m`` that is not
+                finite and positive, a first-order march that does not finish in
+                ``max_iterations`` steps, or a C march that is not built (or refusing its
+                arguments' sizes).
         """
+        if not (np.isfinite(max_range_m) and max_range_m > 0):
+            raise ConfigError(f"ray_ranges: max_range_m = {max_range_m}: must be finite and > 0")
+        if not (np.isfinite(tol_m) and tol_m > 0 and np.isfinite(min_step_m) and min_step_m > 0):
+            raise ConfigError(
+                f"ray_ranges: tol_m = {tol_m}, min_step_m = {min_step_m}: must be finite and > 0"
+            )
         o, e = np.broadcast_arrays(np.asarray(origin_m, float), np.asarray(directions, float))
         shape = o.shape[:-1]
         if not shape or shape[0] != self.paths:
@@ -392,18 +451,25 @@ class HarmonicSeabed:
         unresolved = np.zeros(n, np.uint8)
         s = np.zeros(n)
         coef = [np.ascontiguousarray(getattr(self, c), dtype=float) for c in "abcd"]
-        march(
-            n,
+        arrays = [
             np.ascontiguousarray(o, dtype=float),
             np.ascontiguousarray(e, dtype=float),
             np.ascontiguousarray(path, dtype=np.int64),
-            self.a.shape[1],
             *coef,
             np.ascontiguousarray(wx),
             np.ascontiguousarray(wy),
-            -self.a0_m + self.relief_bound(),
-            (wx**2 * np.hypot(self.a, self.b)).sum(-1),
-            (wy**2 * np.hypot(self.c, self.d)).sum(-1),
+            np.ascontiguousarray(-self.a0_m + self.relief_bound()),
+            np.ascontiguousarray((wx**2 * np.hypot(self.a, self.b)).sum(-1)),
+            np.ascontiguousarray((wy**2 * np.hypot(self.c, self.d)).sum(-1)),
+        ]
+        # every buffer's length, so the march checks what it reads and writes (harmonic_rays.c)
+        sizes = np.array([a.size for a in arrays] + [r.size, hit.size, unresolved.size, s.size])
+        status = march(
+            n,
+            self.paths,
+            *arrays[:3],
+            self.a.shape[1],
+            *arrays[3:],
             self.a0_m,
             self.period_x_m,
             self.period_y_m,
@@ -414,7 +480,14 @@ class HarmonicSeabed:
             hit,
             unresolved,
             s,
+            sizes,
+            sizes.size,
         )
+        if status < 0:
+            raise ConfigError(
+                f"ray_ranges: the C march refused its arguments (status {status}: "
+                f"{_MARCH_STATUS.get(status, 'unknown')})"
+            )
         return r, hit.view(np.bool_), unresolved.view(np.bool_), s
 
     def _lipschitz_ranges(

@@ -891,8 +891,9 @@ pitches by up to ~13 deg at |gamma| <= 10 deg, the tail beat included)."""
 
 
 def check_multibeam(scn: Seed004Scenario, bed: seabed.Seabed) -> None:
-    """The seabed must be within the multibeam's range all along the nominal path, and the
-    sonar must image once per filter step.
+    """The seabed must be within the multibeam's range all along the nominal path, the sonar
+    must image once per filter step, and an image must have more beams than Appendix A's fit
+    has unknowns.
 
     The longest beam of an image is the shallowest, at ``min |gamma^i| - max_gamma -
     PITCH_MARGIN_DEG`` below the horizontal; over the seabed ``h`` below the path it reaches the
@@ -913,6 +914,16 @@ def check_multibeam(scn: Seed004Scenario, bed: seabed.Seabed) -> None:
         raise ConfigError(
             f"multibeam.elevation_deg = {mb.elevation_deg}: the shallowest beam must point at "
             f"least seed004.max_gamma_deg + {PITCH_MARGIN_DEG:g} + 5 deg below the hull's axis"
+        )
+    from nav.seabed import SlopeBasis
+
+    beams = mb.beams_elevation * mb.beams_azimuth
+    size = SlopeBasis(c.slope_basis).size  # type: ignore[arg-type]
+    if beams <= size:
+        raise ConfigError(
+            f"multibeam.beams_elevation x multibeam.beams_azimuth = {mb.beams_elevation} x "
+            f"{mb.beams_azimuth}: Appendix A's {c.slope_basis} fit (seed004.slope_basis) has "
+            f"{size} unknowns; need more than {size} beams"
         )
     p = path_config(scn).path()
     try:

@@ -6,7 +6,12 @@ the estimate comes from the bearing tangents of four surface beacons (eq. 17), f
 
 * **CMNF** (eq. 22-24): gains fitted by Monte Carlo on ``filters.train_paths`` training paths run
   with the CMNF itself in the loop, one step at a time (:func:`nav.cmnf.train`), with the absolute
-  singular-value floor ``filters.floor``;
+  singular-value floor ``filters.floor`` and its basic correction clipped at
+  ``filters.clip_sigmas`` robust sigmas of the training paths (:func:`nav.cmnf.clip_bounds`: near
+  a beacon the tangents have Cauchy-like tails and the unclipped gains, set by a few paths, sent
+  test paths hundreds of metres off; where the tangents are near-Gaussian, as in Table 1, nothing
+  is clipped). The report warns when on the test paths the CMNF's correction made its estimate
+  worse than its own prediction (gains that do not generalise);
 * **UPMF** (eq. 19-21) and the **EKF**,
 
 all with the prediction "by virtue of the system" (eq. 1, row 1 of Table 1). The test paths (the
@@ -60,9 +65,10 @@ from bauv_sim.kinematic.seed004 import (
     check_beacons,
 )
 from bauv_sim.sensors.multibeam import MultibeamConfig
-from nav.cmnf import CmnfGains
+from nav.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains
 from nav.local_control import ControlLimits
 from nav.pcrb import pcrb
+from nav.seabed import SlopeBasis
 from tasks.core import store
 from tasks.core.registry import (
     Experiment,
@@ -103,6 +109,14 @@ class FilterConfig(Config):
     )
     floor: float = Field(
         1e-9, ge=0, le=1e-3, description="CMNF pseudo-inverses' absolute singular-value floor"
+    )
+    clip_sigmas: float = Field(
+        DEFAULT_CLIP_SIGMAS,
+        ge=0,
+        le=1e6,
+        description="CMNF: clip its basic correction at median +- this many robust sigmas of "
+        "the training paths, per step and feature (nav.cmnf.clip_bounds); 0: unclipped, the "
+        "paper's filter, whose gains near a beacon a few paths with extreme tangents set",
     )
     train_paths: int = Field(
         100_000, ge=10, le=1_000_000, description="CMNF training paths (the paper: 1e5)"
@@ -263,6 +277,7 @@ def setting(scn: Paper004Scenario, case: Case) -> LoopSetting:
         correction=scn.filters.correction,
         upmf_form=scn.filters.upmf_form,
         floor=scn.filters.floor,
+        clip_sigmas=scn.filters.clip_sigmas or None,
         train_paths=scn.filters.train_paths,
         prediction=case.prediction,
         multibeam=None if case.prediction == "system" else scn.multibeam,
@@ -327,6 +342,12 @@ def reduce_block(scn: Paper004Scenario, seed: int, runs: tuple[int, ...]) -> Pap
                 "p_tilde": g.p_tilde,
                 "p_hat": g.p_hat,
             }
+            if g.beta_lo is not None and g.beta_hi is not None:
+                gains[c.label] |= {"beta_lo": g.beta_lo, "beta_hi": g.beta_hi}
+            gains[c.label] |= {
+                "clipped": int(g.info.get("clipped", 0)),
+                "top_share": float(g.info.get("top_share", 0.0)),
+            }
     return Paper004Block(tuple(runs), tuple(c.label for c in cases(scn)), sums, gains)
 
 
@@ -350,6 +371,12 @@ class FilterResult(BaseModel):
     )
     diverged_paths: int
     absent_pairs: int
+    worse_than_prediction: list[int] = Field(
+        default_factory=list,
+        description="steps k where on the test paths E||X_k - X^_k||^2 exceeds the "
+        "prediction's E||X_k - X~_k||^2: the correction made the estimate worse (for the "
+        "CMNF: gains that do not generalise beyond their training paths)",
+    )
     paper_m2: float | None = None
     ratio_to_paper: float | None = None
 
@@ -379,6 +406,16 @@ class CaseResult(BaseModel):
     filters: list[FilterResult]
     spread: float | None = Field(description="(max - min) / min of the three J-bars")
     shift_error: list[ShiftError] = Field(default_factory=list)
+    cmnf_clipped_values: int | None = Field(
+        None,
+        description="values of the CMNF's basic correction clipped in training, over all steps "
+        "and features (filters.clip_sigmas; nav.cmnf.clip_bounds)",
+    )
+    cmnf_top_share: float | None = Field(
+        None,
+        description="largest share one training path had in the sum of squares of one feature "
+        "of the (clipped) basic correction at one step: near 1 when one path sets a moment",
+    )
 
 
 class Paper004Metrics(BaseModel):
@@ -452,6 +489,8 @@ def filter_result(
         level = float("nan")
     jbar = float(np.nanmax(J)) if ok.any() else float("nan")
     ratio = stated[1:] / mse[1:]
+    pred = np.where(ok, s.pred_err2[fi] / safe, np.nan) if s.pred_err2.size else None
+    worse = [] if pred is None else [int(k) for k in np.flatnonzero(mse[1:] > pred[1:]) + 1]
     return FilterResult(
         filter=name,
         j_bar_m2=_f(jbar),
@@ -462,6 +501,7 @@ def filter_result(
         stated_to_actual=_f(float(np.nanmax(ratio))) if ok.any() else None,
         diverged_paths=int(s.diverged[fi]),
         absent_pairs=int(s.absent[fi].sum()),
+        worse_than_prediction=worse,
         paper_m2=paper,
         ratio_to_paper=_f(jbar / paper) if paper else None,
     )
@@ -542,8 +582,24 @@ class Paper004Experiment(Experiment):
     def check(self, scenario: Paper004Scenario, n_runs: int) -> None:
         check_beacons(scenario.beacons)
         scenario.guidance.control_limits()
+        unknowns = 2 * len(scenario.beacons) + 1
+        if scenario.filters.gains_dir is None and scenario.filters.train_paths <= unknowns:
+            raise ConfigError(
+                f"filters.train_paths = {scenario.filters.train_paths}: with "
+                f"{len(scenario.beacons)} beacons a CMNF gain row has {unknowns} unknowns; "
+                f"must be > {unknowns}"
+            )
         if scenario.filters.gains_dir is not None and not Path(scenario.filters.gains_dir).is_dir():
             raise ConfigError(f"filters.gains_dir = {scenario.filters.gains_dir!r}: not a folder")
+        mb = scenario.multibeam
+        beams = mb.beams_elevation * mb.beams_azimuth
+        size = SlopeBasis.seed004().size  # the row 2 prediction's Appendix A fit
+        if any(p != "system" for p in scenario.sweep.prediction) and beams <= size:
+            raise ConfigError(
+                f"multibeam.beams_elevation x multibeam.beams_azimuth = {mb.beams_elevation} x "
+                f"{mb.beams_azimuth}: Appendix A's harmonic fit of the seabed prediction has "
+                f"{size} unknowns; need more than {size} beams"
+            )
         if self.kind == "near-beacon":
             v = scenario.report.documented_variance_m2
             if v not in scenario.sweep.initial_variance_m2:
@@ -650,8 +706,19 @@ def report_paper004(exp: Paper004Experiment, ctx: ReportContext) -> ReportSummar
                 spread=spread,
                 prediction=c.prediction,
                 shift_error=_shift_errors(s) if c.prediction != "system" else [],
+                cmnf_clipped_values=gains.get(c.label, {}).get("clipped"),
+                cmnf_top_share=gains.get(c.label, {}).get("top_share"),
             )
         )
+        cm = frs[FILTERS.index("CMNF")]
+        if cm.worse_than_prediction:
+            k = cm.worse_than_prediction[0]
+            warnings.append(
+                f"{c.label}: CMNF: on the test paths its correction made the estimate worse than "
+                f"its own prediction at {len(cm.worse_than_prediction)} step(s) from k = {k}: its "
+                f"gains, trained on {st.train_paths} paths (filters.clip_sigmas = "
+                f"{scn.filters.clip_sigmas:g}), do not generalise; train on more paths"
+            )
         for f in frs:
             if f.diverged_paths:
                 warnings.append(
@@ -925,14 +992,18 @@ def _save_gains(ctx: ReportContext, scn: Paper004Scenario, cs, gains: dict) -> l
         if g is None:
             continue
         s = setting(scn, c)
+        arrays = {k: v for k, v in g.items() if k not in ("clipped", "top_share")}
         cg = CmnfGains(
-            **g,
+            **arrays,
             info={
                 "setting": s.key(),
                 "seed": ctx.seed,
                 "correction": s.correction,
                 "floor": s.floor,
+                "clip_sigmas": s.clip_sigmas,
                 "paths": s.train_paths,
+                "clipped": g.get("clipped", 0),
+                "top_share": g.get("top_share", 0.0),
             },
         )
         rel = f"gains/gains-{c.label}.npz"

@@ -365,6 +365,103 @@ def test_c_march_refuses_bad_rays_as_the_reference(origin, direction, kwargs, mo
     assert str(got.value) == str(want.value)
 
 
+def test_harmonic_seabed_refuses_inconsistent_or_non_finite_coefficients():
+    """b, c, d of one path beside a of four: the C march used to read b[p K] past b's buffer and
+    return wrong ranges without a word."""
+    good = HarmonicSeabed.draw(0, (0, 1, 2, 3))
+    with pytest.raises(ConfigError, match=r"HarmonicSeabed.b: shape \(1, 2\), but a has \(4, 2\)"):
+        HarmonicSeabed(good.a, good.b[:1], good.c[:1], good.d[:1])
+    with pytest.raises(ConfigError, match=r"HarmonicSeabed.d: shape \(4, 3\), but a has"):
+        HarmonicSeabed(good.a, good.b, good.c, np.zeros((4, 3)))
+    with pytest.raises(ConfigError, match=r"HarmonicSeabed.a: shape \(2,\); need \(paths"):
+        HarmonicSeabed(np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2))
+    with pytest.raises(ConfigError, match=r"HarmonicSeabed\.c: non-finite"):
+        HarmonicSeabed(good.a, good.b, np.where(good.c > 0.5, np.nan, good.c), good.d)
+    with pytest.raises(ConfigError, match=r"HarmonicSeabed\.period_y_m = 0"):
+        HarmonicSeabed(good.a, good.b, good.c, good.d, period_y_m=0.0)
+    with pytest.raises(ConfigError, match="max_range_m = nan"):
+        good.ray_ranges(np.zeros((4, 3)), np.array([0.0, 0.0, -1.0]), float("nan"))
+    # the coefficients are the seabed's own copy: a caller's array changed later does not move it
+    a = good.a.copy()
+    bed = HarmonicSeabed(a, good.b, good.c, good.d)
+    a[:] = 0.0
+    assert np.array_equal(bed.a, good.a)
+
+
+def _march_args(bed, o, e, path):
+    """bauv_harmonic_march's arguments for rays (r, 3) of seabed ``bed``, as _curvature_march
+    passes them, with the outputs and the sizes array (the caller can then break either)."""
+    wx, wy = bed._w()
+    arrays = [
+        np.ascontiguousarray(o, float),
+        np.ascontiguousarray(e, float),
+        np.ascontiguousarray(path, np.int64),
+        *[np.ascontiguousarray(getattr(bed, c)) for c in "abcd"],
+        wx,
+        wy,
+        -bed.a0_m + bed.relief_bound(),
+        (wx**2 * np.hypot(bed.a, bed.b)).sum(-1),
+        (wy**2 * np.hypot(bed.c, bed.d)).sum(-1),
+    ]
+    n = len(path)
+    outs = [np.full(n, -7.0), np.zeros(n, np.uint8), np.zeros(n, np.uint8), np.full(n, -7.0)]
+    sizes = np.array([a.size for a in arrays] + [x.size for x in outs])
+    return arrays, outs, sizes
+
+
+def _march(bed, n, P, arrays, outs, sizes):
+    march = multibeam._march_library()
+    return march(
+        n,
+        P,
+        *arrays[:3],
+        bed.a.shape[1],
+        *arrays[3:],
+        bed.a0_m,
+        bed.period_x_m,
+        bed.period_y_m,
+        100.0,
+        1e-9,
+        60,
+        *outs,
+        sizes,
+        sizes.size,
+    )
+
+
+def test_c_march_stays_inside_its_buffers_whatever_python_passes():
+    """The march checks every buffer's length and every path index before it reads: a seabed
+    whose coefficients were swapped for shorter ones behind the constructor's back, a path index
+    past the seabeds, a sizes array of the wrong length, or a path count beyond the arrays are
+    refused with nothing written; consistent arguments give the ranges of ray_ranges."""
+    bed = HarmonicSeabed.draw(2, (0, 1, 2))
+    o = np.tile([0.0, 0.0, -10.0], (3, 1))
+    e = np.tile([0.2, 0.1, -1.0], (3, 1)) / np.linalg.norm([0.2, 0.1, -1.0])
+    path = np.arange(3)
+    arrays, outs, sizes = _march_args(bed, o, e, path)
+    assert _march(bed, 3, 3, arrays, outs, sizes) == 0
+    np.testing.assert_allclose(outs[0], bed.ray_ranges(o, e, 100.0)[0], rtol=1e-13)
+    for broken, status in (
+        (lambda a, s: a.__setitem__(2, np.array([0, 1, 3])), -2),  # path 3 of 3 seabeds
+        (lambda a, s: a.__setitem__(4, a[4][:1].copy()), -1),  # b of one path, a of three
+        (lambda a, s: a.__setitem__(7, a[7][:1].copy()), -1),  # w_l of one harmonic
+    ):
+        arrays, outs, sizes = _march_args(bed, o, e, path)
+        broken(arrays, sizes)
+        sizes = np.array([a.size for a in arrays] + [x.size for x in outs])
+        assert _march(bed, 3, 3, arrays, outs, sizes) == status
+        assert np.all(outs[0] == -7.0) and np.all(outs[3] == -7.0)  # nothing written
+    arrays, outs, sizes = _march_args(bed, o, e, path)
+    assert _march(bed, 3, 4, arrays, outs, sizes) == -1  # 4 paths claimed, arrays of 3
+    assert _march(bed, 3, 3, arrays, outs, sizes[:-1]) == -1  # a sizes array too short
+    assert _march(bed, 3, 0, arrays, outs, sizes) == -3
+    assert np.all(outs[0] == -7.0)
+    # through the class: coefficients swapped behind the constructor's back
+    object.__setattr__(bed, "b", bed.b[:1])
+    with pytest.raises(ConfigError, match=r"refused its arguments.*buffer shorter"):
+        bed.ray_ranges(o, e, 100.0)
+
+
 def test_a_missing_c_march_is_an_error_that_says_how_to_build_it(monkeypatch):
     monkeypatch.setattr(multibeam, "_MARCH_LIBRARY", "_no_such_library")
     multibeam._march_library.cache_clear()

@@ -197,3 +197,115 @@ def test_a_missing_c_library_is_an_error_that_says_how_to_build_it(monkeypatch):
             )
     finally:
         seabed._shift_library.cache_clear()
+
+
+def test_a_basis_with_more_unknowns_than_feet_is_refused_at_once():
+    """With m feet per image a fit needs more valid feet than functions: at most 15 harmonics
+    (61 functions) for seed 004's 64 beams. 16 harmonics used to be fitted in numpy and come
+    back not ok on every path, 1e5 ended in a 2.3 TiB allocation and 1e9 never returned."""
+    pts = np.random.default_rng(0).normal(size=(2, 64, 3))
+    valid = np.ones((2, 64), bool)
+    grad, ok = fit_slopes(pts, valid, SlopeBasis("harmonic", 20.0, 20.0, 15))
+    assert ok.all() and np.isfinite(grad).all()
+    for k in (16, 10**5, 10**9):
+        with pytest.raises(NavInputError, match=rf"harmonics = {k} .*at most 15 harmonics"):
+            fit_slopes(pts, valid, SlopeBasis("harmonic", 20.0, 20.0, k))
+    with pytest.raises(NavInputError, match="'quadratic', 6 functions"):
+        fit_slopes(pts[:, :6], valid[:, :6], SlopeBasis("quadratic"))
+    with pytest.raises(NavInputError, match=r"harmonics = 2\.5"):
+        SlopeBasis("harmonic", 20.0, 20.0, 2.5)
+    L = np.full((1, 2, 2), 20.0)  # 4 beams: the seed's harmonic basis has 9 functions
+    with pytest.raises(NavInputError, match=r"harmonics = 2 .*4 beam feet"):
+        shift_estimate(L, L, BeamGeometry.uniform((-50, -60), (0, 10), 2, 2), np.zeros((1, 2)))
+
+
+def test_non_finite_poses_and_slopes_are_refused_in_words():
+    """A NaN position used to end in numpy's LinAlgError from the fit, a NaN slope in a silent
+    NaN shift; a NaN slope or foot on a beam without echo takes no part and changes nothing."""
+    L0, L1, att0, att1, echo0, echo1, pos, _ = _images(3)
+    kw = {"echo": echo0, "next_echo": echo1}
+    want = shift_estimate(L0, L1, GEO, att0, att1, position_m=pos, **kw)
+    for name, bad in (("position_m", pos), ("attitude_rad", att0)):
+        bad = bad.copy()
+        bad[5, 1] = np.nan
+        args = {"position_m": pos, "attitude_rad": att0} | {name: bad}
+        with pytest.raises(NavInputError, match=rf"{name}: non-finite value nan at index \(5, 1\)"):
+            shift_estimate(L0, L1, GEO, next_attitude_rad=att1, **args, **kw)
+    a1 = att1.copy()
+    a1[0, 0] = np.inf
+    with pytest.raises(NavInputError, match="next_attitude_rad: non-finite"):
+        shift_estimate(L0, L1, GEO, att0, a1, reading="turning", **kw)
+    with pytest.raises(NavInputError, match="commanded_shift_m: non-finite"):
+        shift_estimate(L0, L1, GEO, att0, commanded_shift_m=np.full((P, 3), np.nan), **kw)
+    for name, value in (("sigma_range_m", np.nan), ("fallback_var_m2", 0.0), ("rcond", 1.0)):
+        with pytest.raises(NavInputError, match=rf"{name} = "):
+            shift_estimate(L0, L1, GEO, att0, **{name: value}, **kw)
+    slopes = np.zeros((P, 8, 8, 3))
+    slopes[..., 2] = 1.0
+    use = echo0 & echo1
+    p, i, j = np.argwhere(use)[0]
+    bad = slopes.copy()
+    bad[p, i, j, 0] = np.nan
+    with pytest.raises(NavInputError, match=r"slopes \(at a beam with an echo in both images\)"):
+        shift_estimate(L0, L1, GEO, att0, slopes=bad, **kw)
+    p, i, j = np.argwhere(~use)[0]
+    masked = slopes.copy()
+    masked[p, i, j] = np.nan
+    got = shift_estimate(L0, L1, GEO, att0, slopes=masked, **kw)
+    ref = shift_estimate(L0, L1, GEO, att0, slopes=slopes, **kw)
+    assert np.array_equal(got.shift_m, ref.shift_m) and np.isfinite(got.shift_m).all()
+    # a foot without echo in image k is not part of the fit: its NaN range changes nothing
+    assert np.isnan(L0[~echo0]).all()
+    assert np.isfinite(want.shift_m).all()
+    with pytest.raises(NavInputError, match="fit_slopes: points \\(at a valid foot\\)"):
+        pts = np.zeros((1, 64, 3))
+        pts[0, 7, 2] = np.nan
+        fit_slopes(pts, np.ones((1, 64), bool), SlopeBasis.seed004())
+
+
+def test_the_c_entry_points_refuse_buffers_shorter_than_their_sizes_say():
+    """Whatever the caller passes, the C reads and writes only inside the buffers it is told of:
+    a harmonic count whose basis size overflows an int (K = 2^30: (int)(1 + 4 K) was 1, then
+    the basis loop wrote 4 K rows into a buffer of one), a points buffer of one path for two, a
+    sizes array of the wrong length; nothing is written."""
+    lib = seabed._shift_library()
+    P_, m = 2, 64
+    pts = np.random.default_rng(1).normal(size=(P_, m, 3))
+    valid = np.ones((P_, m), np.uint8)
+
+    def fit(K, points=pts, kind=0, n_sizes=5):
+        grad = np.full((P_, m, 3), -7.0)
+        ok = np.full(P_, 9, np.uint8)
+        tn = np.full(P_, 9, np.uint8)
+        sizes = np.array([points.size, valid.size, grad.size, ok.size, tn.size])
+        st = lib.fit(P_, m, points, valid, kind, K, 20.0, 20.0, 1e4, grad, ok, tn, sizes, n_sizes)
+        return st, grad, ok
+
+    st, grad, ok = fit(2)
+    assert st >= 0 and ok.all()
+    for status, kw in (
+        (-2, {"K": 2**30}),
+        (-2, {"K": 16}),
+        (-2, {"K": 0}),
+        (-2, {"K": 2, "kind": 3}),
+        (-3, {"K": 2, "points": np.ascontiguousarray(pts[:1])}),
+        (-3, {"K": 2, "n_sizes": 4}),
+    ):
+        st, grad, ok = fit(**kw)
+        assert st == status, kw
+        assert np.all(grad == -7.0) and np.all(ok == 9), kw
+    L = np.full((P_, m), 20.0)
+    e = np.tile([0.0, 0.0, -1.0], (P_, m, 1))
+    outs = [np.full((P_, 3), -7.0), np.zeros((P_, 3, 3)), np.zeros(P_, np.int64)]
+    outs += [np.zeros(P_, np.int64), np.zeros(P_, np.uint8), np.zeros(P_)]
+    for short, status in ((None, 0), ("grad", -3), ("cmd", -3)):
+        grad = e.copy() if short != "grad" else np.ascontiguousarray(e[:1])
+        cmd = np.zeros((P_, 3)) if short != "cmd" else np.zeros((1, 3))
+        ins = [grad, e, L, L, valid, np.ones(P_, np.uint8)]
+        sizes = np.array([a.size for a in ins[:2]] + [0] + [a.size for a in ins[2:]] + [cmd.size])
+        sizes = np.concatenate([sizes, [a.size for a in outs]])
+        outs[0][:] = -7.0
+        st = lib.shift(P_, m, *ins[:2], None, *ins[2:], 1, 0.1, 1e6, 1e-4, 1e-9,
+                       cmd.ctypes.data, *outs, sizes, 14)  # fmt: skip
+        assert st == status, short
+        assert np.all(outs[0] == -7.0) != (status == 0), short

@@ -129,6 +129,35 @@ def test_near_beacon_ekf_breaks_down_at_the_documented_spread(tmp_path):
     assert m["ekf_starts_to_lose_m2"] == 10.0
 
 
+def test_near_beacon_cmnf_trained_on_few_paths_stays_on_the_bound_or_is_flagged(tmp_path):
+    """2000 training paths, S_0 = 5 I, seed 2. Every filter that follows the path has J-bar at
+    its PCRB level 3 + trace S_0 = 18 (pinned at k = 1). The paper's unclipped CMNF does not:
+    a test path passing under the beacon's x gets a tangent residual beyond its training paths
+    and a correction of hundreds of metres (J-bar 88), which the report names; the winsorised
+    CMNF stays on the bound and no warning is given."""
+    over = [
+        "filters.train_paths=2000",
+        "report.figures=false",
+        "sweep.initial_variance_m2=[5.0]",
+        "report.documented_variance_m2=5.0",
+    ]
+    cm = {}
+    for clip in ("6.0", "0.0"):
+        out = tmp_path / f"clip{clip}"
+        o = [*over, f"filters.clip_sigmas={clip}"]
+        run("paper-004/near-beacon", n_runs=4000, seed=2, out_dir=out, overrides=o, progress=False)
+        m = _metrics(out)
+        f = next(f for f in m["cases"][0]["filters"] if f["filter"] == "CMNF")
+        cm[clip] = (f, [w for w in m["warnings"] if "CMNF: on the test paths" in w])
+    f, w = cm["6.0"]
+    assert f["j_bar_m2"] <= 1.05 * f["pcrb_level_m2"], f
+    assert f["worse_than_prediction"] == [] and w == []
+    f, w = cm["0.0"]
+    assert f["j_bar_m2"] > 2 * f["pcrb_level_m2"], f
+    assert f["worse_than_prediction"] and len(w) == 1
+    assert "its correction made the estimate worse than its own prediction" in w[0]
+
+
 def test_beacon_straight_above_the_path_degrades_with_a_warning_and_no_nan(tmp_path):
     base = tmp_path / "base"
     over = [*FAST, "path.duration_s=30.0", "sweep.bearing_sigma_deg=[0.5]"]
@@ -206,6 +235,23 @@ def _bauv(tmp_path, name, *args):
             "paper-004/near-beacon",
             ["--set", "report.documented_variance_m2=7.0"],
             "report.documented_variance_m2 = 7.0",
+        ),
+        (
+            "paper-004/near-beacon",
+            [
+                "--set",
+                "beacons=[[500.0, 100.0, 0.0], [500.0, -100.0, 0.0], [-100.0, 100.0, 0.0], "
+                "[-5.0, -5.0, 0.0], [100.0, 100.0, 0.0]]",
+                "--set",
+                "filters.train_paths=11",
+            ],
+            "filters.train_paths = 11: with 5 beacons a CMNF gain row has 11 unknowns",
+        ),
+        ("paper-004/table-1", ["--set", "filters.clip_sigmas=-1.0"], "filters.clip_sigmas"),
+        (
+            "paper-004/table-1-seabed",
+            ["--set", "multibeam.beams_elevation=3", "--set", "multibeam.beams_azimuth=3"],
+            "3 x 3: Appendix A's harmonic fit of the seabed prediction has 9 unknowns",
         ),
     ],
 )
