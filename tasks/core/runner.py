@@ -577,7 +577,10 @@ def check_executor(kind: str, workers: int, address: str | None) -> None:
 
     Args:
         kind: ``"local"`` or ``"dask"``.
-        workers: worker processes, an integer >= 1.
+        workers: worker processes on this machine, an integer from 1 to
+            :func:`tasks.core.workers.usable_cpus` (each computes one block at a time on one
+            CPU; more would only share the CPUs and multiply the memory held). Not used with an
+            ``address``: the scheduler's workers compute the blocks.
         address: a Dask scheduler address ``[scheme://]host:port`` or ``None``.
 
     Raises:
@@ -588,6 +591,12 @@ def check_executor(kind: str, workers: int, address: str | None) -> None:
     if kind not in EXECUTORS:
         raise ConfigError(f"executor = {kind!r}: must be 'local' or 'dask'")
     if address is None:
+        cpus = workers_mod.usable_cpus()
+        if workers > cpus:
+            raise ConfigError(
+                f"workers = {workers}: at most {cpus} on this machine (the CPUs this process may "
+                "run on; each worker computes one block on one CPU)"
+            )
         return
     if kind == "local":
         raise ConfigError(
@@ -616,7 +625,8 @@ def make_executor(
 
     Args:
         kind: ``"local"`` or ``"dask"``.
-        workers: worker processes (local, and local Dask cluster), >= 1.
+        workers: worker processes (local, and local Dask cluster), >= 1; the runner asks for no
+            more than the blocks it has to compute.
         address: a Dask scheduler address (``tcp://host:8786``) or ``None``.
         preload: modules local workers import before they are forked (the experiment's), see
             :func:`tasks.core.workers.pool_context`.
@@ -790,7 +800,8 @@ def execute(
         plan: the batch.
         out_dir: its prepared folder (see :func:`prepare_out_dir`).
         executor: ``"local"`` or ``"dask"``.
-        workers: number of worker processes.
+        workers: number of worker processes; no more than the blocks still to compute are
+            started (one block left: it is computed in this process).
         address: Dask scheduler address, if any.
         progress: show a progress bar on a terminal.
         pool: an executor already opened by :func:`make_executor` (then ``executor``,
@@ -808,6 +819,8 @@ def execute(
     from tqdm import tqdm
 
     todo = [i for i in range(len(plan.blocks)) if not _saved(out_dir, i)]
+    # a worker computes one block at a time: more workers than blocks would only be forked idle
+    workers = max(1, min(workers, len(todo)))
     done_runs = plan.n_runs - sum(len(plan.blocks[i]) for i in todo)
     data = to_plain(plan.scenario)
     failures: list[str] = []
@@ -978,8 +991,9 @@ def run(
         plan = plan_batch(name, n_runs, 0 if seed is None else seed, overrides, scenario_files)
         out = Path(out_dir) if out_dir is not None else default_out_dir(name, plan.seed)
     if executor == "local" or address is None:
-        # this machine's workers each hold a block at the same time
-        check_memory(plan.experiment, plan.scenario, plan.n_runs, workers)
+        # this machine's workers each hold a block at the same time (no more workers than blocks
+        # are started)
+        check_memory(plan.experiment, plan.scenario, plan.n_runs, min(workers, len(plan.blocks)))
     with contextlib.ExitStack() as stack:
         pool = None
         if address is not None:
