@@ -329,7 +329,10 @@ def open_for_reading(path: str | Path) -> BinaryIO:
 
 
 def find_link(root: str | Path) -> Path | None:
-    """The first symbolic link inside folder ``root`` (``root`` itself may be one), or None.
+    """A symbolic link inside folder ``root`` (``root`` itself may be one), or None.
+
+    The folders are listed as the file system gives them (not sorted: a run folder may hold two
+    million block files), so of several links any one is named.
 
     Raises:
         OSError: if a folder cannot be listed.
@@ -338,7 +341,7 @@ def find_link(root: str | Path) -> Path | None:
     while stack:
         folder = stack.pop()
         with os.scandir(folder) as entries:
-            for entry in sorted(entries, key=lambda e: e.name):
+            for entry in entries:
                 if entry.is_symlink():
                     return folder / entry.name
                 if entry.is_dir(follow_symlinks=False):
