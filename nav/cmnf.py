@@ -47,6 +47,7 @@ Gains are plain data: :meth:`CmnfGains.save` writes an ``.npz`` read back with
 
 from __future__ import annotations
 
+import io
 import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -236,24 +237,30 @@ class CmnfGains:
         """Number of steps N."""
         return len(self.F)
 
-    def save(self, path: str | Path) -> Path:
-        """Write the gains as an ``.npz`` of plain arrays (the info as a JSON string)."""
-        path = Path(path)
+    def to_bytes(self) -> bytes:
+        """The gains as the bytes of an ``.npz`` of plain arrays (the info as a JSON string), as
+        :meth:`save` writes them (for a caller that writes files its own way)."""
         clip = {}
         if self.beta_lo is not None and self.beta_hi is not None:
             clip = {"beta_lo": self.beta_lo, "beta_hi": self.beta_hi}
-        with path.open("wb") as fh:
-            np.savez(
-                fh,
-                F=self.F,
-                f=self.f,
-                H=self.H,
-                h=self.h,
-                p_tilde=self.p_tilde,
-                p_hat=self.p_hat,
-                info=np.array(json.dumps(self.info, sort_keys=True)),
-                **clip,
-            )
+        buf = io.BytesIO()
+        np.savez(
+            buf,
+            F=self.F,
+            f=self.f,
+            H=self.H,
+            h=self.h,
+            p_tilde=self.p_tilde,
+            p_hat=self.p_hat,
+            info=np.array(json.dumps(self.info, sort_keys=True)),
+            **clip,
+        )
+        return buf.getvalue()
+
+    def save(self, path: str | Path) -> Path:
+        """Write the gains as an ``.npz`` of plain arrays (the info as a JSON string)."""
+        path = Path(path)
+        path.write_bytes(self.to_bytes())
         return path
 
     @classmethod

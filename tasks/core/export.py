@@ -22,9 +22,7 @@ back as NaN).
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +32,7 @@ import numpy as np
 
 from bauv_sim.errors import BauvSimError
 from tasks.core import store
-from tasks.core.files import create_beside
+from tasks.core.files import atomic_write_bytes
 from tasks.core.lazy import LazyModule
 
 pa = LazyModule("pyarrow")  # imported when run data is written or read
@@ -198,16 +196,11 @@ def write_parquet(
         raise ExportError(f"field names {dup} occur twice (a column name and a component clash)")
     schema = pa.schema(fields, metadata={**metadata, FORMAT_KEY: FORMAT_VERSION})
     table = pa.Table.from_arrays(arrays, schema=schema)
-    out = Path(path)
-    fd, tmp = create_beside(out)
-    os.close(fd)
-    try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, out)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
+    # encoded in memory, then written atomically by tasks.core.files: a full disk leaves no
+    # partial file and raises a plain OSError, and nothing is written through a symbolic link
+    buf = pa.BufferOutputStream()
+    pq.write_table(table, buf)
+    atomic_write_bytes(Path(path), memoryview(buf.getvalue()))
 
 
 def _group_meta(path: Path, field: pa.Field) -> dict[str, Any]:

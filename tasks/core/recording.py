@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim.frames import quat_wxyz_from_R, quat_wxyz_to_xyzw
+from tasks.core.files import atomic_write_bytes
 from tasks.core.lazy import LazyModule
 
 rr = LazyModule("rerun")  # imported when a recording is written or read, not before
@@ -39,8 +40,13 @@ COLORS: dict[str, Color] = {
 class Recording:
     """A rerun recording written to a file.
 
+    The recording is encoded into memory as it is logged and written when it is closed, atomically
+    (:func:`tasks.core.files.atomic_write_bytes`): a recording is whole or absent (never the
+    truncated file a full disk leaves when rerun writes it as it goes), a full disk raises a plain
+    :class:`OSError`, and a run folder's recording is never written through a symbolic link.
+
     Args:
-        path: the ``.rrd`` file to write.
+        path: the ``.rrd`` file to write (on :meth:`close`).
         app_id: rerun application id (e.g. the experiment name).
         recording_id: a stable id (e.g. ``"<experiment>/seed<s>/run<i>"``), so that the same run
             gives the same recording id.
@@ -50,7 +56,7 @@ class Recording:
         self.path = Path(path)
         # rerun application ids are entry names: no "/"
         self.rec = rr.RecordingStream(app_id.replace("/", "-"), recording_id=recording_id)
-        self.rec.save(str(self.path))
+        self._stream = self.rec.binary_stream()
         # the world frame is declared once: x east, y north, z up
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
 
@@ -278,9 +284,16 @@ class Recording:
         )
 
     def close(self) -> None:
-        """Flush and close the file."""
+        """Flush the recording and write its file.
+
+        Raises:
+            OSError: if the file cannot be written (nothing is left at its name).
+        """
         self.rec.flush()
-        self.rec.disconnect()
+        data = self._stream.read(flush=True) or b""
+        self.rec.disconnect()  # the stream's end
+        data += self._stream.read(flush=False) or b""
+        atomic_write_bytes(self.path, data)
 
 
 def covariance_ellipsoids(

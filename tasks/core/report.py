@@ -103,7 +103,6 @@ def write_tables(out_dir: Path, tables: Sequence[Table], heading: str = "") -> l
     files = ["tables.md"]
     for t in tables:
         rel = f"tables/{t.file_slug()}.csv"
-        (out_dir / "tables").mkdir(exist_ok=True)
         atomic_write_text(out_dir / rel, t.to_csv())
         files.append(rel)
     return files

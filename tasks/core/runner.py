@@ -20,16 +20,22 @@ there is neither; :mod:`tasks.core.workers`) and ``dask`` (``distributed.Client(
 local cluster with ``workers`` single-threaded processes when no address is given).
 
 The run folder holds ``run.json`` (``state`` is ``incomplete`` until the report is written, then
-``complete``), ``scenario.toml`` (the resolved scenario: ``bauv run NAME --scenario FILE`` repeats
-it), ``blocks/`` and the report's files.
+``complete``; ``record_sha256`` is the sha256 of its other fields), ``scenario.toml`` (the
+resolved scenario: ``bauv run NAME --scenario FILE`` repeats it), ``blocks/`` and the report's
+files. Every file is written through :mod:`tasks.core.files` with the run folder
+:func:`~tasks.core.files.confined`: atomically, and never through a symbolic link inside it.
 
-What ``--resume`` checks before it writes anything (any failure is a :class:`ConfigError`):
-``run.json`` is whole and every field is there with its type (format version, experiment, seed,
-runs, block size, number of blocks, the sha256 of ``scenario.toml``, the store version); the
-request agrees with it (experiment, seed, runs; no new scenario); ``scenario.toml`` still has its
-recorded sha256 and gives the recorded block layout; and every saved block's bytes have their
-recorded sha256, decode, and carry a header (format version, experiment, seed, block index, run
-indices, scenario sha256) that agrees with the batch. No file of a run folder is ever unpickled.
+What ``--resume`` checks before it writes anything (any failure is a :class:`ConfigError`): the
+folder holds no symbolic link (a link to a file or folder outside would have the batch read or
+write there); ``run.json`` is whole, at most :data:`MAX_RECORD_BYTES`, every field is there with
+its type (format version, experiment, seed, runs, block size, number of blocks, the sha256 of
+``scenario.toml``, the store version, state) and its ``record_sha256`` is theirs (an edited run
+count or seed is refused); the request agrees with it (experiment, seed, runs; no new scenario);
+``scenario.toml`` still has its recorded sha256 and gives the recorded block layout; and every
+saved block is at most the size such a block can hold (:func:`block_file_limit`, checked before a
+byte is read), its bytes have their recorded sha256 (read in chunks), decode, and carry a header
+(format version, experiment, seed, block index, run indices, scenario sha256) that agrees with the
+batch. No file of a run folder is ever unpickled.
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ import os
 import re
 import threading
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +60,7 @@ import tomllib
 from bauv_sim.config import Config, load_config, to_plain, validate
 from bauv_sim.errors import ConfigError
 from bauv_sim.rng import check_seed
-from tasks.core import registry, store
+from tasks.core import files, registry, store
 from tasks.core import workers as workers_mod
 from tasks.core.errors import BatchFailed, BatchInterrupted, OutputError
 from tasks.core.files import atomic_write_bytes, os_error_text
@@ -65,9 +71,10 @@ SCENARIO_FILE = "scenario.toml"
 BLOCK_DIR = "blocks"
 BLOCK_SUFFIX = ".zip"
 DIGEST_SUFFIX = ".sha256"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 """Version of the run folder's layout. 1 kept pickled blocks (never read: a crafted pickle runs
-code when loaded); 2 keeps plain-data blocks with a sha256 file each and the scenario's sha256."""
+code when loaded); 2 keeps plain-data blocks with a sha256 file each and the scenario's sha256;
+3 adds ``record_sha256`` to ``run.json`` (the sha256 of its other fields)."""
 STATES = ("incomplete", "complete")
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
@@ -91,6 +98,11 @@ class BatchPlan:
     n_runs: int
     blocks: tuple[tuple[int, ...], ...]
     scenario_sha256: str
+    block_file_limit_b: int = field(init=False, repr=False, compare=False)
+    """The largest block file this batch can write or read, bytes (:func:`block_file_limit`)."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "block_file_limit_b", block_file_limit(self))
 
 
 def plan_batch(
@@ -141,6 +153,41 @@ MAX_BLOCKS = 1_000_000
 """The most blocks in a batch (each is two files in ``blocks/``)."""
 MEMORY_FRACTION = 0.5
 """Share of the machine's physical memory a batch may be estimated to use."""
+
+
+BLOCK_FILE_BASE_B = 64 * 2**20
+"""What any block file may hold besides its runs (manifest, per-tick sums, histograms), bytes."""
+BLOCK_FILE_PER_RUN_B = 2**20
+"""What a block file may hold per run, bytes: 9x the most measured per run of the experiments
+that do not estimate their memory, at their defaults (vehicle/autopilot 110 kB, paper-001/replica
+51 kB, paper-003/test-1 22 kB)."""
+BLOCK_FILE_MEMORY_FACTOR = 8
+"""Multiple of a block's estimated memory (the per-block terms of :meth:`Experiment.memory`) a
+block file may hold: the estimate of a mission counts one vehicle (500 B per control tick), and
+mission/swarm with 4 followers writes 2.4 kB per tick (4.8x)."""
+MAX_RECORD_BYTES = 2**16
+"""The largest ``run.json`` read (it is about 400 bytes)."""
+MAX_SCENARIO_BYTES = 2**24
+"""The largest ``scenario.toml`` read (a few kB; way-point and beacon lists make it longer)."""
+
+
+def block_file_limit(plan: BatchPlan) -> int:
+    """The largest block file a batch can have written, bytes: what its largest block may
+    legitimately hold, from the plan alone (runs per block, the scenario's memory estimate).
+
+    ``BLOCK_FILE_BASE_B + BLOCK_FILE_PER_RUN_B * runs per block + BLOCK_FILE_MEMORY_FACTOR *
+    (the per-block terms of Experiment.memory)``. A block file above it is refused before a
+    byte of it is read (a corrupt or planted file is not read whole into memory).
+
+    Args:
+        plan: the batch.
+    """
+    terms = plan.experiment.memory(plan.scenario, plan.n_runs)
+    per_block = sum(t.bytes for t in terms if t.per_block)
+    runs = max(len(b) for b in plan.blocks)
+    return int(
+        BLOCK_FILE_BASE_B + BLOCK_FILE_PER_RUN_B * runs + BLOCK_FILE_MEMORY_FACTOR * per_block
+    )
 
 
 def memory_limit_bytes() -> float:
@@ -238,7 +285,7 @@ def _saved(out_dir: Path, index: int) -> bool:
 def _save_block(out_dir: Path, index: int, payload: bytes) -> None:
     """Write a block's bytes, then its sha256 (a crash in between leaves it unsaved)."""
     path = _block_path(out_dir, index)
-    _digest_path(out_dir, index).unlink(missing_ok=True)
+    files.remove(_digest_path(out_dir, index))
     atomic_write_bytes(path, payload)
     atomic_write_text(_digest_path(out_dir, index), f"{_sha256(payload)}  {path.name}\n")
 
@@ -264,8 +311,44 @@ def _same(a: Any, b: Any) -> bool:
     return a == b
 
 
+HASH_CHUNK_B = 2**20
+"""Bytes read at a time to hash a block file."""
+
+
+def _file_sha256(fh: Any) -> str:
+    """sha256 (hex) of an open binary file, read in chunks of :data:`HASH_CHUNK_B` (memory stays
+    at one chunk whatever the file's size)."""
+    h = hashlib.sha256()
+    buf = bytearray(HASH_CHUNK_B)
+    view = memoryview(buf)
+    while n := fh.readinto(buf):
+        h.update(view[:n])
+    return h.hexdigest()
+
+
+def _read_small(path: Path, limit: int) -> bytes:
+    """A small file's bytes, at most ``limit`` (one more is read to tell a longer file), without
+    following a link.
+
+    Raises:
+        OSError: if it cannot be read.
+        ConfigError: if it is longer than ``limit``.
+    """
+    with files.open_for_reading(path) as fh:
+        size = os.fstat(fh.fileno()).st_size
+        # read() allocates what it is asked for: ask for the file's size, not the limit
+        data = b"" if size > limit else fh.read(size + 1)
+    if size > limit or len(data) > limit:
+        raise ConfigError(f"{str(path)!r}: longer than {limit} bytes; not a file of a run folder")
+    return data
+
+
 def load_block(plan: BatchPlan, out_dir: Path, index: int) -> Any:
-    """Read back a saved block, checking its sha256, its encoding and its header.
+    """Read back a saved block, checking its size, its sha256, its encoding and its header.
+
+    The size is checked against :attr:`BatchPlan.block_file_limit_b` before anything is read,
+    and the sha256 is computed reading the file in chunks; only a block that passes both is
+    decoded (from the same open file).
 
     Args:
         plan: the batch.
@@ -279,25 +362,41 @@ def load_block(plan: BatchPlan, out_dir: Path, index: int) -> Any:
         ConfigError: naming the file and what is wrong.
     """
     path, dpath = _block_path(out_dir, index), _digest_path(out_dir, index)
+    line_limit = 64 + 2 + len(path.name) + 1
     try:
-        recorded = dpath.read_bytes()
-        data = path.read_bytes()
+        recorded = _read_small(dpath, line_limit)
+        fh = files.open_for_reading(path)
     except OSError as exc:
         raise ConfigError(f"{exc.filename!r}: cannot read it ({exc.strerror})") from None
-    match = re.fullmatch(rb"([0-9a-f]{64})  " + re.escape(path.name.encode()) + rb"\n", recorded)
-    if match is None:
-        raise ConfigError(f"{str(dpath)!r}: not a line '<sha256>  {path.name}'")
-    actual, expected_digest = _sha256(data), match.group(1).decode("ascii")
-    if actual != expected_digest:
-        raise ConfigError(
-            f"{str(path)!r}: its sha256 is {actual[:16]}... but {dpath.name} records "
-            f"{expected_digest[:16]}...: the block was changed or damaged (delete both files to "
-            "compute it again)"
+    with fh:
+        match = re.fullmatch(
+            rb"([0-9a-f]{64})  " + re.escape(path.name.encode()) + rb"\n", recorded
         )
-    try:
-        stored = store.loads(data, repr(str(path)))
-    except store.StoreError as exc:
-        raise ConfigError(str(exc)) from None
+        if match is None:
+            raise ConfigError(f"{str(dpath)!r}: not a line '<sha256>  {path.name}'")
+        size = os.fstat(fh.fileno()).st_size
+        if size > plan.block_file_limit_b:
+            raise ConfigError(
+                f"{str(path)!r}: {size} bytes, more than a block of this batch can hold "
+                f"({plan.block_file_limit_b} bytes for {len(plan.blocks[index])} runs); the block "
+                "was changed or damaged (delete both files to compute it again)"
+            )
+        try:
+            actual = _file_sha256(fh)
+            fh.seek(0)
+        except OSError as exc:
+            raise ConfigError(f"{str(path)!r}: cannot read it ({os_error_text(exc)})") from None
+        expected_digest = match.group(1).decode("ascii")
+        if actual != expected_digest:
+            raise ConfigError(
+                f"{str(path)!r}: its sha256 is {actual[:16]}... but {dpath.name} records "
+                f"{expected_digest[:16]}...: the block was changed or damaged (delete both files "
+                "to compute it again)"
+            )
+        try:
+            stored = store.load_file(fh, repr(str(path)))
+        except store.StoreError as exc:
+            raise ConfigError(str(exc)) from None
     expected = _block_header(plan, index)
     if set(stored.header) != set(expected):
         raise ConfigError(
@@ -326,8 +425,23 @@ def _run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
     }
 
 
+RECORD_DIGEST = "record_sha256"
+"""The field of ``run.json`` that holds the sha256 of its other fields (:func:`record_digest`)."""
+
+
+def record_digest(record: dict[str, Any]) -> str:
+    """sha256 (hex) of ``run.json``'s fields other than :data:`RECORD_DIGEST`: of their JSON with
+    sorted keys, no spaces and ASCII escapes (so re-indenting the file does not change it, any
+    edit of a value does)."""
+    fields = {k: v for k, v in record.items() if k != RECORD_DIGEST}
+    text = json.dumps(fields, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return _sha256(text.encode("ascii"))
+
+
 def _write_run_record(out_dir: Path, plan: BatchPlan, state: str) -> None:
-    atomic_write_text(out_dir / RUN_FILE, json.dumps(_run_record(plan, state), indent=2) + "\n")
+    record = _run_record(plan, state)
+    record[RECORD_DIGEST] = record_digest(record)
+    atomic_write_text(out_dir / RUN_FILE, json.dumps(record, indent=2) + "\n")
 
 
 def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
@@ -354,12 +468,14 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
                 )
         created = [p for p in (out_dir, *out_dir.parents) if not p.exists()]
         out_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(out_dir / SCENARIO_FILE, text)
-        _write_run_record(out_dir, plan, "incomplete")
+        with files.confined(out_dir):
+            atomic_write_text(out_dir / SCENARIO_FILE, text)
+            _write_run_record(out_dir, plan, "incomplete")
     except OSError as exc:
-        for path in (out_dir / SCENARIO_FILE, out_dir / RUN_FILE):
-            with contextlib.suppress(OSError):
-                path.unlink(missing_ok=True)
+        with files.confined(out_dir):
+            for path in (out_dir / SCENARIO_FILE, out_dir / RUN_FILE):
+                with contextlib.suppress(OSError):
+                    files.remove(path)
         for folder in created:  # deepest first
             with contextlib.suppress(OSError):
                 folder.rmdir()
@@ -372,7 +488,9 @@ def _read_record(out_dir: Path) -> dict[str, Any]:
     if not path.is_file():
         raise ConfigError(f"out = {str(out_dir)!r}: no {RUN_FILE}; nothing to resume")
     try:
-        record = json.loads(path.read_bytes().decode("utf-8"))
+        record = json.loads(_read_small(path, MAX_RECORD_BYTES).decode("utf-8"))
+    except ConfigError as exc:
+        raise ConfigError(f"--resume: {exc}") from None
     except (OSError, ValueError, RecursionError) as exc:
         what = " ".join(str(exc).split())
         raise ConfigError(f"--resume: {str(path)!r} is not valid JSON ({what})") from None
@@ -405,17 +523,36 @@ def plan_resume(
     Nothing is written. See the module docstring for the checks.
 
     Raises:
-        ConfigError: if the folder is not a batch of ``name``, the request contradicts it, or a
-            file of it was changed, damaged or does not belong to it.
+        ConfigError: if the folder is not a batch of ``name``, holds a symbolic link, the request
+            contradicts it, or a file of it was changed, damaged or does not belong to it.
     """
+    try:
+        link = files.find_link(out_dir) if out_dir.is_dir() else None
+    except OSError as exc:
+        raise ConfigError(
+            f"--resume: cannot read {str(out_dir)!r} ({os_error_text(exc)})"
+        ) from None
+    if link is not None:
+        raise ConfigError(
+            f"--resume: {str(link)!r} is a symbolic link: a run folder holds its own files only "
+            "(bauv would read or write where it points); remove it, or copy what it points to "
+            "in its place"
+        )
     record = _read_record(out_dir)
     where = str(out_dir / RUN_FILE)
     version = _record_field(record, out_dir, "format_version", int)
     if version != FORMAT_VERSION:
         raise ConfigError(
             f"--resume: {where!r}: format_version = {version}: this bauv-sim resumes format "
-            f"{FORMAT_VERSION} only (format 1 kept pickled blocks, which are never read); start "
-            "the batch again"
+            f"{FORMAT_VERSION} only (format 1 kept pickled blocks, which are never read; format "
+            "2 has no sha256 of run.json's fields); start the batch again"
+        )
+    recorded_digest = _record_field(record, out_dir, RECORD_DIGEST, str)
+    if recorded_digest != record_digest(record):
+        raise ConfigError(
+            f"--resume: {where!r} was changed since the batch started (the sha256 of its fields "
+            f"is {record_digest(record)[:16]}..., its {RECORD_DIGEST} records "
+            f"{recorded_digest[:16]}...); restore it or start a new batch"
         )
     experiment = _record_field(record, out_dir, "experiment", str)
     if experiment != name:
@@ -467,7 +604,9 @@ def plan_resume(
     exp = registry.get(name)
     scn_path = out_dir / SCENARIO_FILE
     try:
-        scn_bytes = scn_path.read_bytes()
+        scn_bytes = _read_small(scn_path, MAX_SCENARIO_BYTES)
+    except ConfigError as exc:
+        raise ConfigError(f"--resume: {exc}") from None
     except OSError as exc:
         raise ConfigError(f"--resume: cannot read {str(scn_path)!r}: {exc.strerror}") from None
     if _sha256(scn_bytes) != digest:
@@ -577,7 +716,10 @@ def check_executor(kind: str, workers: int, address: str | None) -> None:
 
     Args:
         kind: ``"local"`` or ``"dask"``.
-        workers: worker processes, an integer >= 1.
+        workers: worker processes on this machine, an integer from 1 to
+            :func:`tasks.core.workers.usable_cpus` (each computes one block at a time on one
+            CPU; more would only share the CPUs and multiply the memory held). Not used with an
+            ``address``: the scheduler's workers compute the blocks.
         address: a Dask scheduler address ``[scheme://]host:port`` or ``None``.
 
     Raises:
@@ -588,6 +730,12 @@ def check_executor(kind: str, workers: int, address: str | None) -> None:
     if kind not in EXECUTORS:
         raise ConfigError(f"executor = {kind!r}: must be 'local' or 'dask'")
     if address is None:
+        cpus = workers_mod.usable_cpus()
+        if workers > cpus:
+            raise ConfigError(
+                f"workers = {workers}: at most {cpus} on this machine (the CPUs this process may "
+                "run on; each worker computes one block on one CPU)"
+            )
         return
     if kind == "local":
         raise ConfigError(
@@ -616,7 +764,8 @@ def make_executor(
 
     Args:
         kind: ``"local"`` or ``"dask"``.
-        workers: worker processes (local, and local Dask cluster), >= 1.
+        workers: worker processes (local, and local Dask cluster), >= 1; the runner asks for no
+            more than the blocks it has to compute.
         address: a Dask scheduler address (``tcp://host:8786``) or ``None``.
         preload: modules local workers import before they are forked (the experiment's), see
             :func:`tasks.core.workers.pool_context`.
@@ -784,13 +933,15 @@ def execute(
 
     With worker processes (a local pool, Dask) the report runs in a thread of this process
     meanwhile, merging each block once it and the blocks before it are saved
-    (:class:`_OverlappedReport`); on one local worker (inline) it follows the blocks.
+    (:class:`_OverlappedReport`); on one local worker (inline) it follows the blocks. Every file
+    is written with the run folder :func:`~tasks.core.files.confined`.
 
     Args:
         plan: the batch.
         out_dir: its prepared folder (see :func:`prepare_out_dir`).
         executor: ``"local"`` or ``"dask"``.
-        workers: number of worker processes.
+        workers: number of worker processes; no more than the blocks still to compute are
+            started (one block left: it is computed in this process).
         address: Dask scheduler address, if any.
         progress: show a progress bar on a terminal.
         pool: an executor already opened by :func:`make_executor` (then ``executor``,
@@ -803,11 +954,27 @@ def execute(
     Raises:
         BatchInterrupted: on SIGINT, after the finished blocks are saved.
         BatchFailed: if a block raised (the others are saved).
-        OutputError: if a block or the report cannot be written (a full disk).
+        OutputError: if a block or the report cannot be written (a full disk, a symbolic link
+            planted in the run folder during the batch).
     """
+    with files.confined(out_dir):
+        return _execute(plan, out_dir, executor, workers, address, progress, pool)
+
+
+def _execute(
+    plan: BatchPlan,
+    out_dir: Path,
+    executor: str,
+    workers: int,
+    address: str | None,
+    progress: bool,
+    pool: cf.Executor | None,
+) -> ReportSummary:
     from tqdm import tqdm
 
     todo = [i for i in range(len(plan.blocks)) if not _saved(out_dir, i)]
+    # a worker computes one block at a time: more workers than blocks would only be forked idle
+    workers = max(1, min(workers, len(todo)))
     done_runs = plan.n_runs - sum(len(plan.blocks[i]) for i in todo)
     data = to_plain(plan.scenario)
     failures: list[str] = []
@@ -930,9 +1097,10 @@ def execute(
 
 def _output_error(plan: BatchPlan, out_dir: Path, what: str, exc: OSError) -> OutputError:
     n_done = sum(_saved(out_dir, i) for i in range(len(plan.blocks)))
+    fix = "remove the link" if isinstance(exc, files.LinkInRunFolder) else "make room"
     return OutputError(
         f"cannot write {what} ({os_error_text(exc)}); {n_done} of {len(plan.blocks)} blocks are "
-        f"saved in {out_dir}; make room and complete the batch with: bauv run "
+        f"saved in {out_dir}; {fix} and complete the batch with: bauv run "
         f"{plan.experiment.name} --resume --out {out_dir}"
     )
 
@@ -1028,8 +1196,9 @@ def run(
         plan = plan_batch(name, n_runs, 0 if seed is None else seed, overrides, scenario_files)
         out = Path(out_dir) if out_dir is not None else default_out_dir(name, plan.seed)
     if executor == "local" or address is None:
-        # this machine's workers each hold a block at the same time
-        check_memory(plan.experiment, plan.scenario, plan.n_runs, workers)
+        # this machine's workers each hold a block at the same time (no more workers than blocks
+        # are started)
+        check_memory(plan.experiment, plan.scenario, plan.n_runs, min(workers, len(plan.blocks)))
     with contextlib.ExitStack() as stack:
         pool = None
         if address is not None:

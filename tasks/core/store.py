@@ -55,7 +55,7 @@ import zipfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, NamedTuple, TypeVar
+from typing import Any, BinaryIO, NamedTuple, TypeVar
 
 import numpy as np
 from pydantic import BaseModel, ValidationError
@@ -532,8 +532,25 @@ def loads(data: bytes, source: str = "<bytes>") -> Stored:
         StoreError: naming ``source`` and what is wrong, on any malformed, damaged, truncated or
             foreign input. Nothing the file names is imported or called.
     """
+    return load_file(io.BytesIO(data), source)
+
+
+def load_file(fh: BinaryIO, source: str = "<file>") -> Stored:
+    """Decode a file written by :func:`dumps` from an open, seekable binary file, member by
+    member: the file is never held whole in memory (its arrays are, one member's bytes more).
+
+    Args:
+        fh: the file, open for reading in binary mode.
+        source: how messages name the file (its path).
+
+    Returns:
+        The header and the value.
+
+    Raises:
+        StoreError: as :func:`loads`; also if the file cannot be read.
+    """
     try:
-        zf = zipfile.ZipFile(io.BytesIO(data))
+        zf = zipfile.ZipFile(fh)
     except Exception as exc:
         raise StoreError(
             f"{source}: not a {FORMAT} file (not a zip archive: {_one_line(exc)})"
@@ -608,7 +625,8 @@ def load(path: str | Path) -> Stored:
     """
     p = Path(path)
     try:
-        data = p.read_bytes()
+        fh = p.open("rb")
     except OSError as exc:
         raise StoreError(f"{p}: cannot read: {_one_line(exc)}") from None
-    return loads(data, str(p))
+    with fh:
+        return load_file(fh, str(p))

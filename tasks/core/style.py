@@ -25,6 +25,7 @@ every figure.
 from __future__ import annotations
 
 import functools
+import io
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal, ParamSpec, TypeVar
@@ -32,6 +33,7 @@ from typing import Any, Literal, ParamSpec, TypeVar
 import numpy as np
 from cycler import cycler
 
+from tasks.core.files import atomic_write_bytes
 from tasks.core.lazy import LazyModule
 
 # matplotlib is imported when the first figure is drawn, not when an experiment is imported
@@ -195,15 +197,33 @@ def save(fig, path: Path, vector: Literal["pdf", "svg"] = "pdf") -> list[str]:
         path: the PNG file (its suffix is replaced by ``.png`` if it has another).
         vector: the vector format written beside it.
 
+    Each file is drawn into memory and then written atomically
+    (:func:`tasks.core.files.atomic_write_bytes`): a full disk leaves no truncated file (the
+    previous one, if any, stays) and raises a plain :class:`OSError`, and a file of a run folder
+    is never written through a symbolic link.
+
     Returns:
         The names of the files written: ``[name.png, name.pdf]``.
+
+    Raises:
+        OSError: if a file cannot be written.
     """
     png = Path(path).with_suffix(".png")
     vec = png.with_suffix(f".{vector}")
-    with matplotlib.rc_context(RC):
-        fig.savefig(png, dpi=PNG_DPI)
-        fig.savefig(vec, metadata=None if vector == "svg" else {"CreationDate": None})
-    plt.close(fig)
+    try:
+        with matplotlib.rc_context(RC):
+            drawn = []
+            for target, kwargs in (
+                (png, {"dpi": PNG_DPI}),
+                (vec, {"metadata": None if vector == "svg" else {"CreationDate": None}}),
+            ):
+                buf = io.BytesIO()
+                fig.savefig(buf, format=target.suffix[1:], **kwargs)
+                drawn.append((target, buf))
+        for target, buf in drawn:
+            atomic_write_bytes(target, buf.getbuffer())
+    finally:
+        plt.close(fig)
     return [png.name, vec.name]
 
 

@@ -59,6 +59,20 @@ PARENT_POLL_S = 0.5
 """How often a local worker checks that the ``bauv`` process that started it is alive, s."""
 
 
+def usable_cpus() -> int:
+    """The CPUs this process may run on: its affinity mask where the platform has one (a
+    container's or ``taskset``'s limit), else :func:`os.cpu_count`; at least 1.
+
+    ``bauv run --workers K`` takes at most this many local workers (each computes one block at
+    a time on one CPU), and starts no more than the blocks it has to compute.
+    """
+    getaffinity = getattr(os, "sched_getaffinity", None)
+    if getaffinity is not None:
+        with contextlib.suppress(OSError):
+            return max(1, len(getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
 def process_alive(pid: int) -> bool:
     """Whether a process exists (signal 0 delivers nothing, it only checks)."""
     try:

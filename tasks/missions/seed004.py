@@ -91,6 +91,7 @@ from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario, NavigationConfig
 from tasks.closed_loop.world import fly, place_vehicle, scenario_sea, single_vehicle_scene, streams
 from tasks.core import store
+from tasks.core.files import atomic_write_bytes
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 
 if TYPE_CHECKING:
@@ -1070,7 +1071,8 @@ def report_seed004(exp: Seed004Experiment, ctx: ReportContext) -> ReportSummary:
     sur_shift: dict[str, Any] = {}
     if "cmnf" in names:
         gains = gains_for(scn, ctx.seed)
-        files.append(gains.save(ctx.out_dir / "cmnf-gains.npz").name)
+        atomic_write_bytes(ctx.out_dir / "cmnf-gains.npz", gains.to_bytes())
+        files.append("cmnf-gains.npz")
         j_sur, m_sur, sur_shift = surrogate_j(scn, ctx.seed, gains)
         j_phys, m_phys = summ["cmnf"].j_bar_m2, summ["cmnf"].j_mean_m2
         if j_sur is not None and j_phys is not None:

@@ -70,6 +70,7 @@ from nav.local_control import ControlLimits
 from nav.pcrb import pcrb
 from nav.seabed import SlopeBasis
 from tasks.core import store
+from tasks.core.files import atomic_write_bytes
 from tasks.core.registry import (
     Experiment,
     MemoryTerm,
@@ -986,7 +987,6 @@ def _save_gains(ctx: ReportContext, scn: Paper004Scenario, cs, gains: dict) -> l
     files = []
     if not gains:
         return files
-    (ctx.out_dir / "gains").mkdir(exist_ok=True)
     for c in cs:
         g = gains.get(c.label)
         if g is None:
@@ -1007,7 +1007,7 @@ def _save_gains(ctx: ReportContext, scn: Paper004Scenario, cs, gains: dict) -> l
             },
         )
         rel = f"gains/gains-{c.label}.npz"
-        cg.save(ctx.out_dir / rel)
+        atomic_write_bytes(ctx.out_dir / rel, cg.to_bytes())
         files.append(rel)
     return files
 

@@ -185,8 +185,12 @@ def test_writing_is_atomic(tmp_path, monkeypatch):
     before = path.read_bytes()
 
     def broken(table, where, **kw):
-        with open(where, "wb") as fh:
-            fh.write(b"PAR1 half a file")
+        # half a file, into whatever write_parquet hands over (a path or a stream)
+        if hasattr(where, "write"):
+            where.write(b"PAR1 half a file")
+        else:
+            with open(where, "wb") as fh:
+                fh.write(b"PAR1 half a file")
         raise OSError("disk full")
 
     monkeypatch.setattr(pq, "write_table", broken)

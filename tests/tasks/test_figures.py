@@ -79,3 +79,52 @@ def test_styled_restores_the_callers_settings(tmp_path):
     assert matplotlib.rcParams["font.size"] == before
     w = (tmp_path / "x.pdf").read_bytes()
     assert w.startswith(b"%PDF")
+
+
+SAVE_UNDER_A_FILE_SIZE_LIMIT = """
+import resource, signal, sys
+from pathlib import Path
+import numpy as np
+from tasks.core import style
+
+out, limit = Path(sys.argv[1]), int(sys.argv[2])
+fig, ax = style.subplots("column")
+rng = np.random.default_rng(0)
+ax.plot(rng.random(20000), rng.random(20000), ",")  # 20,000 vector marks: a big PDF, a small PNG
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))  # a write past it fails (EFBIG)
+try:
+    style.save(fig, out / "f.png")
+except OSError as exc:
+    print("OSError", exc.errno)
+"""
+
+
+def test_a_figure_whose_write_fails_part_way_leaves_no_partial_file(tmp_path):
+    """The PDF cannot be written whole (a file-size limit stands in for a full disk): a plain
+    OSError, the PNG written whole, no PDF and no temporary file. Before the fix matplotlib wrote
+    into the final name and a truncated PDF of exactly the limit was left (and on a real full
+    disk, a traceback from its PDF writer)."""
+    import errno
+    import subprocess
+    import sys
+
+    whole, limited = tmp_path / "whole", tmp_path / "limited"
+    whole.mkdir()
+    limited.mkdir()
+    res = [
+        subprocess.run(
+            [sys.executable, "-c", SAVE_UNDER_A_FILE_SIZE_LIMIT, str(d), str(limit)],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        for d, limit in ((whole, 2**40), (limited, 100_000))
+    ]
+    assert res[0].returncode == 0 and res[0].stdout == "", res[0].stderr
+    png, pdf = (whole / "f.png").stat().st_size, (whole / "f.pdf").stat().st_size
+    assert png < 100_000 < pdf  # the limit falls inside the PDF
+    assert res[1].returncode == 0 and res[1].stderr == "", res[1].stderr
+    assert res[1].stdout.split() == ["OSError", str(errno.EFBIG)]
+    assert sorted(p.name for p in limited.iterdir()) == ["f.png"]
+    assert (limited / "f.png").read_bytes() == (whole / "f.png").read_bytes()

@@ -137,8 +137,7 @@ def _interrupted(out, seed):
         (out / "blocks" / name).unlink()
     for f in [*out.glob("*.md"), out / "metrics.json", *out.glob("tables/*")]:
         f.unlink()
-    record = json.loads((out / "run.json").read_text())
-    (out / "run.json").write_text(json.dumps({**record, "state": "incomplete"}))
+    _edit_record(out, state="incomplete")  # as the runner writes it before the report
     return metrics
 
 
@@ -219,10 +218,23 @@ def _scenario_with_another_layout(out, other):
     _edit_record(out, scenario_sha256=hashlib.sha256(path.read_bytes()).hexdigest())
 
 
-def _edit_record(out, **fields):
+def _record_digest(record):
+    """sha256 of run.json's fields but ``record_sha256``, as documented: their JSON with sorted
+    keys, no spaces, ASCII escapes."""
+    fields = {k: v for k, v in record.items() if k != "record_sha256"}
+    text = json.dumps(fields, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return hashlib.sha256(text.encode("ascii")).hexdigest()
+
+
+def _edit_record(out, sign=True, **fields):
+    """Change fields of ``run.json``; with ``sign`` its ``record_sha256`` is made theirs (a forged
+    record: the checks behind the digest must still refuse it)."""
     path = out / "run.json"
     record = {**json.loads(path.read_text()), **fields}
-    path.write_text(json.dumps({k: v for k, v in record.items() if v is not _DROP}))
+    record = {k: v for k, v in record.items() if v is not _DROP}
+    if sign and "record_sha256" in record:
+        record["record_sha256"] = _record_digest(record)
+    path.write_text(json.dumps(record))
 
 
 _DROP = object()
@@ -242,6 +254,16 @@ def _truncated_record(out, other):
 
 def _fields(**fields):
     return lambda out, other: _edit_record(out, **fields)
+
+
+def _edited(**fields):
+    """``run.json`` edited by hand (its ``record_sha256`` left as it was)."""
+
+    def tamper(out, other):
+        _edit_record(out, sign=False, **fields)
+
+    tamper.__name__ = "edited_" + "_".join(fields)
+    return tamper
 
 
 class _Touch:
@@ -277,6 +299,12 @@ class _Touch:
         (_fields(scenario_sha256="abc"), "scenario_sha256 = 'abc': not a sha256"),
         (_fields(format_version=1), "format_version = 1"),
         (_fields(state="done"), "state = 'done'"),
+        (_fields(record_sha256=_DROP), "field 'record_sha256' is missing"),
+        # 15 runs in blocks of 5 are still 3 blocks, and block 2 is not saved: without a digest
+        # of run.json the batch would silently grow to 15 runs (issue 21)
+        (_edited(n_runs=15), "run.json' was changed since the batch started"),
+        (_edited(seed=3), "run.json' was changed since the batch started"),
+        (_edited(state="complete"), "run.json' was changed since the batch started"),
     ],
     ids=lambda v: getattr(v, "__name__", None) if callable(v) else None,
 )
@@ -566,3 +594,277 @@ def test_workers_die_with_bauv(tmp_path, sig):
     err = (tmp_path / "stderr.txt").read_text()
     if sig == signal.SIGTERM:
         assert proc.returncode == 130 and "--resume" in err and "Traceback" not in err, err
+
+
+def test_a_reformatted_run_json_still_resumes(batches, tmp_path, capsys):
+    """The digest covers run.json's fields, not its layout: re-indented, it resumes."""
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    record = json.loads((out / "run.json").read_text())
+    (out / "run.json").write_text(json.dumps(record, indent=8, sort_keys=True))
+    code, err = _resume(out, capsys)
+    assert code == 0, err
+    assert _bytes(out) == batches["metrics"]
+
+
+# ---------------------------------------------------------------------------------------------
+# A block file is bounded by what a block of the batch can hold, and hashed in chunks (issue 21)
+
+
+def _sparse(path, size):
+    """Make ``path`` ``size`` bytes long without writing them (a hole)."""
+    with path.open("r+b") as fh:
+        fh.truncate(size)
+
+
+def _block_file_limit_b():
+    """The ceiling of a block file of the ``batches`` fixture, by the documented rule: 64 MiB,
+    1 MiB per run of the largest block, 8x the per-block terms of the memory estimate."""
+    from tasks.core import runner
+
+    plan = runner.plan_batch("paper-000/test-1", 12, 2, RESUME_SET)
+    per_block = sum(t.bytes for t in plan.experiment.memory(plan.scenario, 12) if t.per_block)
+    return int(64 * 2**20 + 2**20 * 5 + 8 * per_block)
+
+
+PEAK_TRACED_B = 4 * 2**20
+"""Python memory a refused block may cost: a few chunks of the hash, not the file."""
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragment"),
+    [
+        (1, "bytes, more than a block of this batch can hold"),  # one byte over: refused unread
+        (0, "its sha256 is"),  # at the ceiling: read in chunks, refused by its digest
+        (-(2**25), "its sha256 is"),  # 32 MiB under it
+    ],
+    ids=["ceiling+1", "ceiling", "ceiling-32MiB"],
+)
+def test_a_huge_block_is_refused_without_being_read_whole(
+    batches, tmp_path, capsys, extra, fragment
+):
+    """A block file grown to tens of MB (a hole: nothing on disk) is refused with one line and
+    costs this process a few MB at most: before the fix the file was read whole (3.2 GB of
+    memory for a 3 GB file) before its digest was checked."""
+    import tracemalloc
+
+    from tasks.core import runner
+
+    limit = _block_file_limit_b()
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    _sparse(out / "blocks" / "block-000001.zip", limit + extra)
+    tracemalloc.start()
+    try:
+        code, err = _resume(out, capsys)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < PEAK_TRACED_B, peak
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert "block-000001.zip': " in lines[0] and fragment in lines[0], err
+    plan = runner.plan_resume(batches["seed2"], "paper-000/test-1", None, None, (), ())
+    assert plan.block_file_limit_b == limit
+
+
+def test_a_long_sha256_file_is_refused_unread(batches, tmp_path, capsys):
+    out = tmp_path / "batch"
+    shutil.copytree(batches["seed2"], out)
+    _sparse(out / "blocks" / "block-000000.sha256", 2**30)
+    code, err = _resume(out, capsys)
+    assert code == 2 and "block-000000.sha256': longer than" in err, err
+
+
+# ---------------------------------------------------------------------------------------------
+# Nothing is written outside the run folder (issue 21)
+
+
+FIGURED_SET = [
+    "passage.duration_s=100",
+    "passage.closest_approach_time_s=50",
+    "report.recording=false",
+    "runner.block_size=5",
+]
+
+
+@pytest.fixture(scope="module")
+def figured(tmp_path_factory):
+    """A 12-run batch with its figures (3 blocks), made to look interrupted before its last
+    block (no report yet), and the bytes of every file of the finished batch."""
+    out = tmp_path_factory.mktemp("figured") / "run"
+    run("paper-000/test-1", 12, 2, out, FIGURED_SET, progress=False)
+    finished = _snapshot(out)
+    for name in ("block-000002.zip", "block-000002.sha256"):
+        (out / "blocks" / name).unlink()
+    shutil.rmtree(out / "tables")
+    for f in out.iterdir():
+        if f.suffix in (".png", ".pdf", ".md") or f.name == "metrics.json":
+            f.unlink()
+    _edit_record(out, state="incomplete")
+    return out, finished
+
+
+def _tree(folder):
+    """Every entry under ``folder``, links not followed: relative path -> bytes, "dir" or
+    ("link", target)."""
+    out = {}
+    for path in sorted(pathlib.Path(folder).rglob("*")):
+        rel = str(path.relative_to(folder))
+        if path.is_symlink():
+            out[rel] = ("link", os.readlink(path))
+        elif path.is_dir():
+            out[rel] = "dir"
+        else:
+            out[rel] = path.read_bytes()
+    return out
+
+
+def _link_a_figure(out, outside):
+    (outside / "victim.png").write_bytes(b"victim")
+    (out / "routes.png").symlink_to(outside / "victim.png")
+
+
+def _link_the_tables(out, outside):
+    (outside / "tables").mkdir()
+    (out / "tables").symlink_to(outside / "tables", target_is_directory=True)
+
+
+def _link_the_blocks(out, outside):
+    shutil.move(out / "blocks", outside / "blocks")
+    (out / "blocks").symlink_to(outside / "blocks", target_is_directory=True)
+
+
+@pytest.mark.parametrize("plant", [_link_a_figure, _link_the_tables, _link_the_blocks])
+def test_resume_refuses_a_run_folder_with_a_symbolic_link(figured, tmp_path, capsys, plant):
+    """``--resume`` on a folder where a figure, ``tables/`` or ``blocks/`` links outside: one
+    line, exit 2, nothing written in the folder or where the link points. Before the fix the
+    figure's target was overwritten with PNG data, the CSVs and the missing block written into
+    the outside folders."""
+    out, outside = tmp_path / "batch", tmp_path / "outside"
+    shutil.copytree(figured[0], out)
+    outside.mkdir()
+    plant(out, outside)
+    before, before_outside = _tree(out), _tree(outside)
+    code, err = _resume(out, capsys)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert lines[0].startswith("error: --resume: ") and "is a symbolic link" in lines[0], err
+    assert _tree(outside) == before_outside
+    assert _tree(out) == before
+
+
+@pytest.mark.parametrize("where", ["file", "folder"])
+def test_a_link_planted_after_the_checks_is_not_written_through(figured, tmp_path, where):
+    """A link that appears after ``--resume``'s checks (here: planted between the plan and the
+    batch): a figure linked to a file outside is replaced by the figure, its target untouched;
+    ``tables/`` linked to a folder outside stops the report (OutputError, the computed block
+    kept) with nothing written there."""
+    from tasks.core import runner
+
+    out, outside = tmp_path / "batch", tmp_path / "outside"
+    shutil.copytree(figured[0], out)
+    outside.mkdir()
+    plan = runner.plan_resume(out, "paper-000/test-1", None, None, (), ())
+    if where == "file":
+        _link_a_figure(out, outside)
+        runner.execute(plan, out, progress=False)
+        assert not (out / "routes.png").is_symlink()
+        assert (out / "routes.png").read_bytes() == figured[1][pathlib.Path("routes.png")]
+    else:
+        _link_the_tables(out, outside)
+        with pytest.raises(runner.OutputError) as info:
+            runner.execute(plan, out, progress=False)
+        msg = str(info.value)
+        assert "a symbolic link inside the run folder" in msg and "remove the link" in msg, msg
+        assert "3 of 3 blocks are saved" in msg, msg
+    assert _tree(outside) == ({"victim.png": b"victim"} if where == "file" else {"tables": "dir"})
+
+
+# ---------------------------------------------------------------------------------------------
+# A write that fails part-way (a full disk) leaves no partial file (issue 21)
+
+
+FILE_SIZE_LIMIT_B = 60_000
+"""Larger than every block and table of the ``figured`` batch, smaller than its figures."""
+
+
+def _limit_file_size():
+    """In the child: files may not grow past FILE_SIZE_LIMIT_B (a write past it fails with
+    EFBIG, as on a full disk with ENOSPC, part-way through the file)."""
+    import resource
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (FILE_SIZE_LIMIT_B, FILE_SIZE_LIMIT_B))
+
+
+def test_a_write_failing_part_way_leaves_whole_figures_only(figured, tmp_path):
+    """The report's first figure fails part-way: one line, exit status 1, the block computed
+    before is kept, every figure there is whole (before the fix a truncated file was left) and
+    no temporary file; once the writes succeed ``--resume`` completes the batch to the bytes of
+    the straight batch."""
+    out = tmp_path / "batch"
+    shutil.copytree(figured[0], out)
+    finished = figured[1]
+    cmd = [sys.executable, "-m", "tasks.core.cli", "run", "paper-000/test-1", "--resume"]
+    res = subprocess.run(
+        [*cmd, "--out", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+        preexec_fn=_limit_file_size,
+    )
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 1 and len(lines) == 1, res.stderr
+    assert "cannot write the report (File too large" in lines[0], res.stderr
+    assert "3 of 3 blocks are saved" in lines[0], res.stderr
+    assert (out / "blocks" / "block-000002.zip").read_bytes() == finished[
+        pathlib.Path("blocks/block-000002.zip")
+    ]
+    figures = [p for p in out.iterdir() if p.suffix in (".png", ".pdf")]
+    for p in figures:
+        assert p.read_bytes() == finished[p.relative_to(out)], p.name
+    assert len(figures) < sum(p.suffix in (".png", ".pdf") for p in finished)
+    assert not [p for p in out.rglob(".*.tmp")]
+    res = _resume_in_a_process(out, "--quiet")
+    assert res.returncode == 0, res.stderr
+    for rel, data in finished.items():
+        if rel.suffix in (".png", ".pdf", ".csv") or rel.name == "metrics.json":
+            assert (out / rel).read_bytes() == data, rel
+
+
+def test_a_recording_that_cannot_be_written_is_one_line_not_a_hang(tmp_path):
+    """The recording fails part-way: one line, exit status 1, the blocks kept and no recording
+    left; ``--resume`` then writes a whole one. Before the fix rerun wrote the file itself:
+    a truncated recording.rrd was left and bauv hung in rerun's flush (on a full tmpfs too, where
+    SIGTERM did not stop it either)."""
+    from tasks.core.recording import read_time_series
+
+    out = tmp_path / "batch"
+    cmd = [sys.executable, "-m", "tasks.core.cli", "run", "paper-000/test-1", "--runs", "12"]
+    sets = [s for s in FIGURED_SET if not s.startswith("report.")] + ["report.figures=false"]
+    cmd += [f"--set={s}" for s in sets] + ["--seed", "2", "--quiet", "--out", str(out)]
+    try:
+        res = subprocess.run(
+            cmd,
+            capture_output=True,
+            text=True,
+            check=False,
+            preexec_fn=_limit_file_size,
+            timeout=RECORDING_TIMEOUT_S,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"bauv hung writing the recording ({RECORDING_TIMEOUT_S:g} s)")
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 1 and len(lines) == 1, res.stderr
+    assert "cannot write the report (File too large" in lines[0], res.stderr
+    assert "3 of 3 blocks are saved" in lines[0], res.stderr
+    assert not (out / "recording.rrd").exists() and not [p for p in out.rglob(".*.tmp")]
+    res = _resume_in_a_process(out, "--quiet")
+    assert res.returncode == 0, res.stderr
+    t, d = read_time_series(out / "recording.rrd", "distance/ekf", "Scalars:scalars")
+    assert t[0] == 0.0 and t[-1] == 100.0 and d.shape == (101,)  # every tick of 100 s
+
+
+RECORDING_TIMEOUT_S = 120.0
+"""Ample for a 12-run batch of 100 s passages (about 5 s)."""

@@ -4,6 +4,7 @@ fixed cost of every block and a large one of every process's first block)."""
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import json
 import os
 import platform
@@ -135,3 +136,57 @@ def test_workers_are_forked_from_bauv_only_when_it_runs_one_thread(extra_thread)
     assert got["context"] == ("forkserver" if extra_thread else "fork"), got
     assert got["sigterm"] == "SIG_DFL" and got["sighup"] == "SIG_IGN", got
     assert got["threads"] == 2, got  # the worker's parent watch beside its main thread
+
+
+TWELVE_SET = [
+    "passage.duration_s=100",
+    "passage.closest_approach_time_s=50",
+    "report.figures=false",
+    "report.recording=false",
+    "runner.block_size=5",
+]
+"""Short passages in blocks of 5 runs."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Workers: at most the CPUs, never more than the blocks (issue 21)
+
+
+def test_more_workers_than_cpus_is_one_line_and_writes_nothing(tmp_path, capsys):
+    from tasks.core import cli
+
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    out = tmp_path / "out"
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:
+        cli.main(["run", "paper-000/test-1", "--runs", "4", "--workers", "999", "--out", str(out)])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert info.value.code == 2 and len(lines) == 1, lines
+    assert f"workers = 999: at most {cpus} on this machine" in lines[0], lines
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("n_runs", "n_workers", "started"),
+    [(5, 2, []), (12, 8, [3])],
+    ids=["one-block-two-workers", "three-blocks-eight-workers"],
+)
+def test_no_more_workers_are_started_than_blocks(tmp_path, monkeypatch, n_runs, n_workers, started):
+    """A one-block batch on 2 workers computes its block in this process (before the fix: a pool
+    of 2, and 30 processes forked for ``--workers 30``); 3 blocks on 8 workers start 3."""
+    from tasks.core import runner
+
+    monkeypatch.setattr(workers, "usable_cpus", lambda: 8, raising=False)  # any machine
+    pools = []
+    real = cf.ProcessPoolExecutor
+
+    class Counted(real):
+        def __init__(self, max_workers=None, **kwargs):
+            pools.append(max_workers)
+            super().__init__(max_workers, **kwargs)
+
+    monkeypatch.setattr(runner.cf, "ProcessPoolExecutor", Counted)
+    out = tmp_path / "a"
+    runner.run("paper-000/test-1", n_runs, 2, out, TWELVE_SET, workers=n_workers, progress=False)
+    assert pools == started
+    assert len(list((out / "blocks").glob("*.sha256"))) == -(-n_runs // 5)
