@@ -55,9 +55,8 @@ from pathlib import Path
 from typing import Any
 
 import tomli_w
-import tomllib
 
-from bauv_sim.config import Config, load_config, to_plain, validate
+from bauv_sim.config import Config, load_config, loads_toml, to_plain, validate
 from bauv_sim.errors import ConfigError
 from bauv_sim.rng import check_seed
 from tasks.core import files, registry, store
@@ -616,9 +615,11 @@ def plan_resume(
             "start a new batch"
         )
     try:
-        data = tomllib.loads(scn_bytes.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        text = scn_bytes.decode("utf-8")
+    except UnicodeDecodeError as exc:
         raise ConfigError(f"--resume: {str(scn_path)!r}: {exc}") from None
+    # the structure checks before tomllib (which recurses without a limit)
+    data = loads_toml(text, f"--resume: {str(scn_path)!r}")
     scenario = validate(exp.scenario_type, data)
     if _blocks(rec_runs, exp.block_size(scenario)) != layout:
         raise ConfigError(

@@ -218,6 +218,13 @@ def _scenario_with_another_layout(out, other):
     _edit_record(out, scenario_sha256=hashlib.sha256(path.read_bytes()).hexdigest())
 
 
+def _deep_scenario(out, other):
+    # a hostile scenario.toml with run.json forged to match it: tomllib would recurse 5,000 deep
+    path = out / "scenario.toml"
+    path.write_text(path.read_text() + "deep = " + "[" * 5000 + "]" * 5000 + "\n")
+    _edit_record(out, scenario_sha256=hashlib.sha256(path.read_bytes()).hexdigest())
+
+
 def _record_digest(record):
     """sha256 of run.json's fields but ``record_sha256``, as documented: their JSON with sorted
     keys, no spaces, ASCII escapes."""
@@ -288,6 +295,7 @@ class _Touch:
         (_record(b"\xff\xfe{"), "is not valid JSON"),
         (_edit_scenario, "scenario.toml' was changed since the batch started"),
         (_scenario_with_another_layout, "block_size = 5 but the scenario's runner gives"),
+        (_deep_scenario, "nested more than 32 deep at line"),
         (_record("{ this is not json"), "is not valid JSON"),
         (_truncated_record, "is not valid JSON"),
         (_record("[1, 2]"), "is not a JSON object"),
