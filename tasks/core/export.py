@@ -23,6 +23,7 @@ back as NaN).
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -233,6 +234,11 @@ def read_parquet(path: str | Path) -> tuple[dict[str, Column], dict[str, str]]:
     Raises:
         ExportError: if the file cannot be read or was not written by :func:`write_parquet`.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise ExportError(
+            f"path = {path!r} ({type(path).__name__}): must be the path of a Parquet file "
+            "(str or Path)"
+        )
     p = Path(path)
     try:
         table = pq.read_table(p)

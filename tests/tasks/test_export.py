@@ -222,3 +222,11 @@ def test_columns_are_plain_data():
     got = store.loads(store.dumps({"ticks": {"P": col}})).value["ticks"]["P"]
     assert type(got) is Column and got.components == XYZ and got.unit == "m2"
     assert _bits(got.values) == _bits(col.values)
+
+
+@pytest.mark.parametrize("path", [None, 5, ["a.parquet"]])
+def test_read_parquet_refuses_a_path_of_the_wrong_type(path):
+    from tasks.core.export import ExportError, read_parquet
+
+    with pytest.raises(ExportError, match=r"path = .* must be the path of a Parquet file"):
+        read_parquet(path)
