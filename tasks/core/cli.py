@@ -164,10 +164,16 @@ def run_cmd(
     click.echo(f"tables:    {out_dir / 'tables.md'}\nmetrics:   {out_dir / 'metrics.json'}")
     if summary.failures:
         click.echo(
-            f"error: {len(summary.failures)} failure(s) named in the report (a failed run, or "
-            "an estimate that diverged); the report covers the runs that completed",
+            f"error: {len(summary.failures)} run(s) failed; the report covers the runs that "
+            "completed",
             err=True,
         )
+    if summary.diverged:
+        click.echo(
+            f"error: {len(summary.diverged)} estimate(s) diverged, named in the report",
+            err=True,
+        )
+    if summary.failures or summary.diverged:
         sys.exit(EXIT_FAILED)
 
 

@@ -71,13 +71,15 @@ class ReportSummary:
     Attributes:
         text: printed to the console.
         files: the files written, paths relative to the run folder.
-        failures: one line per run that failed, or per estimate the experiment found diverged
-            (``bauv run`` then exits with status 1).
+        failures: one line per run that failed (``bauv run`` then exits with status 1).
+        diverged: one line per estimate that ran away from the truth in a run that completed
+            (the experiment's divergence rule; ``bauv run`` then exits with status 1 too).
     """
 
     text: str
     files: tuple[str, ...] = ()
     failures: tuple[str, ...] = ()
+    diverged: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -1216,7 +1216,7 @@ def report_swarm(exp: SwarmExperiment, ctx: ReportContext) -> ReportSummary:
                 files.append(record_swarm(exp.name, scn, flight, methods[0], ctx.out_dir))
     text = "".join(t.to_text() + "\n" for t in tables)
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"
-    return ReportSummary(text, tuple(files), tuple(failures + diverged))
+    return ReportSummary(text, tuple(files), tuple(failures), tuple(diverged))
 
 
 COLORS_V = [(0, 0, 0), (0, 114, 178), (213, 94, 0), (0, 158, 115), (230, 159, 0)]
