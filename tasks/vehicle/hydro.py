@@ -728,7 +728,7 @@ def check_own_water(frequency_hz: float | None = None, duration_s: float = 60.0)
     cfg = build.SceneConfig(
         vehicles=(
             build.VehicleSpec(name="leader", east_m=-40.0, depth_m=20.0, speed_m_s=1.0),
-            build.VehicleSpec(name="follower", east_m=0.0, depth_m=20.0, speed_m_s=1.4),
+            build.VehicleSpec(name="follower", east_m=0.0, depth_m=20.0, speed_m_s=1.0),
         ),
         seabed=_flat_bed(),
         beacons=(),

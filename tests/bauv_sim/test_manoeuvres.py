@@ -9,7 +9,6 @@ import pytest
 
 from bauv_sim import currents, hull, manoeuvres
 from bauv_sim.design.speed_table import load_speed_table
-from bauv_sim.sea import Sea
 
 
 def test_cruise_speed_power_and_strouhal():
@@ -74,7 +73,7 @@ def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
     c = currents.UniformCurrent(0.5, math.radians(200.0))  # coasting 20 deg off the axis
     cw = c.velocity_world(0.0, np.zeros(3))
     drift = manoeuvres.open_water_scene()
-    drift.set_sea(Sea(c))
+    manoeuvres.release_in_current(drift, c)
     coast = manoeuvres.open_water_scene()
     coast.set_pose(coast.position_world(), coast.roll_pitch_heading(), -cw)
     for _ in range(50):
