@@ -117,7 +117,9 @@ def test_speed_table_round_trip(tmp_path):
 def test_the_models_speed_table_gives_cruise_at_one_metre_per_second():
     t = load_speed_table()
     f = float(t.frequency_for(1.0))
-    assert 0.8 < f < 1.6
+    # 0.61 Hz since the fins are thin plates (issue 21: MuJoCo's projected-area drag on the
+    # flapping caudal fin was 42 % of the swimming drag; 0.84 Hz with it)
+    assert 0.5 < f < 1.6
     assert np.all(np.diff(t.frequency_hz) > 0)
     assert np.all((t.power_w >= 0) & (t.power_w <= 250.0))
 

@@ -185,19 +185,21 @@ def test_crank_rocker_is_symmetric_so_zero_bias_swims_straight(phys):
 
 @pytest.mark.slow
 def test_port_and_starboard_turns_are_mirror_images():
-    """The same bias to either side turns at the same rate and radius (within 1 %; 6 % and 7 %
-    before the linkage was made symmetric)."""
+    """At the cruise frequency the same bias to either side turns at the same rate and radius
+    within 2 % (the crank-rocker's strokes with the carriage moved aft and forward are not exact
+    mirror images: 1 % apart at 10 deg; a mean angle of 0.33 deg to port made them 6 % apart
+    before the rod was made symmetric), and with no bias the vehicle swims straight."""
     from bauv_sim import manoeuvres
+    from bauv_sim.design.speed_table import load_speed_table
 
-    f = 0.84
+    f = round(float(load_speed_table().frequency_for(1.0)), 2)
     r = [
-        manoeuvres.heading_change(
-            manoeuvres.open_water_scene(speed_m_s=1.0), f, math.radians(b), 5.0, 30.0
-        )
-        for b in (10.0, -10.0)
+        manoeuvres.heading_change(manoeuvres.open_water_scene(), f, math.radians(b))
+        for b in (10.0, -10.0, 0.0)
     ]
-    assert -r[1].turn_rate_rad_s == pytest.approx(r[0].turn_rate_rad_s, rel=0.01)
-    assert r[1].turning_radius_m == pytest.approx(r[0].turning_radius_m, rel=0.01)
+    assert -r[1].turn_rate_rad_s == pytest.approx(r[0].turn_rate_rad_s, rel=0.02)
+    assert r[1].turning_radius_m == pytest.approx(r[0].turning_radius_m, rel=0.02)
+    assert abs(r[2].turn_rate_rad_s) < 0.01 * r[0].turn_rate_rad_s
 
 
 def test_tail_bias_shifts_the_mean_tail_angle():
