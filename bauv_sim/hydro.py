@@ -340,6 +340,7 @@ def hydrostatics(
 # --------------------------------------------------------------------------------------------
 # Added-mass algebra
 
+
 def _skew(r: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
