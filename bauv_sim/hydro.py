@@ -8,7 +8,8 @@ beyond plain MuJoCo:
 
 * **The engine plugin** ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``, compiled at install): added
   mass in the mass matrix, the hull's Munk coupling with separation, crossflow drag, slender-body
-  and thin-plate lift, water acceleration, each vehicle's own water. :func:`load_plugin` registers
+  and thin-plate lift, the thin fins' plate drag (profile, induced, normal force), water
+  acceleration, each vehicle's own water. :func:`load_plugin` registers
   it (at import), :func:`load_model` compiles a model file with it (the one line a plain-MuJoCo
   user needs), :func:`set_water` and :func:`water` hold each vehicle's water in the plugin's
   state, :func:`plugin_force` reads what it applied.
@@ -338,6 +339,7 @@ def hydrostatics(
 
 # --------------------------------------------------------------------------------------------
 # Added-mass algebra
+
 
 def _skew(r: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])

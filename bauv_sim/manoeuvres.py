@@ -576,6 +576,19 @@ def roll_recovery(
     )
 
 
+def release_in_current(physics: BauvPhysics, field: currents.CurrentField) -> None:
+    """Put the (first) vehicle at rest over ground in a current that was always there: the sea is
+    set (:meth:`~bauv_sim.physics.BauvPhysics.set_sea` carries the vehicle with the water) and the
+    vehicle is stopped where it is, attitude and joints kept.
+
+    Args:
+        physics: the physics.
+        field: the current field.
+    """
+    physics.set_sea(Sea(field))
+    physics.set_pose(physics.position_world(), physics.roll_pitch_heading(), np.zeros(3))
+
+
 @dataclass(frozen=True)
 class DriftResult:
     """Idle vehicle in a current.
@@ -598,8 +611,9 @@ class DriftResult:
 def idle_drift(
     physics: BauvPhysics, field: currents.CurrentField, duration_s: float = 120.0
 ) -> DriftResult:
-    """Switch a current on around the idle vehicle (motor stopped, tail straight, fins level) and
-    let it drift.
+    """Release the idle vehicle (motor stopped, tail straight, fins level) at rest over ground in
+    a current that was always there (the sea is set, which carries the vehicle with the water, and
+    the vehicle is then stopped where it is) and let the current pick it up through drag.
 
     Args:
         physics: the physics, vehicle at rest.
@@ -611,7 +625,7 @@ def idle_drift(
     """
     z0 = physics.depth_m()
     physics.set_tail_beat_frequency_hz(0.0)
-    physics.set_sea(Sea(field))
+    release_in_current(physics, field)
     tick = physics.control_tick_s
     n = round(duration_s / tick)
     last = max(1, round(1.0 / tick))
@@ -656,8 +670,9 @@ def swim_in_current(
     measure_s: float = 30.0,
 ) -> CurrentSwimResult:
     """Swim with a fixed tail-beat frequency and level fins, once in still water and once in a
-    current, from the same state relative to the water (in the current the vehicle starts moving
-    with the water at its start point); compare velocities over the same window.
+    current, from the same state relative to the water (putting the vehicle in the current
+    carries it with the water at its start point, :meth:`~bauv_sim.physics.BauvPhysics.set_sea`);
+    compare velocities over the same window.
 
     The fluid forces see only the velocity relative to the water, so in a uniform current the
     motion relative to the water is the same and ground velocity = still-water velocity + current;
@@ -676,12 +691,6 @@ def swim_in_current(
     results = []
     for sea in (Sea(), Sea(field)):
         phys = make_physics()
-        phys.set_sea(sea)
-        phys.set_pose(
-            phys.position_world(),
-            phys.roll_pitch_heading(),
-            phys.velocity_world() + phys.current_at_vehicle_world(),
-        )
         phys.set_sea(sea)
         phys.set_tail_beat_frequency_hz(frequency_hz)
         tick = phys.control_tick_s

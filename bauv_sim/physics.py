@@ -958,12 +958,39 @@ class BauvPhysics(mjcf.Physics):
         """Put the vehicles in a sea. It is applied now and at the start of every control tick of
         :meth:`advance` (or by :meth:`apply_sea`).
 
+        The vehicles are carried by the change of the water: each vehicle's velocity over ground
+        changes by the water velocity at it in the new sea minus the water it was in, so that its
+        motion relative to the water (and its angular velocity and joints) is what it was. This is
+        Galilean invariance, the motion of a neutrally buoyant body in a sea whose velocity changes
+        as a whole: the Froude-Krylov force ``rho V a`` and the added mass's reaction ``M_A a``
+        accelerate the body's mass and added mass with the water (``models/bauv/README.md``,
+        "Current"). A vehicle placed with its speed through the water in still water (the default
+        sea) and then put in a current therefore starts moving with the water, and a steady
+        uniform current injected during a run carries the vehicle at once. (A current field that
+        changes in time during a run is different water accelerating: that acts through the
+        plugin's Froude-Krylov and added-mass forces over the tick, :mod:`bauv_sim.sea`.) To
+        release a vehicle at rest over ground in a current that was always there, set its pose
+        after the sea.
+
         Args:
             sea: the sea (current and free surface).
         """
+        names = self.vehicle_names()
+        before = [self.current_at_vehicle_world(n) for n in names]
         self._sea = sea
         self._sea_applied = False
         self.apply_sea()
+        carried = False
+        for name, w_before in zip(names, before, strict=True):
+            change = self.current_at_vehicle_world(name) - w_before
+            if np.any(change != 0.0):
+                v = self._v(name)
+                self.data.qvel[v.dof_adr : v.dof_adr + 3] += change
+                carried = True
+        if carried:
+            # the sea's first tick saw the velocities before the carry (where a vehicle will be at
+            # the tick's end): evaluate it again from the carried state
+            self._sea.apply(self, again=True)
 
     def apply_sea(self) -> None:
         """Evaluate the sea at every vehicle now and apply it until the next call

@@ -18,7 +18,10 @@ through the facade's primitives (it indexes no MuJoCo array):
   hull (:func:`submerged_fraction`), held for the tick.
 
 A mission constructs its sea from its scenario and injects it into the physics
-(:meth:`bauv_sim.physics.BauvPhysics.set_sea`); the physics applies it at the start of every
+(:meth:`bauv_sim.physics.BauvPhysics.set_sea`, which carries every vehicle with the change of the
+water at it: Galilean invariance, the motion of a neutrally buoyant body when the whole sea changes
+its velocity; a vehicle placed with its speed through still water starts moving with the
+water); the physics applies it at the start of every
 control tick of :meth:`~bauv_sim.physics.BauvPhysics.advance`, and a ``dm_control`` task that steps
 the physics itself calls :meth:`~bauv_sim.physics.BauvPhysics.apply_sea` in ``before_step``.
 Frames: world ENU (x east, y north, z up), depth positive down from the surface z = 0.

@@ -1,20 +1,19 @@
 """Fluid coefficients of the BAUV model derived from first principles (design time).
 
 MuJoCo's ellipsoid fluid model takes five coefficients per geom (``fluidcoef``: blunt drag,
-slender drag, angular drag, Kutta lift, Magnus lift) and the model adds a pure angular-drag
-ellipsoid (the crossflow damper). None of them is fitted: this module derives them from the stated
+slender drag, angular drag, Kutta lift, Magnus lift); the engine plugin ``bauv.hydro`` takes the
+tables of :func:`hydro_numerics`. None of them is fitted: this module derives them from the stated
 hull and fins of :mod:`bauv_sim.hull` with textbook laws (ITTC-57 friction, Hoerner's form factors,
-Helmbold's lift slope, Theodorsen's lift deficiency, strip theory of crossflow drag), and predicts
-the tow-test drag the model must reproduce (:func:`drag_budget`). ``models/bauv/bauv.xml`` holds
-the values; ``tests/bauv_sim/test_design.py`` checks that it does. Nothing here runs during a
-simulation.
+Helmbold's lift slope, Theodorsen's lift deficiency, lifting-line induced drag, strip theory of
+crossflow drag), and predicts the tow-test drag the model must reproduce (:func:`drag_budget`).
+``models/bauv/bauv.xml`` holds the values (``python -m bauv_sim.design.fluid`` writes them there);
+``tests/bauv_sim/test_design.py`` checks that it does. Nothing here runs during a simulation.
 
 All quantities are SI (m, m^2, N, N m s^2); the frames are the vehicle's body frame FLU.
 """
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -26,13 +25,15 @@ from bauv_sim import hull
 
 CROSSFLOW_DRAG_COEFFICIENT = 1.2
 """Drag coefficient of a hull section or a fin plate in flow normal to it (Hoerner 1965,
-*Fluid-Dynamic Drag*, ch. 3: elliptic cylinders of fineness 1.5 about 1.2 subcritical; plates of
-aspect ratio 1-5 about 1.2), used for the rotational (crossflow) damping."""
+*Fluid-Dynamic Drag*, ch. 3: elliptic cylinders of fineness 1.5 about 1.2 subcritical; flat
+plates normal to the flow 1.17 (disc, square) to 1.2 (aspect ratio 5)): the hull's roll damping
+and the fins' normal (crossflow) force, C_N sin^2(a) of the plate's area."""
 
-FIN_OPERATING_DRAG_COEFFICIENT = 0.16
-"""Drag coefficient of a low-aspect-ratio fin at its operating angles of attack (10-20 deg),
-profile plus induced drag: about 0.1-0.2 (Hoerner 1965 ch. 7; Whicker & Fehlner 1958, DTMB 933,
-aspect ratio 1-3 at 15 deg). MuJoCo's blunt-drag coefficient is half of it (its drag has no 1/2)."""
+FIN_SPAN_EFFICIENCY = 1.0
+"""Span efficiency e of the fins' lift-induced drag C_L^2 / (pi e A): 1 for the elliptic loading
+of an elliptic planform in lifting-line theory (Prandtl 1918; Glauert 1926, *The Elements of
+Aerofoil and Airscrew Theory*, ch. 11), the theory Helmbold's lift slope extends; the model's fins
+are ellipses. Real fins have 0.8-0.95; ``models/bauv/README.md`` gives the effect of 0.8."""
 
 TAIL_DESIGN_FREQUENCY_HZ = 1.2
 """Tail-beat frequency of the design cruise point (1 m/s), Hz: sets the reduced frequency at
@@ -97,7 +98,8 @@ def lift_slope_per_rad(aspect_ratio: float) -> float:
 
 @dataclass(frozen=True)
 class PlateFin:
-    """A fin represented in MuJoCo by a flat ellipsoid of the same area.
+    """A fin represented by a flat ellipsoid of the same area (MuJoCo's added mass) and a thin
+    plate of that ellipse (the plugin's lift and drag).
 
     Attributes:
         geom: name of its fluid geom.
@@ -259,16 +261,19 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
 
     * slender drag = skin friction: C_slender (A_max - A_f) = C_F FF S_wet / 2 on each part;
     * blunt drag: hull = the pressure part of Hoerner's body form factor, C_F (FF - 1) S_wet /
-      (2 A_f); peduncle 0 (it is the aft body, in the hull's flow); fins = half the operating drag
-      coefficient :data:`FIN_OPERATING_DRAG_COEFFICIENT` (the slender term then makes up the
-      friction the edge-on blunt term leaves);
+      (2 A_f); peduncle 0 (it is the aft body, in the hull's flow);
+    * the thin fins (caudal, dorsal, lateral): 0 for every term. MuJoCo's drag of a flat
+      ellipsoid puts nearly the whole plate in the flow at a few degrees of incidence (its
+      projected area is a weighted mean of the ellipsoid's three sections, 3.2 times the caudal
+      fin's true shadow at 1 deg and 6.7 times at 5 deg); the plugin applies a thin plate's drag
+      instead (:func:`foil_drag_coefficients`);
     * Kutta lift 0: MuJoCo's Kutta lift of a thick ellipsoid has a slope near zero angle of
       chord/thickness times the thin-plate law, and lifts along a plate's span too; the plugin
       ``bauv.hydro`` computes the lift instead (the plates' slopes: :func:`foil_lift_slopes`; the
       hull's: :func:`slender_lift_stations`);
     * angular drag: 0 on the hull and peduncle (their rotational damping is the crossflow of the
-      strips, :func:`crossflow_elements`, applied by the plugin); on the fins C_dc / (2 pi), the
-      value that reproduces strip-theory crossflow damping for an ellipse;
+      strips, :func:`crossflow_elements`, applied by the plugin) and on the fins (their panels'
+      normal force sees each panel's velocity, rotation included);
     * Magnus lift 0 (:data:`MAGNUS_LIFT_COEFFICIENT`).
 
     Args:
@@ -286,7 +291,6 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
     af_h, amax_h = _ellipsoid_areas(hs)
     ps = peduncle_fluid_semi_axes()
     af_p, amax_p = _ellipsoid_areas(ps)
-    c_ang_fin = CROSSFLOW_DRAG_COEFFICIENT / (2.0 * np.pi)
     out = {
         "hull_fluid": np.array(
             [
@@ -301,23 +305,53 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
             [0.0, 0.5 * cf * s_ped / (amax_p - af_p), 0.0, 0.0, MAGNUS_LIFT_COEFFICIENT]
         ),
     }
-    cb_fin = 0.5 * FIN_OPERATING_DRAG_COEFFICIENT
+    for fin in plate_fins():
+        out[fin.geom] = np.zeros(5)
+    return out
+
+
+def foil_drag_coefficients(speed_m_s: float = DESIGN_SPEED_M_S) -> dict[str, NDArray[np.float64]]:
+    """The thin-plate drag of every lifting plate, ``(C_D0, k_i, C_N)`` in the order of
+    :data:`FOIL_GEOMS` (the model file's ``hydro_foil_drag``), which the plugin applies with the
+    plate's ellipse area S and relative velocity u (chord c, span s, normal n components):
+
+    * profile drag ``-1/2 rho S C_D0 |u_t| u_t`` of the in-plane velocity u_t = (u_c, u_s): skin
+      friction on both faces times the section's form factor, C_D0 = 2 C_F(Re_c) FF_foil(t/c),
+      ITTC-57 at the mean chord's Reynolds number at ``speed_m_s`` and Hoerner's foil form factor
+      (the fins' term of :func:`drag_budget`); friction sees the tangential velocity (Hoerner
+      1965 ch. 2, inclined plates; the independence principle);
+    * lift-induced drag ``1/2 rho S k_i C_L^2 |u|^2`` against the chord-normal velocity, with
+      C_L = C_La sin(a) cos(a) the plugin's lift coefficient and k_i = 1 / (pi e A) at the
+      effective aspect ratio of the lift slope (lifting-line theory, :data:`FIN_SPAN_EFFICIENCY`);
+    * normal (crossflow) force ``-1/2 rho C_N dA |u_n| u_n`` of every panel of the plate with its
+      own normal velocity (translation and rotation): C_N sin^2(a) per unit area in uniform flow,
+      the plate's drag in flow normal to it at 90 deg, C_N = :data:`CROSSFLOW_DRAG_COEFFICIENT`
+      (Hoerner 1965 ch. 3).
+
+    At small incidence this leaves the plate its friction: the caudal fin's drag coefficient on S
+    is 0.019 at 1 deg (C_D0 0.0188) and 0.023 at 5 deg, where MuJoCo's projected-area drag of its
+    flat ellipsoid gave 0.044 and 0.124; at 20 deg 0.112 against 0.157. The peduncle, a thick aft
+    body, keeps MuJoCo's drag (zeros here).
+
+    Args:
+        speed_m_s: speed at which the friction coefficients are evaluated, m/s.
+
+    Returns:
+        Mapping from fluid geom to ``(C_D0, k_i, C_N)``, shape (3,) each.
+    """
+    nu = hull.SEAWATER_VISCOSITY_PA_S / hull.SEAWATER_DENSITY_KG_M3
+    out = {g: np.zeros(3) for g in FOIL_GEOMS}
     for fin in plate_fins():
         c = fin.mean_chord_m
-        cf_fin = float(ittc57_friction(speed_m_s * c / nu))
-        friction = cf_fin * foil_form_factor(fin.thickness_m / c) * fin.area_m2
-        a_edge = np.pi * fin.semi_axes_m[1] * fin.semi_axes_m[2]
-        a_plate = np.pi * fin.semi_axes_m[0] * fin.semi_axes_m[2]
+        cf = float(ittc57_friction(speed_m_s * c / nu))
         out[fin.geom] = np.array(
             [
-                cb_fin,
-                max(0.0, (friction - cb_fin * a_edge) / (a_plate - a_edge)),
-                c_ang_fin,
-                0.0,
-                MAGNUS_LIFT_COEFFICIENT,
+                2.0 * cf * foil_form_factor(fin.thickness_m / c),
+                1.0 / (np.pi * FIN_SPAN_EFFICIENCY * fin.aspect_ratio),
+                CROSSFLOW_DRAG_COEFFICIENT,
             ]
         )
-    return out
+    return {g: out[g] for g in FOIL_GEOMS}
 
 
 BODY_GEOMS = ("hull_fluid",)
@@ -393,12 +427,10 @@ def section_drag_coefficient(fineness: ArrayLike) -> NDArray[np.float64]:
     f, c = np.array(SECTION_DRAG_BY_FINENESS).T
     return np.interp(np.log2(np.asarray(fineness, dtype=float)), np.log2(f), c)
 
+
 N_HULL_STRIPS = 16
 """Strips of the rigid hull in the crossflow model (midpoint rule; the crossflow integral of the
 smooth profile is within 1 % of a 400-strip sum)."""
-
-N_FIN_STRIPS = 6
-"""Span strips of each fixed fin in the crossflow model."""
 
 
 def hull_crossflow_strips(n: int = N_HULL_STRIPS) -> NDArray[np.float64]:
@@ -436,51 +468,12 @@ def hull_crossflow_strips(n: int = N_HULL_STRIPS) -> NDArray[np.float64]:
     return out
 
 
-def fin_crossflow_strips(n: int = N_FIN_STRIPS) -> NDArray[np.float64]:
-    """Crossflow elements of the fixed fins (dorsal fin, lateral fins at zero angle), by span.
-
-    A fin strip of chord c and width dr at its mid-chord point takes normal-flow drag with the
-    plate coefficient :data:`CROSSFLOW_DRAG_COEFFICIENT` less the fin's MuJoCo blunt drag
-    (``2 x`` :data:`FIN_OPERATING_DRAG_COEFFICIENT` ``/ 2``): on the dorsal fin (a vertical plate)
-    flow along y, on the lateral fins (horizontal plates) flow along z. These damp roll (their
-    lever arm is the span), and add to sway, heave, yaw and pitch. The caudal fin and the peduncle
-    have none: while they flap, their flow is what their lift and MuJoCo's drag describe.
-
-    Args:
-        n: strips per fin.
-
-    Returns:
-        Rows ``(x, y, z, a_y, a_z, C_y, C_z)`` as :func:`hull_crossflow_strips`, shape (3 n, 7).
-    """
-    c = CROSSFLOW_DRAG_COEFFICIENT - FIN_OPERATING_DRAG_COEFFICIENT
-    rows = []
-    # dorsal fin: root leading edge at DORSAL_FIN_ROOT_M, span up (z)
-    r, le, te = hull.DORSAL_FIN.edges(4 * n + 1)
-    re_ = np.linspace(0.0, hull.DORSAL_FIN.span_m, n + 1)
-    for a, b in itertools.pairwise(re_):
-        chord = np.interp(0.5 * (a + b), r, le - te)
-        mid = np.interp(0.5 * (a + b), r, 0.5 * (le + te))
-        x0, _, z0 = hull.DORSAL_FIN_ROOT_M
-        rows.append((x0 + mid, 0.0, z0 + 0.5 * (a + b), chord * (b - a), 0.0, c, c))
-    # lateral fins: root leading edge 30 % of the root chord ahead of the pivot, span along +-y
-    fin = hull.LATERAL_FIN
-    r, le, te = fin.edges(4 * n + 1)
-    re_ = np.linspace(0.0, fin.span_m, n + 1)
-    px, py, pz = hull.LATERAL_FIN_PIVOT_M
-    for side in (1.0, -1.0):
-        for a, b in itertools.pairwise(re_):
-            chord = np.interp(0.5 * (a + b), r, le - te)
-            mid = np.interp(0.5 * (a + b), r, 0.5 * (le + te))
-            x = px + hull.LATERAL_FIN_AXIS_FRAC * fin.root_chord_m + mid
-            rows.append((x, side * (py + 0.5 * (a + b)), pz, 0.0, chord * (b - a), c, c))
-    return np.asarray(rows)
-
-
 def crossflow_elements() -> NDArray[np.float64]:
-    """All crossflow elements of the vehicle: :func:`hull_crossflow_strips` then
-    :func:`fin_crossflow_strips`, rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape (k, 7) (the model
-    file's ``hydro_crossflow``)."""
-    return np.vstack([hull_crossflow_strips(), fin_crossflow_strips()])
+    """All crossflow elements of the vehicle, rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape (k, 7)
+    (the model file's ``hydro_crossflow``): the hull's strips (:func:`hull_crossflow_strips`). The
+    fins' normal force is the plugin's plate model, in each fin's own frame
+    (:func:`foil_drag_coefficients`)."""
+    return hull_crossflow_strips()
 
 
 def slender_lift_stations() -> NDArray[np.float64]:
@@ -592,7 +585,8 @@ def hydro_numerics() -> dict[str, NDArray[np.float64]]:
     * ``hydro_crossflow``: :func:`crossflow_elements` flattened (7 per element);
     * ``hydro_slender_lift``: :func:`slender_lift_stations`;
     * ``hydro_roll_damping``: :func:`hull_roll_damping`;
-    * ``hydro_foil_cla``: :func:`foil_lift_slopes`, in the order of the text ``hydro_foils``.
+    * ``hydro_foil_cla``: :func:`foil_lift_slopes`, in the order of the text ``hydro_foils``;
+    * ``hydro_foil_drag``: :func:`foil_drag_coefficients`, 3 per plate in the same order.
 
     Returns:
         Mapping from numeric name to its data, shape (n,).
@@ -604,6 +598,7 @@ def hydro_numerics() -> dict[str, NDArray[np.float64]]:
         "hydro_slender_lift": slender_lift_stations(),
         "hydro_roll_damping": np.array([hull_roll_damping()]),
         "hydro_foil_cla": np.array(list(foil_lift_slopes().values())),
+        "hydro_foil_drag": np.concatenate(list(foil_drag_coefficients().values())),
     }
 
 
@@ -615,3 +610,41 @@ def custom_xml(precision: int = 7) -> str:
         lines.append(f'    <numeric name="{name}" data="{vals}"/>')
     lines.append("  </custom>")
     return "\n".join(lines)
+
+
+def write_model(path: str | None = None) -> list[str]:
+    """Write the derived numbers into the vehicle's model file: every fluid geom's ``fluidcoef``
+    (:func:`derived_fluid_coefficients`, ``%.5g``) and the ``<custom>`` block (:func:`custom_xml`).
+
+    Args:
+        path: model file (default ``models/bauv/bauv.xml``).
+
+    Returns:
+        What was rewritten, one line each.
+    """
+    import re
+    from pathlib import Path
+
+    file = Path(path or hull.MODEL_DIR / "bauv.xml")
+    text = file.read_text()
+    done = []
+    for geom, coefs in derived_fluid_coefficients().items():
+        value = " ".join("0" if c == 0 else f"{c:.5g}" for c in coefs)
+        pattern = rf'(<geom name="{geom}"[^>]*?fluidcoef=")([^"]*)(")'
+        text, n = re.subn(
+            pattern, lambda mt, v=value: mt.group(1) + v + mt.group(3), text, flags=re.S
+        )
+        if n != 1:
+            raise RuntimeError(f"{file}: no unique fluid geom {geom!r} with fluidcoef")
+        done.append(f"{geom}: fluidcoef {value}")
+    text, n = re.subn(r"  <custom>.*?</custom>", lambda _: custom_xml(), text, flags=re.S)
+    if n != 1:
+        raise RuntimeError(f"{file}: no unique <custom> block")
+    done.append(f"<custom>: {', '.join(hydro_numerics())}")
+    file.write_text(text)
+    return done
+
+
+if __name__ == "__main__":
+    for line in write_model():
+        print(line)

@@ -11,6 +11,7 @@ the speed feed-forward of the autopilot and the odometry's frequency-to-speed la
 from __future__ import annotations
 
 import csv
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,8 +29,19 @@ SPEED_TABLE_CSV = MODEL_DIR / "speed_table.csv"
 SPEED_TABLE_COLUMNS: Sequence[str] = ("frequency_hz", "speed_m_s", "power_w", "strouhal")
 """Columns of the CSV file, in order."""
 
-SPEED_TABLE_FREQUENCIES_HZ = (0.3, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0)
-"""Tail-beat frequencies of the speed table, Hz (3 Hz is the motor's commanded limit)."""
+SPEED_TABLE_FREQUENCIES_HZ = (
+    *(0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0),
+    *(1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0),
+)
+"""Tail-beat frequencies of the speed table, Hz (3 Hz is the motor's commanded limit): every
+0.1 Hz up to 1 Hz, where the vehicle cruises and the odometry interpolates, then every 0.25 Hz."""
+
+LEVEL_FIN_FRACTION = 0.9
+"""A straight swim is level while the depth hold's mean fin angle stays below this fraction of its
+limit (:class:`bauv_sim.manoeuvres.DepthHold`)."""
+
+LEVEL_DEPTH_CHANGE_M = 0.25
+"""... and the depth changes by less than this over the measured window, m."""
 
 
 @dataclass(frozen=True)
@@ -102,6 +114,17 @@ def load_speed_table(path: str | Path = SPEED_TABLE_CSV) -> SpeedTable:
     return SpeedTable(**cols)
 
 
+def is_level(swim: manoeuvres.StraightSwimResult) -> bool:
+    """Whether a straight swim was held level by the lateral fins: their mean angle below
+    :data:`LEVEL_FIN_FRACTION` of the depth hold's limit and the depth change over the window
+    below :data:`LEVEL_DEPTH_CHANGE_M`."""
+    limit = manoeuvres.DepthHold(0.0).limit_rad
+    return (
+        abs(swim.mean_fin_rad) < LEVEL_FIN_FRACTION * limit
+        and abs(swim.depth_change_m) < LEVEL_DEPTH_CHANGE_M
+    )
+
+
 def measure_speed_table(
     settle_s: float = 30.0,
     measure_s: float = 20.0,
@@ -109,7 +132,10 @@ def measure_speed_table(
 ) -> list[manoeuvres.StraightSwimResult]:
     """Measure the speed table: straight swims at increasing tail-beat frequencies, one after the
     other in one run of the open-water scene (:func:`bauv_sim.manoeuvres.open_water_scene`, at
-    rest at 20 m depth in still water, the lateral fins holding the depth).
+    rest at 20 m depth in still water, the lateral fins holding the depth), up to the first swim
+    that the fins cannot hold level (:func:`is_level`): the vehicle pitches up as it swims faster
+    (``models/bauv/README.md``, "Speed table and cruise"), and beyond that swim the speed is not
+    that of a straight and level swim.
 
     Args:
         settle_s: settling time per frequency, s.
@@ -117,11 +143,18 @@ def measure_speed_table(
         frequencies_hz: increasing tail-beat frequencies, Hz.
 
     Returns:
-        One :class:`~bauv_sim.manoeuvres.StraightSwimResult` per frequency.
+        One :class:`~bauv_sim.manoeuvres.StraightSwimResult` per frequency held level, in order.
     """
-    return manoeuvres.speed_table(
-        manoeuvres.open_water_scene(), list(frequencies_hz), settle_s, measure_s
-    )
+    if any(b <= a for a, b in itertools.pairwise(frequencies_hz)):
+        raise ConfigError(f"frequencies = {list(frequencies_hz)}: must increase")
+    physics = manoeuvres.open_water_scene()
+    out = []
+    for f in frequencies_hz:
+        swim = manoeuvres.straight_swim(physics, f, settle_s, measure_s)
+        if not is_level(swim):
+            break
+        out.append(swim)
+    return out
 
 
 def write_speed_table(

@@ -24,6 +24,13 @@
 //   * thin-plate lift 1/2 rho S C_La sin(a) cos(a) |u|^2 in each plate's chord-normal plane, at its
 //     quarter chord (text "<prefix>hydro_foils": geom names; numeric "<prefix>hydro_foil_cla": C_La
 //     per plate; chord along the geom's x, normal along its thinnest axis, S = pi a_chord a_span);
+//   * thin-plate drag (numeric "<prefix>hydro_foil_drag": C_D0 k_i C_N per plate, zeros for a plate
+//     whose drag is MuJoCo's): at the centre, the profile drag -1/2 rho S C_D0 |u_t| u_t of the
+//     in-plane velocity u_t (skin friction on both faces with the section's form factor) and the
+//     lift-induced drag 1/2 rho S k_i C_L^2 |u|^2 against the chord-normal velocity (C_L of the
+//     lift above, k_i = 1/(pi e A)); over a grid of NSPAN x NCHORD panels of the plate's ellipse,
+//     the normal (crossflow) force -1/2 rho C_N dA |u_n| u_n of each panel's normal velocity
+//     (translation and rotation);
 //   * the Froude-Krylov force rho V a_water on every displacing body (gravcomp x mass);
 //   * for a vehicle whose water is not MuJoCo's (option wind: the first vehicle's), the change of
 //     MuJoCo's translational drag (blunt, slender, Stokes) of its fluid geoms in its own water.
@@ -42,6 +49,9 @@
 
 #define NSTATE 7
 #define NAME_LEN 1024
+#define NSPAN 8    // span strips of a plate's normal-force panels
+#define NCHORD 4   // chordwise panels per strip
+#define NPANEL (NSPAN * NCHORD)
 
 typedef struct {
   int free_body;     // body of the vehicle's free joint
@@ -62,6 +72,8 @@ typedef struct {
   int* foil_geom;
   mjtNum* foil_k;    // 1/2 rho S C_La
   int* foil_normal;
+  mjtNum* foil_drag; // per plate: 1/2 rho S C_D0, 1/2 rho S k_i C_La^2, 1/2 rho C_N
+  mjtNum* panel;     // per plate NPANEL x (chord, span position in the geom frame (m), area m^2)
   int ndrag;
   int* drag_geom;    // every fluid geom of the vehicle
   int nfk;
@@ -78,6 +90,8 @@ static void hydro_free(Hydro* h) {
   free(h->foil_geom);
   free(h->foil_k);
   free(h->foil_normal);
+  free(h->foil_drag);
+  free(h->panel);
   free(h->drag_geom);
   free(h->fk_body);
   free(h->fluid_geom);
@@ -106,6 +120,8 @@ static Hydro* hydro_copy(const Hydro* s) {
   h->foil_geom = dup_int(s->foil_geom, s->nfoil);
   h->foil_k = dup_num(s->foil_k, s->nfoil);
   h->foil_normal = dup_int(s->foil_normal, s->nfoil);
+  h->foil_drag = dup_num(s->foil_drag, 3 * s->nfoil);
+  h->panel = dup_num(s->panel, 3 * NPANEL * s->nfoil);
   h->drag_geom = dup_int(s->drag_geom, s->ndrag);
   h->fk_body = dup_int(s->fk_body, s->nfk);
   h->fluid_geom = dup_int(s->fluid_geom, s->nfluid);
@@ -263,6 +279,7 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
   snprintf(full, NAME_LEN, "%shydro_foils", prefix);
   int tid = mj_name2id(m, mjOBJ_TEXT, full);
   const mjtNum* cla = numeric(m, prefix, "hydro_foil_cla", &size);
+  int cla_size = size;
   if (tid >= 0) {
     const char* text = m->text_data + m->text_adr[tid];
     int len = m->text_size[tid];
@@ -275,13 +292,21 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
     for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
       count++;
     }
-    if (!cla || size != count) {
+    if (!cla || cla_size != count) {
       hydro_free(h);
       return fail(iname, "'<prefix>hydro_foil_cla' must give one C_La per '<prefix>hydro_foils'");
+    }
+    int drag_size = 0;
+    const mjtNum* fd = numeric(m, prefix, "hydro_foil_drag", &drag_size);
+    if (fd && drag_size != 3 * count) {
+      hydro_free(h);
+      return fail(iname, "'<prefix>hydro_foil_drag' must give C_D0 k_i C_N per '<prefix>hydro_foils'");
     }
     h->foil_geom = (int*)malloc(sizeof(int) * (count + 1));
     h->foil_k = (mjtNum*)malloc(sizeof(mjtNum) * (count + 1));
     h->foil_normal = (int*)malloc(sizeof(int) * (count + 1));
+    h->foil_drag = (mjtNum*)calloc(3 * (count + 1), sizeof(mjtNum));
+    h->panel = (mjtNum*)calloc(3 * NPANEL * (count + 1), sizeof(mjtNum));
     memcpy(buf, text, len);
     buf[len] = '\0';
     save = NULL;
@@ -301,7 +326,30 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
       }
       h->foil_geom[i] = g;
       h->foil_normal[i] = normal;
-      h->foil_k[i] = 0.5 * m->opt.density * mjPI * s[0] * s[3 - normal] * cla[i];
+      const mjtNum area = mjPI * s[0] * s[3 - normal];
+      h->foil_k[i] = 0.5 * m->opt.density * area * cla[i];
+      if (fd) {
+        h->foil_drag[3 * i] = 0.5 * m->opt.density * area * fd[3 * i];
+        h->foil_drag[3 * i + 1] = 0.5 * m->opt.density * area * fd[3 * i + 1] * cla[i] * cla[i];
+        h->foil_drag[3 * i + 2] = 0.5 * m->opt.density * fd[3 * i + 2];
+      }
+      // normal-force panels of the ellipse: NSPAN span stations eta_j = cos(j pi / (NSPAN + 1))
+      // with the Gauss-Chebyshev weights of the second kind, which integrate sqrt(1 - eta^2) f(eta)
+      // (the chord's distribution times f) exactly for polynomials f of degree < 2 NSPAN: strip
+      // j holds the area fraction 2 sin^2(j pi / (NSPAN + 1)) / (NSPAN + 1) of the ellipse, its
+      // chord 2 a sin(j pi / (NSPAN + 1)) cut into NCHORD equal panels
+      mjtNum* pn = h->panel + 3 * NPANEL * i;
+      for (int j = 1; j <= NSPAN; j++) {
+        mjtNum th = j * mjPI / (NSPAN + 1);
+        mjtNum half = sin(th);
+        for (int k = 0; k < NCHORD; k++) {
+          mjtNum xi = -1.0 + (2.0 * k + 1.0) / NCHORD;
+          pn[0] = xi * half * s[0];
+          pn[1] = cos(th) * s[3 - normal];
+          pn[2] = area * 2.0 * half * half / (NSPAN + 1) / NCHORD;
+          pn += 3;
+        }
+      }
       h->kutta_geom[h->nkutta++] = g;
       i++;
     }
@@ -516,7 +564,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     }
   }
 
-  // plates: thin-plate lift in the chord-normal plane
+  // plates: thin-plate drag (profile, induced, normal) and lift in the chord-normal plane
   for (int i = 0; i < h->nfoil; i++) {
     int g = h->foil_geom[i];
     const mjtNum* Rg = d->geom_xmat + 9 * g;
@@ -527,8 +575,47 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     ul[1] = vel[4] - wl[1];
     ul[2] = vel[5] - wl[2];
     int n = h->foil_normal[i];
+    int span = 3 - n;
     mjtNum uc = ul[0], un = ul[n];
     mjtNum sp = sqrt(uc * uc + un * un);
+    const mjtNum* fd = h->foil_drag + 3 * i;
+    if (fd[0] != 0 || fd[1] != 0 || fd[2] != 0) {
+      mjtNum fp[3] = {0, 0, 0}, tp[3] = {0, 0, 0};
+      // profile drag of the in-plane velocity (chord and span)
+      mjtNum ut = sqrt(uc * uc + ul[span] * ul[span]);
+      fp[0] -= fd[0] * ut * uc;
+      fp[span] -= fd[0] * ut * ul[span];
+      // lift-induced drag against the chord-normal velocity: 1/2 rho S k_i (C_La uc un / sp)^2
+      if (sp > 0) {
+        mjtNum di = fd[1] * uc * uc * un * un / (sp * sp * sp);
+        fp[0] -= di * uc;
+        fp[n] -= di * un;
+      }
+      // normal force of each panel, at the panel: moment about the centre
+      if (fd[2] != 0) {
+        const mjtNum* pn = h->panel + 3 * NPANEL * i;
+        for (int k = 0; k < NPANEL; k++, pn += 3) {
+          mjtNum r[3] = {pn[0], 0, 0};
+          r[span] = pn[1];
+          mjtNum wr[3];
+          cross3(wr, vel, r);  // vel[0:3]: the geom's angular velocity, its frame
+          mjtNum unp = un + wr[n];
+          mjtNum fn = -fd[2] * pn[2] * fabs(unp) * unp;
+          fp[n] += fn;
+          // r x (fn e_n)
+          mjtNum fv[3] = {0, 0, 0}, tv[3];
+          fv[n] = fn;
+          cross3(tv, r, fv);
+          tp[0] += tv[0];
+          tp[1] += tv[1];
+          tp[2] += tv[2];
+        }
+      }
+      mjtNum fw2[3], tw2[3];
+      mju_mulMatVec3(fw2, Rg, fp);
+      mju_mulMatVec3(tw2, Rg, tp);
+      mj_applyFT(m, d, fw2, tw2, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
+    }
     if (sp <= 0) continue;
     mjtNum k = h->foil_k[i] * uc * un / sp;
     mjtNum fl[3] = {k * un, 0, 0};

@@ -61,7 +61,10 @@ def streams(prefix: str, name: str) -> tuple[str, ...]:
 def place_vehicle(
     physics, start: StartConfig, seed: int, run: int, vehicle: str, prefix: str = ""
 ) -> Array:
-    """Place a vehicle at its start: the nominal pose scattered by its ``start`` stream.
+    """Place a vehicle at its start: the nominal pose scattered by its ``start`` stream, moving
+    at ``start.speed_m_s`` along its heading through the water (placed in the still water of a
+    reset physics; :meth:`MissionWorld.initialize_episode` then puts it in the mission's sea,
+    which carries it with the water: over ground it starts at that velocity plus the current).
 
     Returns:
         The true start position, shape (3,), m, world.
@@ -234,6 +237,7 @@ class MissionWorld(control.Task):
     def initialize_episode(self, physics) -> None:
         physics.set_control_tick(self.scn.timing.control_tick_s)
         self.parts = self.design.build(self.scn, self.seed, self.run, physics)
+        # after the vehicles are placed: the sea carries each with the water at it (set_sea)
         physics.set_sea(self.parts.sea)
         got = tuple(v.name for v in self.parts.vehicles)
         if got != self.names:

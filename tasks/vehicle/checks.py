@@ -363,7 +363,7 @@ def check_current(frequency_hz: float | None = None, long_s: float = 1500.0) -> 
     # time until the drift is within 3 %
     phys = _scene()
     phys.set_tail_beat_frequency_hz(0.0)
-    phys.set_sea(sea.Sea(field))
+    manoeuvres.release_in_current(phys, field)
     tick = phys.control_tick_s
     t3 = math.inf
     prev = phys.position_world()

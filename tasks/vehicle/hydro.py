@@ -65,6 +65,34 @@ reviewers quote the same within their own set-ups (broadside Cd 0.037, hull side
 1 deg, roll period 0.89 s and settling 3.7 s, turn 7.7 deg/s and 7.5 m at 10 deg, log 0.75 m/s
 after an along-track step, plain MuJoCo 0.52 m/s and 38 deg)."""
 
+BEFORE_21: dict[str, float] = {
+    "idle_across_0.2s": 0.089,
+    "idle_across_1s": 0.317,
+    "idle_along_0.2s": 0.004,
+    "idle_along_1s": 0.019,
+    "cross_lag_0.3_m": 2.656,
+    "cross_lag_2_m": 5.39,
+    "log_min_after_switch_m_s": 0.716,
+    "tow_mujoco_r0_n": 3.815,
+    "tow_mujoco_r0.05_n": 5.913,
+    "tow_mujoco_r0.1_n": 7.217,
+    "tow_mujoco_r0.2_n": 8.307,
+    "tow_total_r0_n": 3.815,
+    "tow_total_r0.05_n": 5.754,
+    "tow_total_r0.1_n": 6.581,
+    "tow_total_r0.2_n": 5.786,
+    "speed_at_0.84_hz_m_s": 1.000,
+}
+"""Figures of issue 21's items on the model before it (commit e4e897f), measured by the same
+procedures as :func:`check_set_sea` and :func:`check_fins` (the set_sea carry and the thin-plate
+fins reverted): an idle vehicle's velocity along a 0.3 m/s current set with ``set_sea``, as a
+fraction of it, 0.2 s and 1 s after; a swimming vehicle's lag behind the drifted track after 60 s
+in a cross current; the log's least reading after an along-track switch; the towed drag at 1 m/s
+with a yaw rate (MuJoCo's part: the audit's 7.2 N); the cruise speed at 0.84 Hz."""
+
+OLD_FIN_FLUIDCOEF = {"caudal_fin_fluid": (0.08, 0.003781), "dorsal_fin_fluid": (0.08, 0.0046943)}
+"""MuJoCo's blunt and slender drag coefficients of the fins before issue 21 (commit e4e897f)."""
+
 
 def _open_water(speed_m_s: float = 0.0, heading_deg: float = 0.0) -> BauvPhysics:
     return manoeuvres.open_water_scene(depth_m=20.0, heading_deg=heading_deg, speed_m_s=speed_m_s)
@@ -292,7 +320,8 @@ def check_broadside(speed_m_s: float = 0.3) -> BroadsideResult:
 
 def hull_only() -> BauvPhysics:
     """The vehicle with only its hull in the fluid: the other geoms' fluid coefficients zeroed,
-    no lifting plates, no fin crossflow strips (a model variant, for the hull's forces)."""
+    no lifting plates (their lift and drag), only the hull's crossflow strips (a model variant,
+    for the hull's forces)."""
     spec = mujoco.MjSpec.from_file(str(hull.MODEL_DIR / "scene.xml"))
     keep = {"hull_fluid"}
     for g in spec.geoms:
@@ -302,7 +331,7 @@ def hull_only() -> BauvPhysics:
         if t.name == "hydro_foils":
             spec.delete(t)
     for n in list(spec.numerics):
-        if n.name == "hydro_foil_cla":
+        if n.name in ("hydro_foil_cla", "hydro_foil_drag"):
             spec.delete(n)
         elif n.name == "hydro_crossflow":
             rows = np.asarray(n.data).reshape(-1, 7)
@@ -649,6 +678,126 @@ def check_current_step(frequency_hz: float | None = None) -> tuple[StepRow, ...]
     return tuple(out)
 
 
+@dataclass(frozen=True)
+class SetSeaResult:
+    """A steady uniform current injected with ``set_sea`` (issue 21): the idle vehicle's
+    velocity along a 0.3 m/s current, as a fraction of it, 0.2 s and 1 s after (across and along
+    its heading); a vehicle placed at 1 m/s through the water and put in a cross current of 0.3
+    and 2 m/s: its offset across the track from the still-water track plus the drift after 60 s
+    (m); the log's least reading within 10 s after a 0.3 m/s current is set along the track of a
+    vehicle swimming at 1 m/s, and its range over the 10 s before (m/s)."""
+
+    idle: dict[str, tuple[float, float]]
+    cross_lag_m: dict[float, float]
+    log_min_after_m_s: float
+    log_range_before_m_s: tuple[float, float]
+
+
+def check_set_sea(frequency_hz: float | None = None) -> SetSeaResult:
+    """The idle step, the start in a cross current and the along-track switch of issue 21."""
+    from bauv_sim.currents import UniformCurrent
+    from tasks.vehicle.checks import cruise_frequency_hz
+
+    f = cruise_frequency_hz() if frequency_hz is None else frequency_hz
+    idle = {}
+    for name, direction in (("across", math.pi / 2), ("along", 0.0)):
+        ph = _open_water()
+        ph.advance(1.0)
+        c = UniformCurrent(0.3, direction)
+        w = c.velocity_world(0.0, np.zeros(3))
+        ph.set_sea(Sea(c))
+        fr = []
+        for _ in range(10):
+            ph.advance(0.1)
+            fr.append(float(ph.velocity_world() @ w / (w @ w)))
+        idle[name] = (fr[1], fr[9])
+
+    def swim(seas: dict[int, Sea], ticks: int, log: list | None = None) -> NDArray:
+        ph = _open_water(speed_m_s=1.0)
+        hold = manoeuvres.DepthHold(ph.depth_m())
+        ph.set_tail_beat_frequency_hz(f)
+        p0 = ph.position_world()
+        for k in range(ticks):
+            if k in seas:
+                ph.set_sea(seas[k])
+            a = hold.fins_rad(ph)
+            ph.set_lateral_fins_rad(a, a)
+            ph.advance(ph.control_tick_s)
+            if log is not None:
+                log.append(float(ph.R_world_from_body()[:, 0] @ ph.velocity_through_water_world()))
+        return ph.position_world() - p0
+
+    still = swim({}, 600)
+    lag = {}
+    for speed in (0.3, 2.0):
+        moved = swim({0: Sea(UniformCurrent(speed, math.pi / 2))}, 600)
+        lag[speed] = float(abs(moved[0] - (still[0] + speed * 60.0)))
+    log: list[float] = []
+    swim({200: Sea(UniformCurrent(0.3, 0.0))}, 300, log)
+    before = log[100:200]
+    return SetSeaResult(idle, lag, min(log[200:]), (min(before), max(before)))
+
+
+@dataclass(frozen=True)
+class FinDragResult:
+    """The thin fins' drag (issue 21). ``coefficients``: per fin and incidence (deg), the drag
+    coefficient on the plate's area of the plate model and of MuJoCo's projected-area formula
+    with the fin's former coefficients, and that formula's projected area over the plate's true
+    shadow. ``tow``: per yaw rate (rad/s), the towed drag at 1 m/s (N): MuJoCo's part and the total
+    fluid force against the motion. ``cruise_speed_m_s``: the straight swim at 0.84 Hz (the
+    cruise frequency before)."""
+
+    coefficients: dict[str, dict[float, tuple[float, float, float]]]
+    tow: dict[float, tuple[float, float]]
+    cruise_speed_m_s: float
+
+
+def projected_area_m2(semi: NDArray[np.float64], u: NDArray[np.float64]) -> tuple[float, float]:
+    """MuJoCo's projected area of an ellipsoid for a flow direction (``engine_passive.c``: a
+    weighted mean of the three sections) and the true shadow ``pi abc |(u_x/a, u_y/b, u_z/c)|``,
+    m^2."""
+    n = np.asarray(u, dtype=float) / np.linalg.norm(u)
+    r2 = np.asarray(semi, dtype=float) ** 2
+    num = r2[1] ** 2 * r2[2] ** 2 * n[0] ** 2 + r2[2] ** 2 * r2[0] ** 2 * n[1] ** 2
+    num += r2[0] ** 2 * r2[1] ** 2 * n[2] ** 2
+    den = r2[1] * r2[2] * n[0] ** 2 + r2[2] * r2[0] * n[1] ** 2 + r2[0] * r2[1] * n[2] ** 2
+    shadow = math.pi * float(np.prod(semi)) * float(np.linalg.norm(n / np.asarray(semi)))
+    return math.pi * math.sqrt(num / den), shadow
+
+
+def check_fins(alphas_deg: tuple[float, ...] = (1.0, 5.0, 20.0)) -> FinDragResult:
+    """The caudal and dorsal fins' drag coefficients against incidence (design tables: the plate
+    model the plugin applies, drag = q S (C_D0 cos^3 a + k_i C_L^2 + C_N sin^3 a) with C_L = C_La
+    sin a cos a; MuJoCo's 2 (C_b A_proj + C_s (S - A_proj)) / S), the towed drag with a yaw rate,
+    and the cruise speed at the former cruise frequency."""
+    drag = fluid.foil_drag_coefficients()
+    cla = fluid.foil_lift_slopes()
+    fins = {f.geom: f for f in fluid.plate_fins()}
+    coefs: dict[str, dict[float, tuple[float, float, float]]] = {}
+    for geom, (cb, cs) in OLD_FIN_FLUIDCOEF.items():
+        semi = np.array(fins[geom].semi_axes_m)  # chord, thickness, span
+        area = math.pi * semi[0] * semi[2]
+        c_d0, k_i, c_n = drag[geom]
+        coefs[geom] = {}
+        for a in alphas_deg:
+            al = math.radians(a)
+            c_l = cla[geom] * math.sin(al) * math.cos(al)
+            plate = c_d0 * math.cos(al) ** 3 + k_i * c_l**2 + c_n * math.sin(al) ** 3
+            a_proj, shadow = projected_area_m2(semi, np.array([math.cos(al), math.sin(al), 0.0]))
+            old = 2.0 * (cb * a_proj + cs * (area - a_proj)) / area
+            coefs[geom][a] = (plate, old, a_proj / shadow)
+    tow_rows = {}
+    for r in (0.0, 0.05, 0.1, 0.2):
+        ph = _open_water()
+        ph.set_pose([0.0, 0.0, -20.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], None, [0.0, 0.0, r])
+        total = -float(ph.fluid_force_world()[1])
+        free = np.arange(6)
+        mj = -float(np.asarray(ph.data.qfrc_fluid)[free][1])
+        tow_rows[r] = (mj, total)
+    swim = manoeuvres.straight_swim(_open_water(speed_m_s=1.0), 0.84)
+    return FinDragResult(coefs, tow_rows, swim.speed_through_water_m_s)
+
+
 # ------------------------------------------------------------------------------------------
 # 5. plain MuJoCo, and a vehicle in water of its own
 
@@ -728,7 +877,7 @@ def check_own_water(frequency_hz: float | None = None, duration_s: float = 60.0)
     cfg = build.SceneConfig(
         vehicles=(
             build.VehicleSpec(name="leader", east_m=-40.0, depth_m=20.0, speed_m_s=1.0),
-            build.VehicleSpec(name="follower", east_m=0.0, depth_m=20.0, speed_m_s=1.4),
+            build.VehicleSpec(name="follower", east_m=0.0, depth_m=20.0, speed_m_s=1.0),
         ),
         seabed=_flat_bed(),
         beacons=(),
@@ -841,10 +990,12 @@ def _set_numeric(m: mujoco.MjModel, name: str, data: NDArray[np.float64]) -> Non
 
 
 def check_approximations(frequency_hz: float | None = None) -> tuple[ApproximationRow, ...]:
-    """What two of the model's approximations change: the afterbody's share of the hull's Munk
-    couple lost to separation (the variant keeps the whole potential couple: f = 0), and the tail's
+    """What four of the model's approximations change: the afterbody's share of the hull's Munk
+    couple lost to separation (the variant keeps the whole potential couple: f = 0), the tail's
     share of the rigid-body added mass at zero tail angle (the variant leaves it out: the flapping
-    parts' water then only as the hinges' armature)."""
+    parts' water then only as the hinges' armature), the fins' span efficiency e = 1 of their
+    induced drag (the variant: 0.8, real fins' lower bound) and their normal force C_N sin^2 a
+    (the variant leaves it out)."""
     from tasks.vehicle.checks import cruise_frequency_hz
 
     f = cruise_frequency_hz() if frequency_hz is None else frequency_hz
@@ -852,12 +1003,19 @@ def check_approximations(frequency_hz: float | None = None) -> tuple[Approximati
     no_tail = fluid.added_mass_matrix(
         geoms=("hull_fluid", "dorsal_fin_fluid", "fin_port_fluid", "fin_starboard_fluid")
     )
+    plates = np.array(list(fluid.foil_drag_coefficients().values()))
     variants = {
         "the model": lambda m: None,
         "separation off (the hull's whole Munk couple)": lambda m: _set_numeric(
             m, "hydro_slender_lift", np.r_[sl[:4], 0.0, 0.0]
         ),
         "without the tail's added mass": lambda m: _set_numeric(m, "hydro_added_mass", no_tail),
+        "fins' span efficiency 0.8 (induced drag x 1.25)": lambda m: _set_numeric(
+            m, "hydro_foil_drag", plates * [1.0, 1.0 / 0.8, 1.0]
+        ),
+        "fins without their normal (crossflow) force": lambda m: _set_numeric(
+            m, "hydro_foil_drag", plates * [1.0, 1.0, 0.0]
+        ),
     }
     rows = []
     for label, edit in variants.items():
@@ -1024,6 +1182,71 @@ def render(name: str, res: object) -> str:
             ],
             rows,
         )
+    if name == "sea":
+        q: SetSeaResult = res  # type: ignore[assignment]
+        c = BEFORE_21
+        rows = []
+        for k in ("across", "along"):
+            a, b1 = q.idle[k]
+            rows.append(
+                [
+                    f"idle, 0.3 m/s set {k} the heading: fraction reached after 0.2 s / 1 s",
+                    f"{a:.3f} / {b1:.3f}",
+                    f"{c[f'idle_{k}_0.2s']:.3f} / {c[f'idle_{k}_1s']:.3f}",
+                ]
+            )
+        for speed, lag in q.cross_lag_m.items():
+            rows.append(
+                [
+                    f"placed at 1 m/s, put in a {speed:g} m/s cross current: behind the drifted "
+                    "track after 60 s (m)",
+                    f"{lag:.3f}",
+                    f"{c[f'cross_lag_{speed:g}_m']:.2f}",
+                ]
+            )
+        rows.append(
+            [
+                "swimming at 1 m/s, 0.3 m/s set along the track: the log's least reading in 10 s "
+                "(m/s)",
+                f"{q.log_min_after_m_s:.3f} (before the switch "
+                f"{q.log_range_before_m_s[0]:.3f}-{q.log_range_before_m_s[1]:.3f})",
+                f"{c['log_min_after_switch_m_s']:.3f}",
+            ]
+        )
+        return _table(
+            ["steady uniform current set with set_sea", "measured", "before (e4e897f)"], rows
+        )
+    if name == "fins":
+        fr: FinDragResult = res  # type: ignore[assignment]
+        c = BEFORE_21
+        rows = []
+        for geom, by_alpha in fr.coefficients.items():
+            for a, (plate, old, ratio) in by_alpha.items():
+                rows.append(
+                    [
+                        f"{geom.removesuffix('_fluid').replace('_', ' ')}, {a:g} deg",
+                        f"{plate:.4f}",
+                        f"{old:.4f} ({old / plate:.1f} x; projected area {ratio:.1f} x the shadow)",
+                    ]
+                )
+        coef = _table(
+            ["fin, incidence", "drag coefficient on S: plate", "before (e4e897f): MuJoCo's"], rows
+        )
+        tow = _table(
+            ["yaw rate rad/s", "towed drag at 1 m/s: MuJoCo's part / total N", "before (e4e897f)"],
+            [
+                [
+                    f"{r:g}",
+                    f"{mj:.3f} / {tot:.3f}",
+                    f"{c[f'tow_mujoco_r{r:g}_n']:.3f} / {c[f'tow_total_r{r:g}_n']:.3f}",
+                ]
+                for r, (mj, tot) in fr.tow.items()
+            ],
+        )
+        return (
+            coef + "\n\n" + tow + f"\n\nStraight swim at 0.84 Hz (the cruise frequency before): "
+            f"{fr.cruise_speed_m_s:.3f} m/s (before {c['speed_at_0.84_hz_m_s']:.3f})."
+        )
     if name == "plain":
         p: PlainResult = res  # type: ignore[assignment]
         return _table(
@@ -1112,6 +1335,8 @@ CHECKS = {
     "bauv": check_bauv,
     "turns": check_turns,
     "step": check_current_step,
+    "sea": check_set_sea,
+    "fins": check_fins,
     "plain": check_plain_mujoco,
     "water": check_own_water,
     "spring": check_spring,

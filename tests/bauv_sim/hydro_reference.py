@@ -31,6 +31,28 @@ def _text(m: mujoco.MjModel, name: str) -> str | None:
     return bytes(m.text_data[a : a + n]).decode().rstrip("\x00")
 
 
+N_SPAN, N_CHORD = 8, 4
+"""The plate's normal-force panels: span strips and chordwise panels per strip."""
+
+
+def _panels(a: float, b: float, span: int) -> list[tuple[NDArray[np.float64], float]]:
+    """Panels of an ellipse of semi-axes a (chord, geom x) and b (span, geom axis ``span``): span
+    stations at the nodes of Gauss-Chebyshev quadrature of the second kind (weight
+    sqrt(1 - eta^2), the chord's distribution), strip areas pi a b times the normalised weights,
+    each strip's chord cut into N_CHORD equal panels. Position (geom frame, m) and area (m^2) of
+    each."""
+    theta = np.arange(1, N_SPAN + 1) * np.pi / (N_SPAN + 1)
+    weight = np.sin(theta) ** 2 / np.sum(np.sin(theta) ** 2)
+    xi = -1.0 + (2.0 * np.arange(N_CHORD) + 1.0) / N_CHORD
+    out = []
+    for th, wt in zip(theta, weight, strict=True):
+        for x in xi:
+            r = np.zeros(3)
+            r[0], r[span] = x * np.sin(th) * a, np.cos(th) * b
+            out.append((r, np.pi * a * b * wt / N_CHORD))
+    return out
+
+
 def free_body(m: mujoco.MjModel, prefix: str) -> int:
     b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, prefix + "hull")
     while m.body_jntnum[b] == 0 and m.body_parentid[b] != 0:
@@ -110,7 +132,9 @@ def reference(
     # thin plates
     names = (_text(m, prefix + "hydro_foils") or "").split()
     cla = _numeric(m, prefix + "hydro_foil_cla")
-    for name, c_la in zip(names, [] if cla is None else cla, strict=True):
+    drag = _numeric(m, prefix + "hydro_foil_drag")
+    drag = np.zeros((len(names), 3)) if drag is None else drag.reshape(-1, 3)
+    for name, c_la, (c_d0, k_i, c_n) in zip(names, [] if cla is None else cla, drag, strict=True):
         g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, prefix + name)
         size = m.geom_size[g]
         n = 1 if size[1] <= size[2] else 2
@@ -122,6 +146,29 @@ def reference(
         u = vel[3:] - Rg.T @ w
         uc, un = u[0], u[n]
         speed = np.hypot(uc, un)
+        # drag: profile drag of the in-plane velocity, lift-induced drag against the chord-normal
+        # velocity (C_L = C_La sin a cos a), normal force of the plate's area by panels
+        f = np.zeros(3)
+        tangential = np.array([uc, 0.0, 0.0])
+        tangential[span] = u[span]
+        f -= 0.5 * rho * area * c_d0 * np.linalg.norm(tangential) * tangential
+        if speed > 0:
+            c_l = c_la * (uc / speed) * (un / speed)
+            chord_normal = np.zeros(3)
+            chord_normal[0], chord_normal[n] = uc, un
+            f -= 0.5 * rho * area * k_i * c_l**2 * speed * chord_normal
+        torque = np.zeros(3)
+        if c_n:
+            for r, d_area in _panels(size[0], size[span], span):
+                u_n = (u + np.cross(vel[:3], r))[n]
+                fn = np.zeros(3)
+                fn[n] = -0.5 * rho * c_n * d_area * abs(u_n) * u_n
+                f += fn
+                torque += np.cross(r, fn)
+        if c_d0 or k_i or c_n:
+            mujoco.mj_applyFT(
+                m, d, Rg @ f, Rg @ torque, d.geom_xpos[g], int(m.geom_bodyid[g]), qfrc
+            )
         if speed == 0:
             continue
         # lift perpendicular to (uc, un) in the chord-normal plane, magnitude

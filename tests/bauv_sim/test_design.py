@@ -41,7 +41,7 @@ def test_ballast_in_the_model_is_the_solution():
     sol = ballast.solve_ballast(spec, "hull", "buoyancy", "ballast", v, cb)
     g = spec.geom("ballast")
     assert g.mass == pytest.approx(sol.mass_kg, abs=1e-6)
-    assert g.pos[:2] == pytest.approx(sol.pos_hull_m, abs=1e-6)
+    assert g.pos[:2] == pytest.approx(sol.pos_hull_m, abs=1e-7)  # the file rounds to 0.1 um
     assert spec.body("buoyancy").gravcomp == pytest.approx(sol.float_gravcomp, abs=1e-6)
 
 
@@ -117,7 +117,9 @@ def test_speed_table_round_trip(tmp_path):
 def test_the_models_speed_table_gives_cruise_at_one_metre_per_second():
     t = load_speed_table()
     f = float(t.frequency_for(1.0))
-    assert 0.8 < f < 1.6
+    # 0.61 Hz since the fins are thin plates (issue 21: MuJoCo's projected-area drag on the
+    # flapping caudal fin was 42 % of the swimming drag; 0.84 Hz with it)
+    assert 0.5 < f < 1.6
     assert np.all(np.diff(t.frequency_hz) > 0)
     assert np.all((t.power_w >= 0) & (t.power_w <= 250.0))
 

@@ -9,20 +9,33 @@ import pytest
 
 from bauv_sim import currents, hull, manoeuvres
 from bauv_sim.design.speed_table import load_speed_table
-from bauv_sim.sea import Sea
 
 
-def test_cruise_speed_power_and_strouhal():
+@pytest.fixture(scope="module")
+def cruise():
     f = load_speed_table().frequency_for(1.0)
     phys = manoeuvres.open_water_scene(speed_m_s=1.0)
-    r = manoeuvres.straight_swim(phys, f, settle_s=15.0, measure_s=6.0)
+    return f, phys, manoeuvres.straight_swim(phys, f, settle_s=15.0, measure_s=6.0)
+
+
+def test_cruise_speed_and_power(cruise):
+    f, phys, r = cruise
     assert 0.9 <= r.speed_through_water_m_s <= 1.1
     assert 0.0 < r.mean_motor_power_w <= 250.0
-    assert 0.2 <= r.strouhal <= 0.4
     # the caudal tip swings at least as far as segment 1's end does by the crank alone
     seg1_tip = 2 * (hull.HULL.hinge_x_m - hull.HULL.end_x_m) * math.sin(phys.tail_amplitude_rad())
     assert r.tail_tip_amplitude_m > 0.8 * seg1_tip
     assert r.window_s == pytest.approx(round(6.0 * f) / f, abs=0.01)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 21: since the fins are thin plates the model cruises at St 0.193, below the "
+    "0.2 of cruising fish (issue 3's range); the flapping peduncle's crossflow drag is missing "
+    "(models/bauv/README.md, Limitations)",
+)
+def test_cruise_strouhal_is_that_of_cruising_fish(cruise):
+    assert 0.2 <= cruise[2].strouhal <= 0.4
 
 
 def test_tail_bias_turns_the_way_it_says():
@@ -39,11 +52,12 @@ def test_tail_bias_turns_the_way_it_says():
 
 
 def test_fins_change_depth_the_way_they_say():
+    f = load_speed_table().frequency_for(1.0)  # at cruise (above 1.4 m/s the vehicle pitches up)
     up = manoeuvres.depth_change(
-        manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, 0.2, approach_s=5.0, step_s=10.0
+        manoeuvres.open_water_scene(speed_m_s=1.0), f, 0.2, approach_s=5.0, step_s=10.0
     )
     down = manoeuvres.depth_change(
-        manoeuvres.open_water_scene(speed_m_s=1.0), 1.2, -0.2, approach_s=5.0, step_s=10.0
+        manoeuvres.open_water_scene(speed_m_s=1.0), f, -0.2, approach_s=5.0, step_s=10.0
     )
     assert up.depth_rate_m_s < -0.03 and down.depth_rate_m_s > 0.03
 
@@ -74,7 +88,7 @@ def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
     c = currents.UniformCurrent(0.5, math.radians(200.0))  # coasting 20 deg off the axis
     cw = c.velocity_world(0.0, np.zeros(3))
     drift = manoeuvres.open_water_scene()
-    drift.set_sea(Sea(c))
+    manoeuvres.release_in_current(drift, c)
     coast = manoeuvres.open_water_scene()
     coast.set_pose(coast.position_world(), coast.roll_pitch_heading(), -cw)
     for _ in range(50):

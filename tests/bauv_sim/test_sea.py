@@ -124,3 +124,119 @@ def test_free_surface_buoyancy_fraction_and_motion():
     p.advance(2.0)
     assert p.depth_m() == pytest.approx(2.0, abs=0.02)
     assert p.buoyancy_scale() == 1.0
+
+
+# ------------------------------------------------------------------------------------------
+# a sea injected with set_sea carries the vehicles with the water (issue 21)
+
+
+def _swim(sea_at: dict[float, Sea], seconds: float, heading_deg: float = 0.0, f: float = 0.84):
+    """A vehicle swimming at a fixed tail-beat frequency from 1 m/s through the water (depth held
+    by the fins), seas injected at given times; its position over ground and its velocity through
+    the water at every tick."""
+    from bauv_sim import manoeuvres
+
+    p = manoeuvres.open_water_scene(heading_deg=heading_deg, speed_m_s=1.0)
+    hold = manoeuvres.DepthHold(p.depth_m())
+    p.set_tail_beat_frequency_hz(f)
+    pos, through = [], []
+    for k in range(round(seconds / p.control_tick_s)):
+        if k * p.control_tick_s in sea_at:
+            p.set_sea(sea_at[k * p.control_tick_s])
+        a = hold.fins_rad(p)
+        p.set_lateral_fins_rad(a, a)
+        p.advance(p.control_tick_s)
+        pos.append(p.position_world())
+        through.append(p.velocity_through_water_world())
+    return np.array(pos), np.array(through), p
+
+
+@pytest.mark.parametrize("direction_deg", [0.0, 90.0])
+def test_an_idle_vehicle_follows_a_step_of_a_steady_uniform_current(direction_deg):
+    """Galilean invariance: a neutrally buoyant vehicle at rest in water whose velocity changes as
+    a whole moves with the water (Froude-Krylov and added-mass reaction): seen from the water it
+    stays exactly as the same vehicle in still water does. Before issue 21 the step gave no push:
+    0.004 (along the heading) and 0.089 (across) of a 0.3 m/s step after 0.2 s, 0.019 and 0.317
+    after 1 s."""
+    from bauv_sim import manoeuvres
+
+    c = currents.UniformCurrent(0.3, math.radians(direction_deg))
+    w = c.velocity_world(0.0, np.zeros(3))
+    idle, still = manoeuvres.open_water_scene(), manoeuvres.open_water_scene()
+    for p in (idle, still):
+        p.advance(0.5)
+    idle.set_sea(Sea(c))
+    for k in range(10):
+        idle.advance(0.1)
+        still.advance(0.1)
+        assert np.allclose(idle.velocity_through_water_world(), still.velocity_world(), atol=1e-9)
+        if k == 1:  # 0.2 s after the step: the fraction of the step reached
+            assert idle.velocity_world() @ w / (w @ w) == pytest.approx(1.0, abs=1e-3)
+    assert np.allclose(idle.position_world() - w * 1.0, still.position_world(), atol=1e-9)
+
+
+def test_a_vehicle_put_in_a_current_starts_moving_with_the_water():
+    """A vehicle placed at 1 m/s along its heading and put in a 0.3 m/s cross current swims, over
+    ground, the still-water track plus the drift (issue 21: it lagged 2.66 m behind the drifted
+    track after 60 s, 5.38 m in 2 m/s)."""
+    w = np.array([0.3, 0.0, 0.0])
+    still, _, _ = _swim({}, 60.0)
+    cur, _, p = _swim({0.0: Sea(currents.UniformCurrent(0.3, math.pi / 2))}, 60.0)
+    assert np.allclose(p.current_at_vehicle_world(), w)
+    t = p.control_tick_s * np.arange(1, len(still) + 1)
+    assert np.allclose(cur, still + t[:, None] * w, atol=1e-6)
+
+
+def test_the_log_keeps_reading_speed_through_water_after_an_along_track_switch():
+    """A steady uniform current injected along the track during a swim changes nothing relative
+    to the water (the log read 0.72 m/s at 1 m/s before issue 21, recovering over 5 s)."""
+    _, through_still, _ = _swim({}, 15.0)
+    _, through, _ = _swim({10.0: Sea(currents.UniformCurrent(0.3, 0.0))}, 15.0)
+    assert np.allclose(through, through_still, atol=1e-9)
+
+
+def test_set_sea_carries_each_vehicle_by_the_water_at_it():
+    """Two vehicles in a gyre: each one's velocity over ground changes by its own water's velocity
+    (its velocity through the water, angular velocity and joints are kept)."""
+    cfg = build.SceneConfig(
+        vehicles=(
+            build.VehicleSpec(name="a", east_m=60.0, depth_m=3.0, speed_m_s=0.5),
+            build.VehicleSpec(name="b", east_m=-40.0, north_m=10.0, depth_m=3.0, heading_deg=40.0),
+        )
+    )
+    two = build.build_physics(cfg)
+    before = {n: two.velocity_world(n) for n in "ab"}
+    joints = np.array(two.data.qvel[6:]), np.array(two.data.qpos)
+    gyre = currents.GyreCurrent((0.0, 0.0), 50.0, 0.4)
+    two.set_sea(Sea(gyre))
+    for n in "ab":
+        w = gyre.velocity_world(0.0, two.position_world(n))
+        assert np.allclose(two.current_at_vehicle_world(n), w)
+        assert np.allclose(two.velocity_world(n), before[n] + w, atol=1e-12)
+        assert np.allclose(two.velocity_through_water_world(n), before[n], atol=1e-12)
+    assert np.array_equal(two.data.qpos, joints[1])
+    # a second injection of the same sea carries nothing
+    again = {n: two.velocity_world(n) for n in "ab"}
+    two.set_sea(Sea(gyre))
+    for n in "ab":
+        assert np.array_equal(two.velocity_world(n), again[n])
+
+
+def test_a_mission_vehicle_starts_at_its_speed_through_the_water_plus_the_current():
+    """The mission world places the vehicle at its start speed along its heading and then puts it
+    in the mission's sea: over ground it starts with the current added."""
+    from tasks.closed_loop.world import WaypointMission, build_environment
+    from tasks.core.runner import plan_batch
+
+    scn = plan_batch(
+        "mission/short",
+        overrides=["current.speed_m_s=0.3", "current.direction_deg=90", "start.heading_deg=0"],
+    ).scenario
+    env = build_environment(WaypointMission(), scn, 0, 0)
+    env.reset()
+    p = env.physics
+    heading = p.heading_rad()
+    want = scn.start.speed_m_s * np.array([math.sin(heading), math.cos(heading), 0.0])
+    assert np.allclose(p.current_at_vehicle_world(), [0.3, 0.0, 0.0], atol=1e-12)
+    assert np.allclose(p.velocity_world(), want + [0.3, 0.0, 0.0], atol=1e-12)
+    assert np.allclose(p.velocity_through_water_world(), want, atol=1e-12)
