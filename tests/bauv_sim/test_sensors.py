@@ -241,3 +241,21 @@ def test_usbl_elevation_past_the_zenith_is_the_direction_over_the_top():
     horizontal = np.hypot(*rel_from_range_azimuth_elevation(above)[:, :2].T)
     mean, sd = h * sigma_b * math.sqrt(2 / math.pi), h * sigma_b * math.sqrt(1 - 2 / math.pi)
     assert abs(horizontal.mean() - mean) < 4 * sd / math.sqrt(n), (horizontal.mean(), mean)
+
+
+def test_compass_default_is_seed_000s_three_degree_gaussian_heading():
+    """The default compass is seed 000's INS heading (section 3: "determined arbitrarily sigma_COG
+    = 3 deg for INS VN-200"), unbiased gaussian: the configuration says 3 deg, and 200,000
+    headings measured by the default compass scatter about the truth with a standard deviation
+    within the chi-square band of their sample size (5 sigma: 3 deg +- 0.8 %) and no bias."""
+    cfg = CompassConfig()
+    assert cfg.heading.sigma_deg == 3.0 and cfg.heading.bias_deg == 0.0
+    assert cfg.heading.distribution == "gaussian"
+    T = K
+    heading = np.tile(np.linspace(0.3, 6.0, T), (N, 1))
+    tr = _truth(np.zeros((N, T, 3)), np.zeros((N, T, 3)), np.zeros((N, T, 3)), heading)
+    s = Compass(cfg, 5, tuple(range(N))).sample(tr, np.arange(T))
+    e = np.degrees(np.angle(np.exp(1j * (s.values - heading))))
+    n = e.size
+    assert abs(e.mean()) < 5 * 3.0 / math.sqrt(n)
+    assert e.std() == pytest.approx(3.0, rel=5 * math.sqrt(1 / (2 * n)))
