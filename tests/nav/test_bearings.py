@@ -445,10 +445,20 @@ def test_cmnf_gains_are_eq22_worked_out_on_a_tiny_training_set():
     np.testing.assert_allclose(p_t, cov(x, x) - F_want @ cov(alpha, x), rtol=1e-9, atol=1e-9)
 
     x_tilde = alpha @ F_want.T + f
-    b = np.column_stack([x - x_tilde, rng.normal(size=n)]) @ rng.normal(size=(4, 5))
+    # beta: noisy linear functions of the prediction error with a mean that is not zero (eq. 22's
+    # h_k = -H_k E beta then matters)
+    e = x - x_tilde + rng.normal(0.0, 0.3, (n, 3))
+    b = np.column_stack([e, rng.normal(size=n)]) @ rng.normal(size=(4, 5)) + [
+        3.0,
+        -2.0,
+        1.0,
+        0.5,
+        4.0,
+    ]
     H, h, p_h = correction_gain(x, x_tilde, b, p_t, DEFAULT_FLOOR)
     H_want = cov(x - x_tilde, b) @ np.linalg.pinv(cov(b, b))
     np.testing.assert_allclose(H, H_want, rtol=1e-8, atol=1e-9)
+    assert np.abs(H_want @ b.mean(0)).max() > 0.3
     np.testing.assert_allclose(h, -H_want @ b.mean(0), rtol=1e-8, atol=1e-9)
     np.testing.assert_allclose(p_h, p_t - H_want @ cov(b, x - x_tilde), rtol=1e-8, atol=1e-9)
 
@@ -470,3 +480,28 @@ def test_cmnf_prediction_gain_recovers_a_linear_gaussian_model():
     np.testing.assert_allclose(F, A, atol=0.02)  # standard errors ~0.005 / sigma_alpha
     np.testing.assert_allclose(f, a, atol=0.1)
     np.testing.assert_allclose(p_t, Q, atol=0.03)
+
+
+def test_cmnf_step_is_eq22_with_the_fitted_gains():
+    """One CMNF step with given non-symmetric gains is eq. 22 written out per path: ``X~ = F alpha
+    + f`` and ``X^ = X~ + H beta + h`` with eq. 24's residual ``beta = Y - Psi(X~)`` (eq. 17's
+    tangents at the prediction), for step 2 of a two-step gain set."""
+    rng = np.random.default_rng(12)
+    F = np.stack([np.eye(3), [[1.0, 0.4, 0.0], [-0.3, 0.9, 0.2], [0.0, 0.5, 1.1]]])
+    H = rng.normal(0.0, 3.0, (2, 3, 8))
+    gains = CmnfGains(
+        F=F,
+        f=rng.normal(size=(2, 3)),
+        H=H,
+        h=rng.normal(size=(2, 3)),
+        p_tilde=np.zeros((2, 3, 3)),
+        p_hat=np.zeros((2, 3, 3)),
+    )
+    alpha = _points(6, seed=3)
+    y = bearings(alpha + rng.normal(0, 2.0, (6, 3)), B)[0]
+    x_tilde, x_hat = cmnf_step(gains, 2, alpha, "residual", y, np.ones((6, 4), bool), B)
+    for i in range(6):
+        xt = F[1] @ alpha[i] + gains.f[1]
+        b = (y[i] - bearings(xt[None], B)[0][0]).ravel()
+        np.testing.assert_allclose(x_tilde[i], xt, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(x_hat[i], xt + H[1] @ b + gains.h[1], rtol=1e-12, atol=1e-9)

@@ -176,3 +176,25 @@ def test_fixes_arrive_after_their_validity_by_the_devices_latency(batch):
         assert np.all(ta >= due - 1e-3) and np.all(ta < due + tick + 1e-3), ta - due
         k = tv / cfg.period_s
         assert np.allclose(k, np.round(k), atol=1e-9)
+
+
+def test_attitude_components_are_the_quaternions_roll_pitch_heading(batch):
+    """``truth_rph``'s components are what their names say, against the attitude quaternion
+    (body FLU to world ENU) turned into a rotation matrix here: pitch (nose up +) is the asin of
+    the body x axis's up component, roll (starboard down +) the angle of the body y (port) axis
+    above the horizontal about x, heading clockwise from north of the body x axis."""
+    out, _ = batch
+    t = pq.read_table(out / "data" / "run-000000" / "bauv.ticks.parquet")
+    w, x, y, z = (t[f"truth_quat_wxyz.{c}"].to_numpy() for c in "wxyz")
+    # columns of R: the body axes in the world
+    bx = np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+    by_up = 2 * (y * z + w * x)
+    bz_up = 1 - 2 * (x * x + y * y)
+    pitch = np.arcsin(bx[:, 2])
+    roll = np.arctan2(by_up, bz_up)
+    heading = np.arctan2(bx[:, 0], bx[:, 1]) % (2 * np.pi)
+    got = {c: t[f"truth_rph.{c}"].to_numpy() for c in ("roll", "pitch", "heading")}
+    assert np.abs(got["roll"] - got["pitch"]).max() > 1e-3  # the two can be told apart
+    np.testing.assert_allclose(got["pitch"], pitch, atol=1e-9)
+    np.testing.assert_allclose(got["roll"], roll, atol=1e-9)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (got["heading"] - heading))), 0, atol=1e-9)

@@ -6,6 +6,8 @@ Flights are short (one or two minutes of simulated time, few vehicles): the phys
 
 import json
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -215,3 +217,48 @@ def test_report_recording_and_warning_of_a_batch(tmp_path):
     th, hdop = read_time_series(rec, "hdop/f1", "Scalars:scalars")
     assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
     assert (out / "data" / "run-000000-ga2" / "f1.modem.parquet").is_file()
+
+
+def _doc_prose_units(lead: str) -> dict[str, str]:
+    """The units ``docs/run-data.md`` gives, in the paragraph starting with ``lead``, to the
+    columns it names: "`a`, `b` (unit, ...)" gives both a and b that unit."""
+    doc = Path(__file__).resolve().parents[2] / "docs" / "run-data.md"
+    paragraphs = doc.read_text(encoding="utf-8").split("\n\n")
+    text = " ".join(next(p for p in paragraphs if p.startswith(lead)).split())
+    units = {}
+    for names, unit in re.findall(r"((?:`\w+`(?:, | and )?)+) \(([^,;:)\s]+)", text):
+        for name in re.findall(r"`(\w+)`", names):
+            units[name] = unit
+    return units
+
+
+def test_follower_columns_have_the_units_docs_run_data_states(compared):
+    """The columns a follower adds carry the units ``docs/run-data.md`` states for them, and the
+    leader's stated course labelled rad is a course in radians: in [0, 2 pi), and after the first
+    messages within 20 deg on average of the leader's true course over ground."""
+    from tasks.missions.swarm import FOLLOWER_COLUMNS
+
+    doc = _doc_prose_units("`mission/swarm`'s followers")
+    assert doc["leader_course"] == "rad" and doc["hdop"] == "1"  # the parse found them
+    _, res = compared
+    f, lead = res.flights["ga1"].vehicles["f1"], res.flights["ga1"].vehicles[LEADER]
+    for name in FOLLOWER_COLUMNS:
+        assert f.ticks[name].unit == doc[name], (name, f.ticks[name].unit, doc[name])
+    course = f["leader_course"]
+    assert np.all((course >= 0) & (course < 2 * np.pi))
+    v = lead["truth_vel"][:, :2]
+    d = np.angle(np.exp(1j * (course - np.arctan2(v[:, 0], v[:, 1]))))
+    assert np.degrees(np.abs(d[f["t"] > 10]).mean()) < 20
+
+
+def test_ranges_arrive_after_their_validity_by_the_modems_latency(compared):
+    """Each range reaches the follower's navigation at the first control tick at or after its
+    time of validity plus the acoustic travel time (range / sound speed) and the modem's
+    processing delay."""
+    scn, res = compared
+    modem, tick = scn.followers.sensors.modem, scn.timing.control_tick_s
+    fx = res.flights["ga1"].vehicles["f1"].fixes["modem"]
+    tv, ta, rng = (fx[k].values for k in ("t_valid", "t_arrival", "range"))
+    assert len(tv) >= 10 and modem.processing_delay_s > 0
+    due = tv + rng / modem.sound_speed_m_s + modem.processing_delay_s
+    assert np.all(ta >= due - 1e-3) and np.all(ta < due + tick + 1e-3), ta - due
