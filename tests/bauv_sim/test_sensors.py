@@ -296,3 +296,26 @@ def test_usbl_log_and_pressure_defaults_are_seed_000s_device_figures():
         n = err.size
         assert abs(err.mean()) < 5 * sigma / math.sqrt(n), (err.mean(), sigma)
         assert err.std() == pytest.approx(sigma, rel=5 * math.sqrt(1 / (2 * n)))
+
+
+def test_log_reads_the_velocity_through_water_along_the_pitched_hull():
+    """The EM log measures the velocity through water along the body x axis, which points
+    ``(cos p sin h, cos p cos h, sin p)`` for nose-up pitch p and heading h: a hull pitched 10 deg
+    nose up, heading 30 deg, climbing along its axis at 1.5 m/s through a 0.3 m/s current from
+    the north reads 1.5 m/s; sinking at 0.2 m/s with a level velocity reads the projection."""
+    p, h = math.radians(10.0), math.radians(30.0)
+    axis = np.array([math.cos(p) * math.sin(h), math.cos(p) * math.cos(h), math.sin(p)])
+    cur = np.array([0.0, -0.3, 0.0])
+    water = np.stack([1.5 * axis, np.array([0.4, 0.9, -0.2])])  # (2, 3): along the axis; other
+    T = 2
+    tr = Truth(
+        np.arange(T, dtype=float),
+        np.zeros((1, T, 3)),
+        (water + cur)[None],
+        water[None],
+        np.full((1, T), h),
+        np.tile([0.0, p], (1, T, 1)),
+        np.tile(cur, (1, T, 1)),
+    )
+    s = Log(LogConfig(speed={"sigma_m_s": 0.0}), 0, (0,)).sample(tr, np.arange(T))
+    np.testing.assert_allclose(s.values[0], [1.5, water[1] @ axis], rtol=1e-12)

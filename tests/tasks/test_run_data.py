@@ -3,8 +3,6 @@ estimates, measurements and commands, equal to the run's own arrays and to the r
 with a unit on every field (``docs/run-data.md``)."""
 
 import json
-import re
-from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -15,6 +13,8 @@ from tasks.closed_loop.world import WaypointMission, fly
 from tasks.core.export import read_parquet
 from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
+
+from .run_data_doc import prose_units, table_units
 
 SHORT = "mission/short"
 OVERRIDES = ["timing.max_duration_s=60", "report.figures=false"]
@@ -88,33 +88,11 @@ def test_the_batch_is_complete_with_every_runs_data(batch):
 # ---------------------------------------------------------------------------------------------
 # the units and the times the files state, against docs/run-data.md and against physics
 
-DOC = Path(__file__).resolve().parents[2] / "docs" / "run-data.md"
-
-
-def _doc_units() -> dict[str, dict[str, str]]:
-    """``docs/run-data.md``'s tables, parsed: table heading -> column name -> unit. A row may name
-    several columns (`a`, `b`) with one unit each ("m, rad, rad") or one for all."""
-    tables: dict[str, dict[str, str]] = {}
-    current = None
-    for line in DOC.read_text(encoding="utf-8").splitlines():
-        if line.startswith("## "):
-            current = tables.setdefault(line[3:].strip(), {})
-            continue
-        cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if current is None or not line.startswith("| `") or len(cells) < 3:
-            continue
-        names = re.findall(r"`([^`]+)`", cells[0])
-        units = [u.strip() for u in cells[1].split(",")]
-        assert len(units) in (1, len(names)), line
-        for i, name in enumerate(names):
-            current[name] = units[i if len(units) > 1 else 0]
-    return tables
-
 
 def test_every_columns_unit_is_the_one_docs_run_data_states(batch):
     """The unit of every column, as declared (TICK_COLUMNS, FIX_COLUMNS) and as written in the
     field metadata of the batch's files, is the unit ``docs/run-data.md`` gives it."""
-    doc = _doc_units()
+    doc = table_units()
     ticks = doc["`<vehicle>.ticks.parquet`"]
     fixes = doc["`<vehicle>.usbl.parquet` and `<vehicle>.gps.parquet`"]
     modem = doc["`<vehicle>.modem.parquet` (`mission/swarm`'s followers)"]
@@ -198,3 +176,19 @@ def test_attitude_components_are_the_quaternions_roll_pitch_heading(batch):
     np.testing.assert_allclose(got["pitch"], pitch, atol=1e-9)
     np.testing.assert_allclose(got["roll"], roll, atol=1e-9)
     np.testing.assert_allclose(np.angle(np.exp(1j * (got["heading"] - heading))), 0, atol=1e-9)
+
+
+def test_missions_own_columns_have_the_units_docs_run_data_states():
+    """The per-tick columns mission/correction and mission/swarm's followers add carry the units
+    ``docs/run-data.md`` gives them in its paragraphs on those missions."""
+    from tasks.missions.correction import EXTRA_COLUMNS
+    from tasks.missions.swarm import FOLLOWER_COLUMNS
+
+    for lead, columns in (
+        ("`mission/correction` adds", EXTRA_COLUMNS),
+        ("`mission/swarm`'s followers", FOLLOWER_COLUMNS),
+    ):
+        doc = prose_units(lead)
+        assert len(doc) == len(columns), (lead, sorted(doc))
+        for name, spec in columns.items():
+            assert spec[1] == doc[name], (lead, name, spec[1], doc[name])

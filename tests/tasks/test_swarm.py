@@ -6,8 +6,6 @@ Flights are short (one or two minutes of simulated time, few vehicles): the phys
 
 import json
 import math
-import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +14,8 @@ from tasks.closed_loop.world import build_environment, fly
 from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
 from tasks.missions.swarm import LEADER, SwarmMission, fly_run
+
+from .run_data_doc import prose_units
 
 NAME = "mission/swarm"
 
@@ -219,26 +219,13 @@ def test_report_recording_and_warning_of_a_batch(tmp_path):
     assert (out / "data" / "run-000000-ga2" / "f1.modem.parquet").is_file()
 
 
-def _doc_prose_units(lead: str) -> dict[str, str]:
-    """The units ``docs/run-data.md`` gives, in the paragraph starting with ``lead``, to the
-    columns it names: "`a`, `b` (unit, ...)" gives both a and b that unit."""
-    doc = Path(__file__).resolve().parents[2] / "docs" / "run-data.md"
-    paragraphs = doc.read_text(encoding="utf-8").split("\n\n")
-    text = " ".join(next(p for p in paragraphs if p.startswith(lead)).split())
-    units = {}
-    for names, unit in re.findall(r"((?:`\w+`(?:, | and )?)+) \(([^,;:)\s]+)", text):
-        for name in re.findall(r"`(\w+)`", names):
-            units[name] = unit
-    return units
-
-
 def test_follower_columns_have_the_units_docs_run_data_states(compared):
     """The columns a follower adds carry the units ``docs/run-data.md`` states for them, and the
     leader's stated course labelled rad is a course in radians: in [0, 2 pi), and after the first
     messages within 20 deg on average of the leader's true course over ground."""
     from tasks.missions.swarm import FOLLOWER_COLUMNS
 
-    doc = _doc_prose_units("`mission/swarm`'s followers")
+    doc = prose_units("`mission/swarm`'s followers")
     assert doc["leader_course"] == "rad" and doc["hdop"] == "1"  # the parse found them
     _, res = compared
     f, lead = res.flights["ga1"].vehicles["f1"], res.flights["ga1"].vehicles[LEADER]
@@ -262,3 +249,17 @@ def test_ranges_arrive_after_their_validity_by_the_modems_latency(compared):
     assert len(tv) >= 10 and modem.processing_delay_s > 0
     due = tv + rng / modem.sound_speed_m_s + modem.processing_delay_s
     assert np.all(ta >= due - 1e-3) and np.all(ta < due + tick + 1e-3), ta - due
+
+
+def test_modem_table_centre_is_the_leaders_position(compared):
+    """The modem table's ``centre_east``, ``centre_north`` are the east and north of the range
+    circle's centre: with the leader sending its true position, within 1 m of the leader's true
+    position when the range arrives (the transducers' lever arms are decimetres), on a path
+    whose east and north differ by tens of metres (swapped columns would be far off)."""
+    _, res = compared
+    lead, fx = res.flights["ga1"].vehicles[LEADER], res.flights["ga1"].vehicles["f1"].fixes["modem"]
+    ticks = {round(t, 6): i for i, t in enumerate(lead["t"])}
+    truth = lead["truth_pos"][[ticks[round(t, 6)] for t in fx["t_arrival"].values], :2]
+    centre = np.column_stack([fx["centre_east"].values, fx["centre_north"].values])
+    assert len(centre) >= 10 and np.abs(truth[:, 1] - truth[:, 0]).mean() > 10.0
+    assert np.abs(centre - truth).max() < 1.0
