@@ -145,8 +145,11 @@ GUARDS: dict[str, tuple[str, ...]] = {
     ),
     "tasks/paper000/passage.py": ("tests/tasks/test_paper000.py",),
     "tasks/paper003/square.py": ("tests/tasks/test_paper003.py",),
-    "tasks/missions/swarm.py": ("tests/tasks/test_swarm.py",),
-    "tasks/missions/correction.py": ("tests/tasks/test_missions.py",),
+    "tasks/missions/swarm.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
+    "tasks/missions/correction.py": (
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_missions.py",
+    ),
 }
 """Mutated module -> the test files that guard it, fast and focused first (with the default
 fail-fast, the first to fail names the catch). A mutation may add tests of its own."""
