@@ -998,6 +998,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 snapshot, m, plan[m.name], not args.all_failures, args.timeout, args.keep
             )
             print(f"{m.name}: {o.verdict} {_by(o)} ({o.seconds:.0f} s)", flush=True)
+            if args.all_failures:
+                for node in o.failed + o.errors + o.collection_errors:
+                    print(f"    fails: {node}", flush=True)
             return m, o
 
         with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
