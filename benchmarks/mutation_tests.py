@@ -962,16 +962,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     for m in chosen:
         try:
             check_anchor(root, m)
-            m.guards()
         except AnchorError as e:
             bad.append(str(e))
+        for t in m.guards():
+            if not (root / t.split("::")[0]).is_file():
+                bad.append(f"{m.name}: its test file {t.split('::')[0]} does not exist")
     if bad:
-        print("REFUSED: mutations whose anchors do not match the code:", file=sys.stderr)
+        print("REFUSED: mutations whose anchors or tests do not match the code:", file=sys.stderr)
         for b in bad:
             print(f"  {b}", file=sys.stderr)
         return 1
     if args.check:
-        print(f"all {len(chosen)} anchors match exactly once")
+        print(f"all {len(chosen)} anchors match exactly once; every guarding test file exists")
         return 0
 
     suite = ("tests",)
