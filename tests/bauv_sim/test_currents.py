@@ -62,3 +62,52 @@ def test_config_discriminator_and_factory():
     with pytest.raises(ValueError):
         cu.make_current(cfg)
     assert validate(cu.UniformCurrentConfig, {"speed_m_s": 0.2}).direction_deg == 0.0
+
+
+def test_randomised_current_sets_towards_alpha_c_clockwise_from_north():
+    """Seed 001's current (section "Conditions of experiments"): direction N(alpha_c, sigma_alpha^2)
+    set *towards*, clockwise from north (x east += |V| sin alpha, y north += |V| cos alpha, as the
+    vehicle's own velocity in eq. 27-28). With the paper's alpha_c = 20 deg and sigma_alpha^2 =
+    10 deg^2: each held segment's set direction scatters about 20 deg with a 3.16 deg standard
+    deviation, and the water carried by the current alone (eq. 27-28 with V_a = V_s = V_r = 0)
+    drifts along 20 deg by |Vc| exp(-sigma_alpha^2 / 2) per second."""
+    alpha_c, sig_a = math.radians(20.0), math.radians(math.sqrt(10.0))
+    c = cu.RandomisedCurrent(0.5, alpha_c, 0.05, sig_a, 2.0, 0.01, np.random.default_rng(8))
+    step = 0.01
+    t = np.arange(0.0, 4000.0, step)
+    v = c.velocity_world(t, np.zeros(3))
+    assert np.all(v[:, 2] == 0.0)
+    new = np.r_[True, np.any(np.diff(v, axis=0) != 0, axis=1)]
+    seg = v[new]
+    assert np.all(np.hypot(seg[:, 0], seg[:, 1]) > 0.2)  # no magnitude draw near or below zero
+    direction = np.arctan2(seg[:, 0], seg[:, 1])  # clockwise from north, towards
+    dev = np.angle(np.exp(1j * (direction - alpha_c)))
+    n = dev.size
+    assert abs(dev.mean()) < 5 * sig_a / math.sqrt(n), math.degrees(dev.mean())
+    assert dev.std() == pytest.approx(sig_a, rel=5 * math.sqrt(1 / (2 * n)))
+    # eq. 27-28: the drift is the sum of V_c,i t over the steps
+    drift = v[:, :2].sum(axis=0) * step
+    mean_v = 0.5 * math.exp(-(sig_a**2) / 2)
+    want = t.size * step * mean_v * np.array([math.sin(alpha_c), math.cos(alpha_c)])
+    np.testing.assert_allclose(drift, want, rtol=0.02)
+
+
+def test_randomised_current_defaults_are_seed_001s_and_scatter_as_stated():
+    """Seed 001, "Conditions of experiments": alpha_c = 20 deg, sigma_V^2 = 0.02, sigma_alpha^2 =
+    10 (deg^2), N_d,max = 10000 steps of 0.001 s. The default configuration says so, and the
+    default field's held segments (with |Vc| = 2 m/s, so that no magnitude draw is negative and
+    sets the current the other way) have set directions scattering with sigma_alpha = 3.16 deg
+    about 20 deg (5-sigma bands of their number)."""
+    cfg = cu.RandomisedCurrentConfig()
+    assert cfg.direction_deg == 20.0 and cfg.hold_step_s == 0.001
+    assert cfg.sigma_speed_m_s**2 == pytest.approx(0.02, rel=1e-12)
+    assert cfg.sigma_direction_deg**2 == pytest.approx(10.0, rel=1e-12)
+    assert round(cfg.hold_max_s / cfg.hold_step_s) == 10000
+    c = cu.make_current(cfg.model_copy(update={"speed_m_s": 2.0}), np.random.default_rng(9))
+    v = c.velocity_world(np.arange(0.0, 3000.0, 0.001), np.zeros(3))
+    seg = v[np.r_[True, np.any(np.diff(v, axis=0) != 0, axis=1)]]
+    dev = np.angle(np.exp(1j * (np.arctan2(seg[:, 0], seg[:, 1]) - math.radians(20.0))))
+    n, sig = dev.size, math.radians(math.sqrt(10.0))
+    assert n > 300
+    assert abs(dev.mean()) < 5 * sig / math.sqrt(n)
+    assert dev.std() == pytest.approx(sig, rel=5 * math.sqrt(1 / (2 * n)))

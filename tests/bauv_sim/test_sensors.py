@@ -241,3 +241,81 @@ def test_usbl_elevation_past_the_zenith_is_the_direction_over_the_top():
     horizontal = np.hypot(*rel_from_range_azimuth_elevation(above)[:, :2].T)
     mean, sd = h * sigma_b * math.sqrt(2 / math.pi), h * sigma_b * math.sqrt(1 - 2 / math.pi)
     assert abs(horizontal.mean() - mean) < 4 * sd / math.sqrt(n), (horizontal.mean(), mean)
+
+
+def test_compass_default_is_seed_000s_three_degree_gaussian_heading():
+    """The default compass is seed 000's INS heading (section 3: "determined arbitrarily sigma_COG
+    = 3 deg for INS VN-200"), unbiased gaussian: the configuration says 3 deg, and 200,000
+    headings measured by the default compass scatter about the truth with a standard deviation
+    within the chi-square band of their sample size (5 sigma: 3 deg +- 0.8 %) and no bias."""
+    cfg = CompassConfig()
+    assert cfg.heading.sigma_deg == 3.0 and cfg.heading.bias_deg == 0.0
+    assert cfg.heading.distribution == "gaussian"
+    T = K
+    heading = np.tile(np.linspace(0.3, 6.0, T), (N, 1))
+    tr = _truth(np.zeros((N, T, 3)), np.zeros((N, T, 3)), np.zeros((N, T, 3)), heading)
+    s = Compass(cfg, 5, tuple(range(N))).sample(tr, np.arange(T))
+    e = np.degrees(np.angle(np.exp(1j * (s.values - heading))))
+    n = e.size
+    assert abs(e.mean()) < 5 * 3.0 / math.sqrt(n)
+    assert e.std() == pytest.approx(3.0, rel=5 * math.sqrt(1 / (2 * n)))
+
+
+def test_usbl_log_and_pressure_defaults_are_seed_000s_device_figures():
+    """Seed 000 section 6: "sigma_r = 0.2 m, sigma_alpha = sigma_beta = 3 deg for the USBL
+    MicronNav", "sigma_dz = 0.25 m for the hydrostatic pressure sensor WIKA S-20", and (section
+    3) "sigma_SOG = 0.5 kn" for the ALIZE log (1 kn = 1852 / 3600 m/s), the MicronNav's 500 m
+    limit; all gaussian and unbiased by default. The configurations say so, and the default
+    devices' errors over 200,000 draws have these standard deviations (5-sigma chi-square bands
+    of their sample size) and no bias."""
+    usbl, log, pressure = UsblConfig(), LogConfig(), PressureConfig()
+    assert usbl.range.sigma_m == 0.2 and usbl.max_range_m == 500.0
+    assert usbl.azimuth.sigma_deg == 3.0 and usbl.elevation.sigma_deg == 3.0
+    assert pressure.depth.sigma_m == 0.25
+    assert log.speed.sigma_m_s == pytest.approx(0.5 * 1852.0 / 3600.0, rel=1e-12)
+    for e in (usbl.range, usbl.azimuth, usbl.elevation, pressure.depth, log.speed):
+        assert e.distribution == "gaussian"
+    T = K
+    rel = np.array([80.0, 60.0, 10.0])  # 100.5 m slant, 5.7 deg above the transceiver
+    tx = np.array([0.0, 0.0, -20.0])
+    vel = np.tile([0.0, 1.2, 0.0], (N, T, 1))
+    tr = _truth(np.broadcast_to(tx + rel, (N, T, 3)).copy(), vel, 0 * vel, np.zeros((N, T)))
+    r0 = np.linalg.norm(rel)
+    want = [r0, math.atan2(rel[0], rel[1]), math.asin(rel[2] / r0)]
+    z = Usbl(usbl, tx, 3, tuple(range(N))).sample(tr, np.arange(T)).values
+    d = Pressure(pressure, 3, tuple(range(N))).sample(tr, np.arange(T)).values
+    s = Log(log, 3, tuple(range(N))).sample(tr, np.arange(T)).values
+    cases = [
+        (z[..., 0] - want[0], 0.2),
+        (np.angle(np.exp(1j * (z[..., 1] - want[1]))), math.radians(3.0)),
+        (z[..., 2] - want[2], math.radians(3.0)),
+        (d - (20.0 - rel[2]), 0.25),
+        (s - 1.2, 0.5 * 1852.0 / 3600.0),
+    ]
+    for err, sigma in cases:
+        n = err.size
+        assert abs(err.mean()) < 5 * sigma / math.sqrt(n), (err.mean(), sigma)
+        assert err.std() == pytest.approx(sigma, rel=5 * math.sqrt(1 / (2 * n)))
+
+
+def test_log_reads_the_velocity_through_water_along_the_pitched_hull():
+    """The EM log measures the velocity through water along the body x axis, which points
+    ``(cos p sin h, cos p cos h, sin p)`` for nose-up pitch p and heading h: a hull pitched 10 deg
+    nose up, heading 30 deg, climbing along its axis at 1.5 m/s through a 0.3 m/s current from
+    the north reads 1.5 m/s; sinking at 0.2 m/s with a level velocity reads the projection."""
+    p, h = math.radians(10.0), math.radians(30.0)
+    axis = np.array([math.cos(p) * math.sin(h), math.cos(p) * math.cos(h), math.sin(p)])
+    cur = np.array([0.0, -0.3, 0.0])
+    water = np.stack([1.5 * axis, np.array([0.4, 0.9, -0.2])])  # (2, 3): along the axis; other
+    T = 2
+    tr = Truth(
+        np.arange(T, dtype=float),
+        np.zeros((1, T, 3)),
+        (water + cur)[None],
+        water[None],
+        np.full((1, T), h),
+        np.tile([0.0, p], (1, T, 1)),
+        np.tile(cur, (1, T, 1)),
+    )
+    s = Log(LogConfig(speed={"sigma_m_s": 0.0}), 0, (0,)).sample(tr, np.arange(T))
+    np.testing.assert_allclose(s.values[0], [1.5, water[1] @ axis], rtol=1e-12)

@@ -251,3 +251,57 @@ def test_small_spd_inverse_equals_numpy(m):
     bad[3] = 0.0
     with pytest.raises(NavInputError):
         inverse_spd_small(bad)
+
+
+# --------------------------------------------------------------------------------------------
+# The gate's chi-square quantile, against closed forms
+
+
+def _chi2_quantile(p, dof):
+    """The chi-square quantile from closed forms, with nothing of the code or scipy: dof 1 is the
+    squared normal quantile, dof 2 the exponential's (mean 2), dof 3 solves the closed-form CDF
+    ``erf(sqrt(x / 2)) - sqrt(2 x / pi) exp(-x / 2)`` by bisection."""
+    from statistics import NormalDist
+
+    if dof == 1:
+        return NormalDist().inv_cdf((1 + p) / 2) ** 2
+    if dof == 2:
+        return -2.0 * math.log1p(-p)
+    assert dof == 3
+    lo, hi = 0.0, 100.0
+    for _ in range(200):
+        x = 0.5 * (lo + hi)
+        cdf = math.erf(math.sqrt(x / 2)) - math.sqrt(2 * x / math.pi) * math.exp(-x / 2)
+        lo, hi = (x, hi) if cdf < p else (lo, x)
+    return 0.5 * (lo + hi)
+
+
+def test_gate_limit_is_the_chi_square_quantile_of_the_innovations_dimension():
+    from nav.ekf import gate_limit
+
+    # the closed forms reproduce the printed table (95 %: 3.8415, 5.9915, 7.8147)
+    assert [round(_chi2_quantile(0.95, d), 4) for d in (1, 2, 3)] == [3.8415, 5.9915, 7.8147]
+    for p in (0.9, 0.95, 0.99, 0.999):
+        for d in (1, 2, 3):
+            assert gate_limit(p, d) == pytest.approx(_chi2_quantile(p, d), rel=1e-9), (p, d)
+
+
+@pytest.mark.parametrize("probability", [0.95, 0.99])
+def test_gate_rejects_exactly_beyond_the_quantile_of_the_active_components(probability):
+    """A 3-component measurement with 1, 2 or 3 components active (H = I, P = I, R = I, so S = 2 I
+    and NIS = |y|^2 / 2): an innovation whose NIS is 0.1 % inside the closed-form quantile of the
+    number of active components is applied, one 0.1 % beyond it is rejected, in the batched update
+    and in the single-run one."""
+    H, P, R = np.eye(3)[None], np.eye(3)[None], np.eye(3)
+    for m in (1, 2, 3):
+        active = np.array([[True, True, True][:m] + [False] * (3 - m)])
+        limit = _chi2_quantile(probability, m)
+        for factor, rejected in ((0.999, False), (1.001, True)):
+            y = np.zeros((1, 3))
+            y[0, :m] = math.sqrt(2 * factor * limit / m)
+            _, _, info = update(np.zeros((1, 3)), P, y, H, R, active, None, probability)
+            assert info.nis[0] == pytest.approx(factor * limit, rel=1e-12)
+            assert info.dof[0] == m
+            assert info.rejected[0] == rejected and info.applied[0] != rejected, (m, factor)
+            _, _, one = update_one(np.zeros((1, 3)), P, y, H, R, active, probability)
+            assert one.rejected[0] == rejected and one.applied[0] != rejected, (m, factor)

@@ -467,3 +467,25 @@ def test_a_batch_with_failed_runs_exits_1_and_says_how_many_completed(tmp_path):
     )
     assert "Traceback" not in res.stderr and "error: 1 run(s) failed" in res.stderr
     assert json.loads((out / "run.json").read_text())["state"] == "complete"
+
+
+def test_gps_table_holds_the_antennas_east_and_north():
+    """The GPS table's ``east`` and ``north`` are the antenna's measured east and north: each fix
+    lies within 5 sigma (the default 2.5 m per coordinate) plus the antenna's lever arm (< 1 m) of
+    the true reference point at its time of validity, coordinate by coordinate, where the vehicle
+    surfaces tens of metres further north than east (so swapped columns would be far off); the
+    fix's ``position`` is the same (east, north) at the surface."""
+    scn = scenario(
+        SHORT, "guidance.waypoints.0.surface=true", "guidance.hold_s=5", "guidance.fixes_needed=2"
+    )
+    a = fly(WaypointMission(), scn, 0, 0).lead
+    gps = a.fixes["gps"]
+    ticks = {round(t, 6): i for i, t in enumerate(a["t"])}
+    truth = a["truth_pos"][[ticks[round(t, 6)] for t in gps["t_valid"].values]]
+    assert len(truth) >= 2 and np.all(np.abs(truth[:, 1] - truth[:, 0]) > 30.0)
+    bound = 5 * scn.sensors.gps.position.sigma_m + 1.0
+    assert np.all(np.abs(gps["east"].values - truth[:, 0]) < bound)
+    assert np.all(np.abs(gps["north"].values - truth[:, 1]) < bound)
+    pos = gps["position"].values
+    assert np.array_equal(pos[:, :2], np.column_stack([gps["east"].values, gps["north"].values]))
+    assert np.all(pos[:, 2] == 0.0)

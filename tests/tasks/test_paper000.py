@@ -278,3 +278,22 @@ def test_a_passage_straight_over_the_transceiver_keeps_the_ekf_on_track():
     used = m.active(flat)[:, 1] & inp.z_produced.reshape(-1)
     assert used.sum() > 1000
     assert np.abs(y[used, 1]).max() <= math.pi / 2
+
+
+def test_the_passage_gate_rejects_exactly_beyond_the_chi_square_quantile():
+    """run_ekf's chi-square gate on real passages (test-1's geometry: the vehicle is never above
+    the transceiver, so every fix has 3 active components): a fix is rejected exactly when its NIS
+    exceeds scipy's 95 % quantile of 3 degrees of freedom (7.81), and some fixes fall between it
+    and the quantile of 4 (9.49), so one degree of freedom too many would show."""
+    from scipy.stats import chi2
+
+    from tasks.paper000.passage import measure_passages, run_ekf
+
+    scn = plan_batch("paper-000/test-1").scenario
+    inp = measure_passages(scn, 3, tuple(range(20)))
+    tracks = run_ekf(inp, scn.passage.tick_s, gate_probability=0.95)
+    measured = np.isfinite(tracks.nis)
+    q3, q4 = chi2.ppf(0.95, 3), chi2.ppf(0.95, 4)
+    assert np.array_equal(tracks.rejected, measured & (tracks.nis > q3))
+    nis = tracks.nis[measured]
+    assert ((nis > q3) & (nis <= q4)).sum() >= 5

@@ -8,10 +8,13 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+from tasks.closed_loop.result import CURRENT_COLUMN, FIX_COLUMNS, TICK_COLUMNS
 from tasks.closed_loop.world import WaypointMission, fly
 from tasks.core.export import read_parquet
 from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
+
+from .run_data_doc import prose_units, table_units
 
 SHORT = "mission/short"
 OVERRIDES = ["timing.max_duration_s=60", "report.figures=false"]
@@ -80,3 +83,112 @@ def test_the_batch_is_complete_with_every_runs_data(batch):
     out, _ = batch
     assert json.loads((out / "run.json").read_text())["state"] == "complete"
     assert (out / "data" / "run-000001" / "bauv.ticks.parquet").is_file()
+
+
+# ---------------------------------------------------------------------------------------------
+# the units and the times the files state, against docs/run-data.md and against physics
+
+
+def test_every_columns_unit_is_the_one_docs_run_data_states(batch):
+    """The unit of every column, as declared (TICK_COLUMNS, FIX_COLUMNS) and as written in the
+    field metadata of the batch's files, is the unit ``docs/run-data.md`` gives it."""
+    doc = table_units()
+    ticks = doc["`<vehicle>.ticks.parquet`"]
+    fixes = doc["`<vehicle>.usbl.parquet` and `<vehicle>.gps.parquet`"]
+    modem = doc["`<vehicle>.modem.parquet` (`mission/swarm`'s followers)"]
+    assert ticks["meas_heading"] == "rad" and fixes["azimuth"] == "rad"  # the parse found them
+    for name, (unit, _, _) in TICK_COLUMNS.items():
+        assert ticks.get(name) == unit, (name, unit, ticks.get(name))
+    assert ticks["ekf_current"] == CURRENT_COLUMN[0]
+    for device, table in (("usbl", fixes), ("gps", fixes), ("modem", modem)):
+        for name, spec in FIX_COLUMNS[device].items():
+            assert table.get(name) == spec[0], (device, name, spec[0], table.get(name))
+    out, _ = batch
+    for path in sorted((out / "data" / "run-000000").iterdir()):
+        table = ticks if path.name.endswith(".ticks.parquet") else fixes
+        for field in pq.read_schema(path):
+            group = field.metadata[b"group"].decode()
+            assert field.metadata[b"unit"].decode() == table[group], (path.name, field.name)
+
+
+def test_angles_labelled_rad_are_radians_of_the_physics(batch):
+    """The angle columns hold what their ``rad`` label says: the compass heading lies in [0, 2 pi)
+    and within the compass's noise (2 deg, mission preset) of the true heading, both read as
+    radians; every USBL fix's own position is the transceiver plus (range, azimuth, elevation)
+    turned into east/north/up with the angles read as radians clockwise from north and up from
+    the horizontal (the same transceiver for every fix, to the transponder's lever arm: the
+    fix is of the reference point)."""
+    out, _ = batch
+    folder = out / "data" / "run-000000"
+    t = pq.read_table(folder / "bauv.ticks.parquet")
+    assert t.schema.field("meas_heading").metadata[b"unit"] == b"rad"
+    meas, true = t["meas_heading"].to_numpy(), t["truth_rph.heading"].to_numpy()
+    assert np.all((meas >= 0) & (meas < 2 * np.pi)) and np.all(np.abs(true) <= 2 * np.pi)
+    e = np.angle(np.exp(1j * (meas - true)))
+    assert e.std() == pytest.approx(np.radians(2.0), rel=5 * np.sqrt(1 / (2 * e.size)))
+    u = pq.read_table(folder / "bauv.usbl.parquet")
+    r, az, el = (u[k].to_numpy() for k in ("range", "azimuth", "elevation"))
+    for k in ("azimuth", "elevation"):
+        assert u.schema.field(k).metadata[b"unit"] == b"rad"
+    rel = np.column_stack(
+        [r * np.cos(el) * np.sin(az), r * np.cos(el) * np.cos(az), r * np.sin(el)]
+    )
+    pos = np.column_stack([u[f"position.{a}"].to_numpy() for a in ("east", "north", "up")])
+    tx = pos - rel
+    assert len(tx) >= 5 and np.abs(tx - np.median(tx, axis=0)).max() < 1.0
+
+
+def test_fixes_arrive_after_their_validity_by_the_devices_latency(batch):
+    """Each USBL fix reaches the navigator at the first control tick at or after its time of
+    validity plus the acoustic travel time (range / sound speed) and the configured processing
+    delay (mission preset: 1 s); times of validity fall on the USBL's period."""
+    out, _ = batch
+    scn = plan_batch(SHORT, overrides=OVERRIDES).scenario
+    cfg, tick = scn.sensors.usbl, scn.timing.control_tick_s
+    assert cfg.processing_delay_s > 0
+    for r in range(2):
+        u = pq.read_table(out / "data" / f"run-{r:06d}" / "bauv.usbl.parquet")
+        tv, ta, rng = (u[k].to_numpy() for k in ("t_valid", "t_arrival", "range"))
+        assert len(tv) >= 5 and np.all(tv <= ta)
+        due = tv + rng / cfg.sound_speed_m_s + cfg.processing_delay_s
+        assert np.all(ta >= due - 1e-3) and np.all(ta < due + tick + 1e-3), ta - due
+        k = tv / cfg.period_s
+        assert np.allclose(k, np.round(k), atol=1e-9)
+
+
+def test_attitude_components_are_the_quaternions_roll_pitch_heading(batch):
+    """``truth_rph``'s components are what their names say, against the attitude quaternion
+    (body FLU to world ENU) turned into a rotation matrix here: pitch (nose up +) is the asin of
+    the body x axis's up component, roll (starboard down +) the angle of the body y (port) axis
+    above the horizontal about x, heading clockwise from north of the body x axis."""
+    out, _ = batch
+    t = pq.read_table(out / "data" / "run-000000" / "bauv.ticks.parquet")
+    w, x, y, z = (t[f"truth_quat_wxyz.{c}"].to_numpy() for c in "wxyz")
+    # columns of R: the body axes in the world
+    bx = np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+    by_up = 2 * (y * z + w * x)
+    bz_up = 1 - 2 * (x * x + y * y)
+    pitch = np.arcsin(bx[:, 2])
+    roll = np.arctan2(by_up, bz_up)
+    heading = np.arctan2(bx[:, 0], bx[:, 1]) % (2 * np.pi)
+    got = {c: t[f"truth_rph.{c}"].to_numpy() for c in ("roll", "pitch", "heading")}
+    assert np.abs(got["roll"] - got["pitch"]).max() > 1e-3  # the two can be told apart
+    np.testing.assert_allclose(got["pitch"], pitch, atol=1e-9)
+    np.testing.assert_allclose(got["roll"], roll, atol=1e-9)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (got["heading"] - heading))), 0, atol=1e-9)
+
+
+def test_missions_own_columns_have_the_units_docs_run_data_states():
+    """The per-tick columns mission/correction and mission/swarm's followers add carry the units
+    ``docs/run-data.md`` gives them in its paragraphs on those missions."""
+    from tasks.missions.correction import EXTRA_COLUMNS
+    from tasks.missions.swarm import FOLLOWER_COLUMNS
+
+    for lead, columns in (
+        ("`mission/correction` adds", EXTRA_COLUMNS),
+        ("`mission/swarm`'s followers", FOLLOWER_COLUMNS),
+    ):
+        doc = prose_units(lead)
+        assert len(doc) == len(columns), (lead, sorted(doc))
+        for name, spec in columns.items():
+            assert spec[1] == doc[name], (lead, name, spec[1], doc[name])

@@ -15,6 +15,8 @@ from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
 from tasks.missions.swarm import LEADER, SwarmMission, fly_run
 
+from .run_data_doc import prose_units
+
 NAME = "mission/swarm"
 
 
@@ -302,3 +304,49 @@ def test_a_diverged_estimate_is_named_and_fails_the_batch(tmp_path):
     rows = {r["method"]: r["values"] for r in m["followers"]}
     assert rows["ekf"]["diverged_runs"] == 1 and "diverged_runs" not in rows["dr"]
     assert "diverged" in (out / "tables.md").read_text()
+
+
+def test_follower_columns_have_the_units_docs_run_data_states(compared):
+    """The columns a follower adds carry the units ``docs/run-data.md`` states for them, and the
+    leader's stated course labelled rad is a course in radians: in [0, 2 pi), and after the first
+    messages within 20 deg on average of the leader's true course over ground."""
+    from tasks.missions.swarm import FOLLOWER_COLUMNS
+
+    doc = prose_units("`mission/swarm`'s followers")
+    assert doc["leader_course"] == "rad" and doc["hdop"] == "1"  # the parse found them
+    _, res = compared
+    f, lead = res.flights["ga1"].vehicles["f1"], res.flights["ga1"].vehicles[LEADER]
+    for name in FOLLOWER_COLUMNS:
+        assert f.ticks[name].unit == doc[name], (name, f.ticks[name].unit, doc[name])
+    course = f["leader_course"]
+    assert np.all((course >= 0) & (course < 2 * np.pi))
+    v = lead["truth_vel"][:, :2]
+    d = np.angle(np.exp(1j * (course - np.arctan2(v[:, 0], v[:, 1]))))
+    assert np.degrees(np.abs(d[f["t"] > 10]).mean()) < 20
+
+
+def test_ranges_arrive_after_their_validity_by_the_modems_latency(compared):
+    """Each range reaches the follower's navigation at the first control tick at or after its
+    time of validity plus the acoustic travel time (range / sound speed) and the modem's
+    processing delay."""
+    scn, res = compared
+    modem, tick = scn.followers.sensors.modem, scn.timing.control_tick_s
+    fx = res.flights["ga1"].vehicles["f1"].fixes["modem"]
+    tv, ta, rng = (fx[k].values for k in ("t_valid", "t_arrival", "range"))
+    assert len(tv) >= 10 and modem.processing_delay_s > 0
+    due = tv + rng / modem.sound_speed_m_s + modem.processing_delay_s
+    assert np.all(ta >= due - 1e-3) and np.all(ta < due + tick + 1e-3), ta - due
+
+
+def test_modem_table_centre_is_the_leaders_position(compared):
+    """The modem table's ``centre_east``, ``centre_north`` are the east and north of the range
+    circle's centre: with the leader sending its true position, within 1 m of the leader's true
+    position when the range arrives (the transducers' lever arms are decimetres), on a path
+    whose east and north differ by tens of metres (swapped columns would be far off)."""
+    _, res = compared
+    lead, fx = res.flights["ga1"].vehicles[LEADER], res.flights["ga1"].vehicles["f1"].fixes["modem"]
+    ticks = {round(t, 6): i for i, t in enumerate(lead["t"])}
+    truth = lead["truth_pos"][[ticks[round(t, 6)] for t in fx["t_arrival"].values], :2]
+    centre = np.column_stack([fx["centre_east"].values, fx["centre_north"].values])
+    assert len(centre) >= 10 and np.abs(truth[:, 1] - truth[:, 0]).mean() > 10.0
+    assert np.abs(centre - truth).max() < 1.0
