@@ -83,16 +83,29 @@ def test_ranges_beat_dead_reckoning_on_the_same_draws(compared):
         )
     # DR drifts with the current it cannot see (0.2 m/s: about 10 m by 100 s, 20 at the end)
     assert dr["est_mean_error_m"] > 5.0 and dr["est_max_error_m"] > 15.0
-    for k in ("ga1", "ga2", "ekf"):
+    for k in ("ga2", "ekf"):
         m = res.metrics[k]["f1"]
         assert m["est_mean_error_m"] < 0.4 * dr["est_mean_error_m"], k
-        # GA1 with the printed Jacobian jumps to the wrong candidate now and then (README of
-        # mission/swarm): its largest error is 10.1 m here against DR's 19.3 (seeds 0-3: 2.8,
-        # 3.4, 2.7, 17.6 m); the others stay within half of DR's
-        bound = 1.0 if k == "ga1" else 0.5
-        assert m["est_max_error_m"] < bound * dr["est_max_error_m"], k
+        assert m["est_max_error_m"] < 0.5 * dr["est_max_error_m"], k
         assert m["station_mean_error_m"] < 0.5 * dr["station_mean_error_m"], k
         assert m["fixes_refused"] == 0
+    # GA1 with the printed Jacobian (A's columns swapped, nav.relative) jumps to the wrong
+    # candidate on the circle now and then and does not always beat DR: mean / largest error
+    # over 100 s on seeds 0-4, 1.4 / 2.9, 2.2 / 6.4, 0.5 / 2.9, 4.2 / 11.0, 7.3 / 23.6 m against
+    # DR's 9.5-11.5 / 18.9-21.2 m (the thin-plate fins of issue 21; seed 4 here). What it does
+    # guarantee (eq. 3's constraint): every fix lies on the circle of the measured horizontal
+    # range about the leader's stated position, so its error stays within the circle's diameter
+    # plus the DR drift of one 5 s interval.
+    m = res.metrics["ga1"]["f1"]
+    fx = res.flights["ga1"].vehicles["f1"].fixes["modem"]
+    ranges = fx["horizontal_range"].values
+    on = np.hypot(
+        fx["position"].values[:, 0] - fx["centre_east"].values,
+        fx["position"].values[:, 1] - fx["centre_north"].values,
+    )
+    assert m["fixes_refused"] == 0 and m["fixes_accepted"] >= 18
+    np.testing.assert_allclose(on, ranges, rtol=0, atol=1e-6)
+    assert m["est_max_error_m"] < 2.0 * ranges.max() + 2.0, (m["est_max_error_m"], ranges.max())
     assert dr["fixes_accepted"] == 0
 
 
