@@ -83,7 +83,11 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "nav/navigator.py": ("tests/nav/test_navigator.py", "tests/tasks/test_run_data.py"),
     "nav/dead_reckoning.py": ("tests/nav/test_dead_reckoning.py", "tests/nav/test_navigator.py"),
     "nav/bearings.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
-    "nav/cmnf.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
+    "nav/cmnf.py": (
+        "tests/nav/test_bearings.py",
+        "tests/nav/test_cmnf.py",
+        "tests/tasks/test_paper004.py",
+    ),
     "nav/pcrb.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
     "nav/relative.py": ("tests/nav/test_relative.py", "tests/tasks/test_paper003.py"),
     "nav/correction.py": (
