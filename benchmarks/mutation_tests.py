@@ -754,7 +754,68 @@ OWN_ROUND2: list[Mutation] = [
 """A second round of our own mutations, written after the tests for the first round had been
 added (they measure how well those tests carry over)."""
 
-MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2]
+OWN_ROUND3: list[Mutation] = [
+    Mutation(
+        "usbl-fold-dropped",
+        "own",
+        "correction",
+        "nav/models.py",
+        "        folded = ya_fold**2 / sa2 + yb_fold**2 / sb2 < y[..., 1] ** 2 / sa2"
+        " + y[..., 2] ** 2 / sb2\n",
+        "        folded = np.zeros(y.shape[:-1], dtype=bool)\n",
+        "the USBL innovation of a fix reported over the zenith taken as reported (azimuth + pi)",
+    ),
+    Mutation(
+        "usbl-fold-azimuth-not-turned",
+        "own",
+        "sign",
+        "nav/models.py",
+        "ya_fold = wrap_pi(z[..., 1] + np.pi - hx[..., 1])",
+        "ya_fold = wrap_pi(z[..., 1] - hx[..., 1])",
+        "the folded spelling of a fix over the pole without its azimuth turned by pi",
+    ),
+    Mutation(
+        "swarm-divergence-not-failing",
+        "own",
+        "correction",
+        "tasks/missions/swarm.py",
+        "return ReportSummary(text, tuple(files), tuple(failures), tuple(diverged))",
+        "return ReportSummary(text, tuple(files), tuple(failures))",
+        "mission/swarm names a diverged estimate but bauv run exits 0",
+    ),
+    Mutation(
+        "swarm-divergence-dead-reckoning-counted",
+        "own",
+        "correction",
+        "tasks/missions/swarm.py",
+        'if "diverged_at_s" in m and (name == LEADER or method != "dr"):',
+        'if "diverged_at_s" in m:',
+        "dead reckoning's drift reported as a diverged estimate",
+    ),
+    Mutation(
+        "cmnf-step-clip-dropped",
+        "own",
+        "correction",
+        "nav/cmnf.py",
+        "b = np.clip(b, gains.beta_lo[i], gains.beta_hi[i])",
+        "b = b",
+        "the CMNF applies gains fitted on the clipped correction to the unclipped one",
+    ),
+    Mutation(
+        "set-sea-carry-sign",
+        "own",
+        "sign",
+        "bauv_sim/physics.py",
+        "self.data.qvel[v.dof_adr : v.dof_adr + 3] += change",
+        "self.data.qvel[v.dof_adr : v.dof_adr + 3] -= change",
+        "set_sea carries the vehicles against the change of the water",
+        tests=("tests/bauv_sim/test_sea.py",),
+    ),
+]
+"""A third round, of issue 21's own new code (the USBL fold, the swarm's divergence, the CMNF's
+clipped correction, set_sea's carry), written after it had its tests."""
+
+MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2, *OWN_ROUND3]
 
 _IGNORE = shutil.ignore_patterns(
     ".git", ".venv", "venv", "__pycache__", ".pytest_cache", ".ruff_cache", "runs", "*.egg-info"

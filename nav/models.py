@@ -312,9 +312,9 @@ class UsblMeasurement:
         passing over the transceiver, ``(alpha + pi, pi - beta)`` against a prediction at
         ``(alpha, beta')`` is an azimuth innovation of about pi where the direction differs by
         a few degrees of elevation. The innovation is therefore taken for both spellings of the
-        measured direction (the pole on the prediction's side: over the top when the predicted
-        elevation is >= 0) and the one with the smaller squared angle residuals in units of the
-        angles' sigmas is kept; away from the poles that is always the measurement as given.
+        measured direction (with the elevation residual wrapped, over the zenith and under the
+        nadir give the same) and the one with the smaller squared angle residuals in units of
+        the angles' sigmas is kept; away from the poles that is always the measurement as given.
 
         Args:
             z: measurements ``(r, alpha, beta)``, shape (n, 3), m, rad, rad.
@@ -327,10 +327,10 @@ class UsblMeasurement:
         y = z - hx
         y[..., 1] = wrap_pi(y[..., 1])
         y[..., 2] = wrap_pi(y[..., 2])
-        # the same direction spelled over the pole on the prediction's side
-        b_fold = np.where(hx[..., 2] >= 0.0, np.pi - z[..., 2], -np.pi - z[..., 2])
+        # the same direction spelled over the pole: (alpha + pi, pi - beta); the nadir's
+        # spelling -pi - beta differs by 2 pi, the same wrapped residual
         ya_fold = wrap_pi(z[..., 1] + np.pi - hx[..., 1])
-        yb_fold = wrap_pi(b_fold - hx[..., 2])
+        yb_fold = wrap_pi(np.pi - z[..., 2] - hx[..., 2])
         sa2, sb2 = self.sigma_azimuth_rad**2, self.sigma_elevation_rad**2
         folded = ya_fold**2 / sa2 + yb_fold**2 / sb2 < y[..., 1] ** 2 / sa2 + y[..., 2] ** 2 / sb2
         y[..., 1] = np.where(folded, ya_fold, y[..., 1])
