@@ -7,12 +7,12 @@ current (``../shared/notes/hydrodynamics.md``). This module holds what a compile
 beyond plain MuJoCo:
 
 * **The engine plugin** ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``, compiled at install): added
-  mass in the mass matrix, the hull's Munk coupling with separation, crossflow drag, slender-body
-  and thin-plate lift, the thin fins' plate drag (profile, induced, normal force), water
-  acceleration, each vehicle's own water. :func:`load_plugin` registers
-  it (at import), :func:`load_model` compiles a model file with it (the one line a plain-MuJoCo
-  user needs), :func:`set_water` and :func:`water` hold each vehicle's water in the plugin's
-  state, :func:`plugin_force` reads what it applied.
+  mass in the mass matrix, the hull's Munk coupling with separation, crossflow drag (the hull's
+  strips, and the flapping peduncle's in its own frame), slender-body and thin-plate lift, the
+  thin fins' plate drag (profile, induced, normal force), water acceleration, each vehicle's own
+  water. :func:`load_plugin` registers it (at import), :func:`load_model` compiles a model file
+  with it (the one line a plain-MuJoCo user needs), :func:`set_water` and :func:`water` hold each
+  vehicle's water in the plugin's state, :func:`plugin_force` reads what it applied.
 * **Water velocity**: ``option wind`` is the water velocity of MuJoCo's fluid forces;
   :func:`set_water_velocity` sets it (the facade keeps it equal to the first vehicle's water).
 * **Fluid coefficients** of a compiled model can be read and replaced (calibration experiments);

@@ -261,7 +261,8 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
 
     * slender drag = skin friction: C_slender (A_max - A_f) = C_F FF S_wet / 2 on each part;
     * blunt drag: hull = the pressure part of Hoerner's body form factor, C_F (FF - 1) S_wet /
-      (2 A_f); peduncle 0 (it is the aft body, in the hull's flow);
+      (2 A_f); peduncle 0 (it is the aft body, in the hull's flow; the form factor's pressure drag
+      is the whole body's, on the hull's term); its crossflow drag is its strips';
     * the thin fins (caudal, dorsal, lateral): 0 for every term. MuJoCo's drag of a flat
       ellipsoid puts nearly the whole plate in the flow at a few degrees of incidence (its
       projected area is a weighted mean of the ellipsoid's three sections, 3.2 times the caudal
@@ -272,8 +273,9 @@ def derived_fluid_coefficients(speed_m_s: float = 1.0) -> dict[str, NDArray[np.f
       ``bauv.hydro`` computes the lift instead (the plates' slopes: :func:`foil_lift_slopes`; the
       hull's: :func:`slender_lift_stations`);
     * angular drag: 0 on the hull and peduncle (their rotational damping is the crossflow of the
-      strips, :func:`crossflow_elements`, applied by the plugin) and on the fins (their panels'
-      normal force sees each panel's velocity, rotation included);
+      strips the plugin applies: the hull's :func:`crossflow_elements`, the peduncle's
+      :func:`segment_crossflow` in its own frame) and on the fins (their panels' normal force
+      sees each panel's velocity, rotation included);
     * Magnus lift 0 (:data:`MAGNUS_LIFT_COEFFICIENT`).
 
     Args:
@@ -331,7 +333,8 @@ def foil_drag_coefficients(speed_m_s: float = DESIGN_SPEED_M_S) -> dict[str, NDA
     At small incidence this leaves the plate its friction: the caudal fin's drag coefficient on S
     is 0.019 at 1 deg (C_D0 0.0188) and 0.023 at 5 deg, where MuJoCo's projected-area drag of its
     flat ellipsoid gave 0.044 and 0.124; at 20 deg 0.112 against 0.157. The peduncle, a thick aft
-    body, keeps MuJoCo's drag (zeros here).
+    body, has zeros here: its friction is MuJoCo's slender drag, its crossflow drag its strips
+    (:func:`peduncle_crossflow_strips`).
 
     Args:
         speed_m_s: speed at which the friction coefficients are evaluated, m/s.
@@ -469,11 +472,89 @@ def hull_crossflow_strips(n: int = N_HULL_STRIPS) -> NDArray[np.float64]:
 
 
 def crossflow_elements() -> NDArray[np.float64]:
-    """All crossflow elements of the vehicle, rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape (k, 7)
-    (the model file's ``hydro_crossflow``): the hull's strips (:func:`hull_crossflow_strips`). The
-    fins' normal force is the plugin's plate model, in each fin's own frame
-    (:func:`foil_drag_coefficients`)."""
+    """All crossflow elements in the hull frame, rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape
+    (k, 7) (the model file's ``hydro_crossflow``): the hull's strips
+    (:func:`hull_crossflow_strips`). The peduncle's strips are in its own frame
+    (:func:`segment_crossflow`); the fins' normal force is the plugin's plate model, in each fin's
+    own frame (:func:`foil_drag_coefficients`)."""
     return hull_crossflow_strips()
+
+
+N_PEDUNCLE_STRIPS = 10
+"""Strips of the peduncle in the crossflow model (midpoint rule, 45 mm each: its side and top
+areas within 0.1 % of a fine quadrature of the profile, its damping integral of |x|^3 about the
+tail hinge within 0.7 %)."""
+
+SEGMENT_BODIES = ("peduncle",)
+"""The body segments that move on their own and carry crossflow strips in their own frames (the
+model file's text ``hydro_segments``): the peduncle, caudal segment 1, which the crank-rocker
+swings +-15.5 deg about the tail hinge."""
+
+
+def peduncle_crossflow_strips(n: int = N_PEDUNCLE_STRIPS) -> NDArray[np.float64]:
+    """Crossflow elements of the peduncle (tail hinge to caudal-fin hinge), by strip theory in its
+    own frame.
+
+    The peduncle is the aft part of the body profile (:class:`bauv_sim.hull.HullProfile`, from
+    the tail hinge at ``hinge_x_m`` to the body's end at ``end_x_m``), and it gets the hull's strip
+    treatment (:func:`hull_crossflow_strips`) in the frame of its own body, whose origin is the
+    tail hinge and whose axes swing with the tail: each strip of length dx at ``x`` (aft of the
+    hinge: x < 0) is an elliptic section of half-height h and half-width w of the profile there,
+    with projected areas ``a_y = 2 h dx``, ``a_z = 2 w dx`` and per direction
+    ``C = eta C_2D - 2 C_blunt``: the 2-D coefficient of the elliptic section by its fineness
+    (:func:`section_drag_coefficient`; w/h = 0.65 at the hinge, 0.46 at the end: 1.45 to 1.6
+    across y, 0.82 to 0.6 across z), times the body's finite-length factor
+    :data:`CROSSFLOW_LENGTH_FACTOR` (the peduncle is the last 0.45 m of the same 1.60 m body of
+    fineness 5.9), less MuJoCo's blunt drag of the peduncle's ellipsoid (0: the peduncle's
+    MuJoCo drag is its friction alone). The plugin evaluates each strip with the peduncle's own
+    velocity relative to the water at the strip, the tail's flapping included: sway (the beat)
+    and heave (a pitched or heaving vehicle), ``c = v + omega x r`` in the peduncle's frame.
+    The crossflow Reynolds number (section 0.1-0.2 m, 0.1-0.5 m/s) is 1e4-1e5, subcritical as
+    the coefficients are.
+
+    Args:
+        n: number of strips.
+
+    Returns:
+        Rows ``(x, y, z, a_y, a_z, C_y, C_z)``, shape (n, 7): station in the peduncle's body
+        frame (m), projected areas (m^2), coefficients.
+
+    References:
+        Allen & Perkins 1951 (NACA Report 1048): crossflow drag of a body at incidence by strips;
+        Hoerner 1965, *Fluid-Dynamic Drag*, ch. 3; Delany & Sorensen 1953 (NACA TN 3038).
+    """
+    h = hull.HULL
+    edges = np.linspace(h.end_x_m, h.hinge_x_m, n + 1)
+    x = 0.5 * (edges[1:] + edges[:-1])
+    dx = np.diff(edges)
+    s = h.s_of_x(x)
+    hh, ww = h.half_height(s), h.half_width(s)
+    blunt = 2.0 * float(derived_fluid_coefficients()["peduncle_fluid"][0])
+    out = np.zeros((n, 7))
+    out[:, 0] = x - h.hinge_x_m
+    out[:, 3] = 2.0 * hh * dx
+    out[:, 4] = 2.0 * ww * dx
+    out[:, 5] = CROSSFLOW_LENGTH_FACTOR * section_drag_coefficient(ww / hh) - blunt
+    out[:, 6] = CROSSFLOW_LENGTH_FACTOR * section_drag_coefficient(hh / ww) - blunt
+    return out
+
+
+def segment_crossflow() -> NDArray[np.float64]:
+    """The crossflow strips of the segments :data:`SEGMENT_BODIES`, each in its own body's frame
+    (the model file's ``hydro_segment_crossflow``): rows ``(segment, x, y, z, a_y, a_z, C_y,
+    C_z)``, shape (k, 8), with ``segment`` the index into :data:`SEGMENT_BODIES` and the rest as
+    :func:`peduncle_crossflow_strips`."""
+    strips = peduncle_crossflow_strips()
+    return np.column_stack([np.zeros(len(strips)), strips])
+
+
+def segment_roll_damping() -> NDArray[np.float64]:
+    """Quadratic roll damping K (N m s^2) of each segment of :data:`SEGMENT_BODIES` about its own
+    x axis (the model file's ``hydro_segment_roll_damping``): the peduncle's non-circular
+    sections, as the hull's (:func:`hull_roll_damping`), from the tail hinge to the body's end."""
+    h = hull.HULL
+    blunt = 2.0 * float(derived_fluid_coefficients()["peduncle_fluid"][0])
+    return np.array([_roll_damping(h.end_x_m, h.hinge_x_m, blunt)])
 
 
 def slender_lift_stations() -> NDArray[np.float64]:
@@ -520,12 +601,20 @@ def hull_roll_damping() -> float:
     Returns:
         K, N m s^2.
     """
+    h = hull.HULL
+    blunt = 2.0 * float(derived_fluid_coefficients()["hull_fluid"][0])
+    return _roll_damping(h.hinge_x_m, h.nose_x_m, blunt)
+
+
+def _roll_damping(x0_m: float, x1_m: float, blunt: float) -> float:
+    """``1/2 rho (C - blunt) (h^4 - w^4) / 4`` integrated over the body from x0 to x1 (m), with
+    C = :data:`CROSSFLOW_DRAG_COEFFICIENT`, N m s^2."""
     rho = hull.SEAWATER_DENSITY_KG_M3
     h = hull.HULL
-    x = np.linspace(h.hinge_x_m, h.nose_x_m, 4001)
+    x = np.linspace(x0_m, x1_m, 4001)
     s = h.s_of_x(x)
     hh, ww = h.half_height(s), h.half_width(s)
-    c = CROSSFLOW_DRAG_COEFFICIENT - 2.0 * float(derived_fluid_coefficients()["hull_fluid"][0])
+    c = CROSSFLOW_DRAG_COEFFICIENT - blunt
     return float(np.sum(0.5 * rho * c * 0.25 * (hh**4 - ww**4)) * (x[1] - x[0]))
 
 
@@ -585,6 +674,9 @@ def hydro_numerics() -> dict[str, NDArray[np.float64]]:
     * ``hydro_crossflow``: :func:`crossflow_elements` flattened (7 per element);
     * ``hydro_slender_lift``: :func:`slender_lift_stations`;
     * ``hydro_roll_damping``: :func:`hull_roll_damping`;
+    * ``hydro_segment_crossflow``: :func:`segment_crossflow` flattened (8 per strip), the strips
+      of the bodies in the text ``hydro_segments`` (:data:`SEGMENT_BODIES`), each in its own frame;
+    * ``hydro_segment_roll_damping``: :func:`segment_roll_damping`, one per segment;
     * ``hydro_foil_cla``: :func:`foil_lift_slopes`, in the order of the text ``hydro_foils``;
     * ``hydro_foil_drag``: :func:`foil_drag_coefficients`, 3 per plate in the same order.
 
@@ -597,6 +689,8 @@ def hydro_numerics() -> dict[str, NDArray[np.float64]]:
         "hydro_crossflow": crossflow_elements().ravel(),
         "hydro_slender_lift": slender_lift_stations(),
         "hydro_roll_damping": np.array([hull_roll_damping()]),
+        "hydro_segment_crossflow": segment_crossflow().ravel(),
+        "hydro_segment_roll_damping": segment_roll_damping(),
         "hydro_foil_cla": np.array(list(foil_lift_slopes().values())),
         "hydro_foil_drag": np.concatenate(list(foil_drag_coefficients().values())),
     }
@@ -604,7 +698,11 @@ def hydro_numerics() -> dict[str, NDArray[np.float64]]:
 
 def custom_xml(precision: int = 7) -> str:
     """The ``<custom>`` block of ``bauv.xml`` for :func:`hydro_numerics` (``%.{precision}g``)."""
-    lines = ["  <custom>", f'    <text name="hydro_foils" data="{" ".join(FOIL_GEOMS)}"/>']
+    lines = [
+        "  <custom>",
+        f'    <text name="hydro_foils" data="{" ".join(FOIL_GEOMS)}"/>',
+        f'    <text name="hydro_segments" data="{" ".join(SEGMENT_BODIES)}"/>',
+    ]
     for name, data in hydro_numerics().items():
         vals = " ".join(f"{v:.{precision}g}" for v in data)
         lines.append(f'    <numeric name="{name}" data="{vals}"/>')

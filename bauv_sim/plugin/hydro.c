@@ -18,6 +18,12 @@
 //   * crossflow drag by strip theory, -1/2 rho C a |c| c per element ("<prefix>hydro_crossflow":
 //     x y z a_y a_z C_y C_z in the hull frame), and the hull sections' roll damping
 //     ("<prefix>hydro_roll_damping");
+//   * the same for body segments that move on their own (the peduncle), in each segment body's
+//     own frame and with its own velocity (translation and rotation, the tail's flapping
+//     included): text "<prefix>hydro_segments" names the bodies, numeric
+//     "<prefix>hydro_segment_crossflow" holds 8 numbers per strip (segment index, x y z in that
+//     body's frame, a_y a_z C_y C_z) and "<prefix>hydro_segment_roll_damping" one K per segment
+//     (torque -K p |p| about the body's x);
 //   * the hull's slender-body lift with separation at x_s: -rho u A(x_s) c(x_s)
 //     ("<prefix>hydro_slender_lift": x_y A_y x_z A_z f_y f_z) and the afterbody's share f of the
 //     hull's Munk couple removed (lost to separation, Hopkins 1951);
@@ -82,6 +88,11 @@ typedef struct {
   int* fluid_geom;
   int nkutta;
   int* kutta_geom;
+  int nseg;
+  int* seg_body;     // bodies whose own frames carry crossflow strips
+  mjtNum* seg_roll;  // per segment: roll damping K (N m s^2)
+  int nsegstrip;
+  mjtNum* seg_strip; // 8 per strip: segment, x y z (its body frame), a_y a_z C_y C_z
 } Hydro;
 
 static void hydro_free(Hydro* h) {
@@ -96,6 +107,9 @@ static void hydro_free(Hydro* h) {
   free(h->fk_body);
   free(h->fluid_geom);
   free(h->kutta_geom);
+  free(h->seg_body);
+  free(h->seg_roll);
+  free(h->seg_strip);
   free(h);
 }
 
@@ -126,6 +140,9 @@ static Hydro* hydro_copy(const Hydro* s) {
   h->fk_body = dup_int(s->fk_body, s->nfk);
   h->fluid_geom = dup_int(s->fluid_geom, s->nfluid);
   h->kutta_geom = dup_int(s->kutta_geom, s->nkutta);
+  h->seg_body = dup_int(s->seg_body, s->nseg);
+  h->seg_roll = dup_num(s->seg_roll, s->nseg);
+  h->seg_strip = dup_num(s->seg_strip, 8 * s->nsegstrip);
   return h;
 }
 
@@ -161,6 +178,73 @@ static void zero_model_terms(const mjModel* m, const Hydro* h) {
     for (int k = 6; k < 12; k++) f[k] = 0;
   }
   for (int i = 0; i < h->nkutta; i++) fluid[mjNFLUID * h->kutta_geom[i] + 4] = 0;
+}
+
+// the segments' strips: text "<prefix>hydro_segments" (body names), numeric
+// "<prefix>hydro_segment_crossflow" (8 per strip), "<prefix>hydro_segment_roll_damping" (1 per
+// segment, optional); 0, or -1 with *what set
+static int read_segments(const mjModel* m, const char* prefix, int fb, Hydro* h,
+                         const char** what) {
+  char full[NAME_LEN];
+  snprintf(full, NAME_LEN, "%shydro_segments", prefix);
+  int tid = mj_name2id(m, mjOBJ_TEXT, full);
+  int size = 0;
+  const mjtNum* sc = numeric(m, prefix, "hydro_segment_crossflow", &size);
+  int strip_size = size;
+  if (tid < 0) {
+    if (sc) {
+      *what = "'<prefix>hydro_segment_crossflow' needs the text '<prefix>hydro_segments'";
+      return -1;
+    }
+    return 0;
+  }
+  const char* text = m->text_data + m->text_adr[tid];
+  int len = m->text_size[tid];
+  char buf[4096];
+  if (len >= (int)sizeof(buf)) len = sizeof(buf) - 1;
+  memcpy(buf, text, len);
+  buf[len] = '\0';
+  int count = 0;
+  char* save = NULL;
+  for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
+    count++;
+  }
+  h->seg_body = (int*)malloc(sizeof(int) * (count + 1));
+  h->seg_roll = (mjtNum*)calloc(count + 1, sizeof(mjtNum));
+  memcpy(buf, text, len);
+  buf[len] = '\0';
+  save = NULL;
+  for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
+    snprintf(full, NAME_LEN, "%s%s", prefix, tok);
+    int b = mj_name2id(m, mjOBJ_BODY, full);
+    if (b < 0 || !in_subtree(m, b, fb)) {
+      *what = "a body of '<prefix>hydro_segments' is not in the vehicle";
+      return -1;
+    }
+    h->seg_body[h->nseg++] = b;
+  }
+  if (!sc || strip_size % 8) {
+    *what = "'<prefix>hydro_segment_crossflow' must hold 8 numbers per strip";
+    return -1;
+  }
+  h->nsegstrip = strip_size / 8;
+  for (int k = 0; k < h->nsegstrip; k++) {
+    mjtNum i = sc[8 * k];
+    if (!(i >= 0 && i < count && i == floor(i))) {
+      *what = "a strip of '<prefix>hydro_segment_crossflow' names no segment";
+      return -1;
+    }
+  }
+  h->seg_strip = dup_num(sc, strip_size);
+  const mjtNum* rk = numeric(m, prefix, "hydro_segment_roll_damping", &size);
+  if (rk) {
+    if (size != count) {
+      *what = "'<prefix>hydro_segment_roll_damping' must give one K per segment";
+      return -1;
+    }
+    for (int i = 0; i < count; i++) h->seg_roll[i] = rk[i];
+  }
+  return 0;
 }
 
 static int hydro_init(const mjModel* m, mjData* d, int instance) {
@@ -252,6 +336,11 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
   }
   const mjtNum* rk = numeric(m, prefix, "hydro_roll_damping", &size);
   h->roll_k = (rk && size >= 1) ? rk[0] : 0;
+  const char* what = "";
+  if (read_segments(m, prefix, fb, h, &what) != 0) {
+    hydro_free(h);
+    return fail(iname, what);
+  }
 
   // vehicle geoms and bodies
   h->fluid_geom = (int*)malloc(sizeof(int) * (m->ngeom + 1));
@@ -562,6 +651,41 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       mjtNum fb[3] = {mb * aw[0], mb * aw[1], mb * aw[2]};
       mj_applyFT(m, d, fb, zero, d->xipos + 3 * b, b, qfrc);
     }
+  }
+
+  // segments' crossflow strips, each in its body's own frame with its own velocity
+  for (int i = 0; i < h->nseg; i++) {
+    int b = h->seg_body[i];
+    const mjtNum* Rb = d->xmat + 9 * b;
+    mjtNum vel[6], wl[3], ub[3];
+    mj_objectVelocity(m, d, mjOBJ_XBODY, b, vel, 1);  // (omega, v) at the body origin, its frame
+    mju_mulMatTVec3(wl, Rb, w);
+    ub[0] = vel[3] - wl[0];
+    ub[1] = vel[4] - wl[1];
+    ub[2] = vel[5] - wl[2];
+    mjtNum fs[3] = {0, 0, 0}, ts[3] = {0, 0, 0};
+    for (int k = 0; k < h->nsegstrip; k++) {
+      const mjtNum* e = h->seg_strip + 8 * k;
+      if ((int)e[0] != i) continue;
+      const mjtNum* r = e + 1;
+      mjtNum wr[3];
+      cross3(wr, vel, r);
+      mjtNum cy = ub[1] + wr[1];
+      mjtNum cz = ub[2] + wr[2];
+      mjtNum c = sqrt(cy * cy + cz * cz);
+      mjtNum gy = -0.5 * rho * e[4] * e[6] * c * cy;
+      mjtNum gz = -0.5 * rho * e[5] * e[7] * c * cz;
+      fs[1] += gy;
+      fs[2] += gz;
+      ts[0] += r[1] * gz - r[2] * gy;
+      ts[1] -= r[0] * gz;
+      ts[2] += r[0] * gy;
+    }
+    ts[0] -= h->seg_roll[i] * vel[0] * fabs(vel[0]);
+    mjtNum fw2[3], tw2[3];
+    mju_mulMatVec3(fw2, Rb, fs);
+    mju_mulMatVec3(tw2, Rb, ts);
+    mj_applyFT(m, d, fw2, tw2, d->xpos + 3 * b, b, qfrc);
   }
 
   // plates: thin-plate drag (profile, induced, normal) and lift in the chord-normal plane

@@ -320,18 +320,23 @@ def check_broadside(speed_m_s: float = 0.3) -> BroadsideResult:
 
 def hull_only() -> BauvPhysics:
     """The vehicle with only its hull in the fluid: the other geoms' fluid coefficients zeroed,
-    no lifting plates (their lift and drag), only the hull's crossflow strips (a model variant,
-    for the hull's forces)."""
+    no lifting plates (their lift and drag), only the hull's crossflow strips (not the peduncle's:
+    a model variant, for the hull's forces)."""
     spec = mujoco.MjSpec.from_file(str(hull.MODEL_DIR / "scene.xml"))
     keep = {"hull_fluid"}
     for g in spec.geoms:
         if g.fluid_ellipsoid and g.name not in keep:
             g.fluid_coefs = [0.0, 0.0, 0.0, 0.0, 0.0]
     for t in list(spec.texts):
-        if t.name == "hydro_foils":
+        if t.name in ("hydro_foils", "hydro_segments"):
             spec.delete(t)
     for n in list(spec.numerics):
-        if n.name in ("hydro_foil_cla", "hydro_foil_drag"):
+        if n.name in (
+            "hydro_foil_cla",
+            "hydro_foil_drag",
+            "hydro_segment_crossflow",
+            "hydro_segment_roll_damping",
+        ):
             spec.delete(n)
         elif n.name == "hydro_crossflow":
             rows = np.asarray(n.data).reshape(-1, 7)
@@ -990,12 +995,13 @@ def _set_numeric(m: mujoco.MjModel, name: str, data: NDArray[np.float64]) -> Non
 
 
 def check_approximations(frequency_hz: float | None = None) -> tuple[ApproximationRow, ...]:
-    """What four of the model's approximations change: the afterbody's share of the hull's Munk
+    """What five of the model's approximations change: the afterbody's share of the hull's Munk
     couple lost to separation (the variant keeps the whole potential couple: f = 0), the tail's
     share of the rigid-body added mass at zero tail angle (the variant leaves it out: the flapping
     parts' water then only as the hinges' armature), the fins' span efficiency e = 1 of their
-    induced drag (the variant: 0.8, real fins' lower bound) and their normal force C_N sin^2 a
-    (the variant leaves it out)."""
+    induced drag (the variant: 0.8, real fins' lower bound), their normal force C_N sin^2 a
+    (the variant leaves it out) and the peduncle's crossflow strips (the variant leaves them out,
+    as the model was before them)."""
     from tasks.vehicle.checks import cruise_frequency_hz
 
     f = cruise_frequency_hz() if frequency_hz is None else frequency_hz
@@ -1004,6 +1010,12 @@ def check_approximations(frequency_hz: float | None = None) -> tuple[Approximati
         geoms=("hull_fluid", "dorsal_fin_fluid", "fin_port_fluid", "fin_starboard_fluid")
     )
     plates = np.array(list(fluid.foil_drag_coefficients().values()))
+    segments = fluid.segment_crossflow()
+
+    def no_peduncle_strips(m: mujoco.MjModel) -> None:
+        _set_numeric(m, "hydro_segment_crossflow", segments * [1, 1, 1, 1, 0, 0, 1, 1])
+        _set_numeric(m, "hydro_segment_roll_damping", [0.0])
+
     variants = {
         "the model": lambda m: None,
         "separation off (the hull's whole Munk couple)": lambda m: _set_numeric(
@@ -1016,6 +1028,7 @@ def check_approximations(frequency_hz: float | None = None) -> tuple[Approximati
         "fins without their normal (crossflow) force": lambda m: _set_numeric(
             m, "hydro_foil_drag", plates * [1.0, 1.0, 0.0]
         ),
+        "without the peduncle's crossflow drag": no_peduncle_strips,
     }
     rows = []
     for label, edit in variants.items():

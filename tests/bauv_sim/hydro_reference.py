@@ -122,6 +122,31 @@ def reference(
     qfrc = np.zeros(m.nv)
     qfrc[dof : dof + 3] += R @ tau[:3]
     qfrc[dof + 3 : dof + 6] += tau[3:]
+    # the segments' strips, each in its body's frame: the strip's velocity from the point
+    # Jacobian at its world position, its force applied there
+    segments = (_text(m, prefix + "hydro_segments") or "").split()
+    strips = _numeric(m, prefix + "hydro_segment_crossflow")
+    rolls = _numeric(m, prefix + "hydro_segment_roll_damping")
+    for k, name in enumerate(segments):
+        b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, prefix + name)
+        Rb = d.xmat[b].reshape(3, 3)
+        for row in strips.reshape(-1, 8):
+            if int(row[0]) != k:
+                continue
+            r, (ay, az, cy_, cz_) = row[1:4], row[4:]
+            point = d.xpos[b] + Rb @ r
+            jacp = np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jacp, None, point, b)
+            ve = Rb.T @ (jacp @ d.qvel - w)
+            c = np.hypot(ve[1], ve[2])
+            f = -0.5 * rho * c * np.array([0.0, ay * cy_ * ve[1], az * cz_ * ve[2]])
+            mujoco.mj_applyFT(m, d, Rb @ f, np.zeros(3), point, b, qfrc)
+        if rolls is not None:
+            jacr = np.zeros((3, m.nv))
+            mujoco.mj_jacBody(m, d, None, jacr, b)
+            p_seg = (Rb.T @ (jacr @ d.qvel))[0]
+            torque = Rb @ np.array([-rolls[k] * p_seg * abs(p_seg), 0.0, 0.0])
+            mujoco.mj_applyFT(m, d, np.zeros(3), torque, d.xpos[b], b, qfrc)
     # Froude-Krylov on every displacing body of the vehicle
     bodies = hydro.subtree_bodies(m, fb)
     if np.any(a_w != 0):

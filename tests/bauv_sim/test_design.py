@@ -60,11 +60,11 @@ def test_hydro_tables_in_the_model_are_the_derived_ones(model):
         assert i >= 0, name
         a, n = model.numeric_adr[i], model.numeric_size[i]
         assert np.allclose(model.numeric_data[a : a + n], data, rtol=1e-6, atol=1e-9), name
-    t = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, "hydro_foils")
-    a, n = model.text_adr[t], model.text_size[t]
-    assert bytes(model.text_data[a : a + n]).decode().rstrip("\x00").split() == list(
-        fluid.FOIL_GEOMS
-    )
+    texts = (("hydro_foils", fluid.FOIL_GEOMS), ("hydro_segments", fluid.SEGMENT_BODIES))
+    for text, names in texts:
+        t = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, text)
+        a, n = model.text_adr[t], model.text_size[t]
+        assert bytes(model.text_data[a : a + n]).decode().rstrip("\x00").split() == list(names)
 
 
 def test_crossflow_strips_reproduce_the_hull_integrals():
@@ -83,6 +83,28 @@ def test_crossflow_strips_reproduce_the_hull_integrals():
     # 2-D coefficients by fineness: a laterally compressed section is bluffer across y
     assert fluid.section_drag_coefficient(1.0) == pytest.approx(1.2)
     assert np.all(strips[:, 5] > strips[:, 6])
+
+
+def test_peduncle_strips_reproduce_its_integrals():
+    """The peduncle's strips (its own frame: origin at the tail hinge, x aft < 0) against a fine
+    quadrature of the profile from the tail hinge to the body's end: side and top areas (m^2),
+    the flapping's damping integral of |x|^3 about the hinge; the coefficients are the body's
+    (0.75 x the 2-D elliptic section's by fineness: bluffer across y than across z)."""
+    strips = fluid.peduncle_crossflow_strips()
+    h = hull.HULL
+    x = np.linspace(h.end_x_m, h.hinge_x_m, 40001)
+    s = h.s_of_x(x)
+    assert np.all((strips[:, 0] < 0.0) & (strips[:, 0] > h.end_x_m - h.hinge_x_m))
+    assert np.all(strips[:, 1:3] == 0.0)
+    assert strips[:, 3].sum() == pytest.approx(np.trapezoid(2.0 * h.half_height(s), x), rel=2e-3)
+    assert strips[:, 4].sum() == pytest.approx(np.trapezoid(2.0 * h.half_width(s), x), rel=2e-3)
+    k = np.trapezoid(2.0 * h.half_height(s) * np.abs(x - h.hinge_x_m) ** 3, x)
+    assert (strips[:, 3] * np.abs(strips[:, 0]) ** 3).sum() == pytest.approx(k, rel=0.01)
+    assert np.all(strips[:, 5] > strips[:, 6])
+    assert np.all((strips[:, 5] >= 0.75 * 1.2) & (strips[:, 5] <= 0.75 * 1.6 + 1e-12))
+    assert np.all((strips[:, 6] >= 0.75 * 0.6 - 1e-12) & (strips[:, 6] <= 0.75 * 1.2))
+    rows = fluid.segment_crossflow()
+    assert np.array_equal(rows[:, 0], np.zeros(len(strips))) and np.array_equal(rows[:, 1:], strips)
 
 
 def test_formula_laws():
