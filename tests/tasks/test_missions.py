@@ -305,27 +305,35 @@ def test_mission_navigator_is_consistent():
 
 
 def test_correction_mission_corrects_dr_and_the_course(tmp_path):
-    """Seed 001 on the physical vehicle, one run (both flights): CP2 from two surfacings makes
-    leg 3's DR several times better and the compensated course stays on the desired course."""
+    """Seed 001 on the physical vehicle, four runs (both flights each): CP2 from two surfacings
+    makes leg 3's DR several times better and the compensated course stays on the desired course.
+    The closed loop makes single runs vary widely (seed 0, runs 0-3: improvement 2.0-10.0x,
+    current error 0.028-0.057 m/s since issue 21's thin-plate fins, 0.012-0.033 before: with half
+    the drag the vehicle takes 2.6 times longer to reach its speed after each surfacing, while the
+    odometry reads the steady speed of its drive setting), so the checks are on the batch."""
     out = tmp_path / "corr"
     run(
         "mission/correction",
-        n_runs=1,
+        n_runs=4,
         seed=0,
         out_dir=out,
         progress=False,
         overrides=["report.recording=false", "report.figures=false"],
     )
     m = json.loads((out / "metrics.json").read_text())
-    r = m["runs"][0]
-    assert r["failed"] is None and r["correction_error"] is None
-    comp, direct = r["compensated"], r["direct"]
-    assert comp["uncorrected_mean_error_m"] > 3 * comp["corrected_mean_error_m"]
-    assert comp["course_deviation_deg"] < 0.5 * direct["course_deviation_deg"]
-    assert comp["current_error_m_s"] < 0.05  # uniform 0.3 m/s current
-    assert m["improvement_factor"] == pytest.approx(
-        comp["uncorrected_mean_error_m"] / comp["corrected_mean_error_m"]
+    assert len(m["runs"]) == 4
+    for r in m["runs"]:
+        assert r["failed"] is None and r["correction_error"] is None
+    comp = [r["compensated"] for r in m["runs"]]
+    direct = [r["direct"] for r in m["runs"]]
+    uncorrected = np.mean([c["uncorrected_mean_error_m"] for c in comp])
+    corrected = np.mean([c["corrected_mean_error_m"] for c in comp])
+    assert uncorrected > 3 * corrected
+    assert m["improvement_factor"] == pytest.approx(uncorrected / corrected)
+    assert np.mean([c["course_deviation_deg"] for c in comp]) < 0.5 * np.mean(
+        [d["course_deviation_deg"] for d in direct]
     )
+    assert np.mean([c["current_error_m_s"] for c in comp]) < 0.05  # uniform 0.3 m/s current
 
 
 # ---------------------------------------------------------------------------------------------

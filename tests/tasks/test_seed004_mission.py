@@ -9,6 +9,7 @@ import dataclasses
 import itertools
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -280,20 +281,32 @@ def test_surrogate_images_the_scene_heightfield_and_shifts_exactly_on_a_flat_one
 
 
 def test_seabed_prediction_flies_every_filter_without_nan_and_reports_the_shift(tmp_path):
+    """With the seabed-sensing prediction the CMNF follows the path and the EKF and UPMF may
+    fail to (seed 004's dashes in Table 1's row 2; on the physics a few of 20 s flights of EKF or
+    UPMF leave the path on any seed: 3 to 5 of 32 over seeds 1-16): a filter that does is a named
+    divergence with the time, never a NaN, and the shift is still reported for its steps."""
     outs = []
     for workers in (1, 2):
         out = tmp_path / f"w{workers}"
-        # seed 4: in 20 s of 2 runs the seabed prediction's filters diverge on some seeds (seeds 1
-        # and 6 of 1-6 before issue 21's physics, seed 3 after it); this test wants none
-        run(NAME, n_runs=2, seed=4, out_dir=out, overrides=SEABED, workers=workers, progress=False)
+        run(NAME, n_runs=2, seed=0, out_dir=out, overrides=SEABED, workers=workers, progress=False)
         outs.append(out)
     a, b = ((o / "metrics.json").read_text() for o in outs)
     assert a == b  # same numbers whatever the worker count
     m = _metrics(outs[0])
-    assert m["prediction"] == "seabed" and m["failures"] == []
+    assert m["prediction"] == "seabed"
+    assert m["filters"]["cmnf"]["runs_ok"] == 2 and m["filters"]["cmnf"]["diverged_runs"] == 0
+    named = re.compile(
+        r"^(ekf|upmf): run \d \(seed 0\) failed at t = [\d.]+ s: NavError: "
+        r"(EKF|UPMF) diverged at step \d+"
+    )
+    assert all(named.match(f) for f in m["failures"]), m["failures"]
     for f, s in m["filters"].items():
-        # 20 steps: a shift at steps 2..20 (the sonar has no image at t = 0) of both runs
-        assert s["shift_steps"] + s["shift_none_steps"] == 2 * 19, f
+        assert s["runs_ok"] + s["diverged_runs"] == 2, f
+        assert len([x for x in m["failures"] if x.startswith(f"{f}:")]) == s["diverged_runs"]
+        # 20 steps: a shift at steps 2..20 (the sonar has no image at t = 0) of a run that
+        # completes; a diverged run's until it stopped
+        steps = s["shift_steps"] + s["shift_none_steps"]
+        assert steps == 2 * 19 if s["diverged_runs"] == 0 else 0 < steps < 2 * 19, (f, steps)
         assert s["shift_beams_mean"] > 40, f
         for k, v in s.items():
             vals = v if isinstance(v, list) else [v]
