@@ -180,6 +180,22 @@ static void zero_model_terms(const mjModel* m, const Hydro* h) {
   for (int i = 0; i < h->nkutta; i++) fluid[mjNFLUID * h->kutta_geom[i] + 4] = 0;
 }
 
+// the whitespace-separated names of a text element: its text copied into buf (cut to
+// buf_size - 1 characters and terminated), and how many names it holds
+static int text_names(const mjModel* m, int tid, char* buf, int buf_size) {
+  int len = m->text_size[tid];
+  if (len >= buf_size) len = buf_size - 1;
+  memcpy(buf, m->text_data + m->text_adr[tid], len);
+  buf[len] = '\0';
+  const char* sep = " \t\n";
+  int count = 0;
+  for (const char* p = buf + strspn(buf, sep); *p; p += strspn(p, sep)) {
+    count++;
+    p += strcspn(p, sep);
+  }
+  return count;
+}
+
 // the segments' strips: text "<prefix>hydro_segments" (body names), numeric
 // "<prefix>hydro_segment_crossflow" (8 per strip), "<prefix>hydro_segment_roll_damping" (1 per
 // segment, optional); 0, or -1 with *what set
@@ -198,22 +214,11 @@ static int read_segments(const mjModel* m, const char* prefix, int fb, Hydro* h,
     }
     return 0;
   }
-  const char* text = m->text_data + m->text_adr[tid];
-  int len = m->text_size[tid];
   char buf[4096];
-  if (len >= (int)sizeof(buf)) len = sizeof(buf) - 1;
-  memcpy(buf, text, len);
-  buf[len] = '\0';
-  int count = 0;
-  char* save = NULL;
-  for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
-    count++;
-  }
+  int count = text_names(m, tid, buf, (int)sizeof(buf));
   h->seg_body = (int*)malloc(sizeof(int) * (count + 1));
   h->seg_roll = (mjtNum*)calloc(count + 1, sizeof(mjtNum));
-  memcpy(buf, text, len);
-  buf[len] = '\0';
-  save = NULL;
+  char* save = NULL;
   for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
     snprintf(full, NAME_LEN, "%s%s", prefix, tok);
     int b = mj_name2id(m, mjOBJ_BODY, full);
@@ -370,17 +375,8 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
   const mjtNum* cla = numeric(m, prefix, "hydro_foil_cla", &size);
   int cla_size = size;
   if (tid >= 0) {
-    const char* text = m->text_data + m->text_adr[tid];
-    int len = m->text_size[tid];
     char buf[4096];
-    if (len >= (int)sizeof(buf)) len = sizeof(buf) - 1;
-    memcpy(buf, text, len);
-    buf[len] = '\0';
-    int count = 0;
-    char* save = NULL;
-    for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
-      count++;
-    }
+    int count = text_names(m, tid, buf, (int)sizeof(buf));
     if (!cla || cla_size != count) {
       hydro_free(h);
       return fail(iname, "'<prefix>hydro_foil_cla' must give one C_La per '<prefix>hydro_foils'");
@@ -396,9 +392,7 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
     h->foil_normal = (int*)malloc(sizeof(int) * (count + 1));
     h->foil_drag = (mjtNum*)calloc(3 * (count + 1), sizeof(mjtNum));
     h->panel = (mjtNum*)calloc(3 * NPANEL * (count + 1), sizeof(mjtNum));
-    memcpy(buf, text, len);
-    buf[len] = '\0';
-    save = NULL;
+    char* save = NULL;
     int i = 0;
     for (char* tok = strtok_r(buf, " \t\n", &save); tok; tok = strtok_r(NULL, " \t\n", &save)) {
       snprintf(full, NAME_LEN, "%s%s", prefix, tok);
