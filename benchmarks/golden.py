@@ -45,6 +45,17 @@ RUNS: dict[str, list[str]] = {
     "mission_survey": ["mission/survey", "--seed", "0"],
     "mission_correction": ["mission/correction", "--runs", "2", "--seed", "0"],
     "vehicle_autopilot": ["vehicle/autopilot"],
+    # seed 004 and the richer missions at small sizes (recorded after issue 21, before issue 22's
+    # redesign of nav and tasks)
+    "paper-004_table-1": ["paper-004/table-1", "--runs", "1000", "--seed", "1"]
+    + ["--set", "filters.train_paths=2000"],
+    "paper-004_near-beacon": ["paper-004/near-beacon", "--runs", "1000", "--seed", "1"]
+    + ["--set", "filters.train_paths=2000"],
+    "mission_swarm": ["mission/swarm", "--seed", "1", "--set", "timing.max_duration_s=60"]
+    + ["--set", 'navigation.methods=["ekf","ga1","ga2","dr"]'],
+    "mission_seed004": ["mission/seed004", "--runs", "1", "--seed", "1"]
+    + ["--set", "seed004.duration_s=40", "--set", "timing.max_duration_s=40"]
+    + ["--set", "seed004.train_paths=500", "--set", "seed004.surrogate_test_paths=200"],
 }
 
 
