@@ -10,8 +10,12 @@ Layers (see ``docs/architecture.md``):
 * :mod:`tasks.missions`: the registered closed-loop missions.
 * :mod:`tasks.vehicle`: experiments on the vehicle itself (autopilot trials, the model's checks).
 
-Importing an experiment package registers its experiments; :mod:`tasks.core.registry` imports the
-packages named in :data:`tasks.core.registry.EXPERIMENT_PACKAGES`. Depends on :mod:`nav` and
+Each experiment package declares its family of names as an entry point of the group
+``bauv_sim.experiments`` (``pyproject.toml``) and the looks of its methods in its ``__init__``
+(:func:`tasks.core.style.declare`); importing it registers its experiments. The framework
+imports a family's package when a name of it is asked for (:mod:`tasks.core.families`,
+:mod:`tasks.core.registry`). ``catalog.json`` here lists every experiment's name and summary for
+``bauv list`` (generated: ``python -m tasks.core.catalog``). Depends on :mod:`nav` and
 :mod:`bauv_sim`; nothing depends on it.
 """
 

@@ -158,12 +158,12 @@ BLOCK_FILE_BASE_B = 64 * 2**20
 """What any block file may hold besides its runs (manifest, per-tick sums, histograms), bytes."""
 BLOCK_FILE_PER_RUN_B = 2**20
 """What a block file may hold per run, bytes: 9x the most measured per run of the experiments
-that do not estimate their memory, at their defaults (vehicle/autopilot 110 kB, paper-001/replica
-51 kB, paper-003/test-1 22 kB)."""
+that do not estimate their memory, at their defaults (110 kB: the autopilot step responses on the
+vehicle; 51 kB: seed 001's replica; 22 kB: seed 003's test 1)."""
 BLOCK_FILE_MEMORY_FACTOR = 8
 """Multiple of a block's estimated memory (the per-block terms of :meth:`Experiment.memory`) a
 block file may hold: the estimate of a mission counts one vehicle (500 B per control tick), and
-mission/swarm with 4 followers writes 2.4 kB per tick (4.8x)."""
+seed 003's swarm mission with 4 followers writes 2.4 kB per tick (4.8x)."""
 MAX_RECORD_BYTES = 2**16
 """The largest ``run.json`` read (it is about 400 bytes)."""
 MAX_SCENARIO_BYTES = 2**24
@@ -1137,7 +1137,7 @@ def check_run_arguments(
         raise ConfigError(f"{arg} = {value!r:.60} ({type(value).__name__}): must be {allowed}")
 
     if not isinstance(name, str):
-        refuse("name", name, "an experiment name (a str), e.g. 'mission/short'")
+        refuse("name", name, "an experiment name (a str), 'family/name'")
     for arg, value in (("n_runs", n_runs), ("seed", seed)):
         if value is not None and (
             isinstance(value, bool) or not isinstance(value, numbers.Integral)
