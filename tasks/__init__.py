@@ -24,7 +24,7 @@ from nav._exports import lazy_exports
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchFailed": ("tasks.core.errors", "BatchFailed"),
     "BatchInterrupted": ("tasks.core.errors", "BatchInterrupted"),
-    "BatchPlan": ("tasks.core.runner", "BatchPlan"),
+    "BatchPlan": ("tasks.core.plan", "BatchPlan"),
     "Column": ("tasks.core.export", "Column"),
     "Experiment": ("tasks.core.registry", "Experiment"),
     "MissionRun": ("tasks.closed_loop.result", "MissionRun"),
@@ -34,7 +34,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "experiment_names": ("tasks.core.registry", "names"),
     "fly": ("tasks.closed_loop.world", "fly"),
     "get_experiment": ("tasks.core.registry", "get"),
-    "plan_batch": ("tasks.core.runner", "plan_batch"),
+    "plan_batch": ("tasks.core.plan", "plan_batch"),
     "read_parquet": ("tasks.core.export", "read_parquet"),
     "register": ("tasks.core.registry", "register"),
     "run": ("tasks.core.runner", "run"),
