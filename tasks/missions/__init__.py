@@ -5,11 +5,9 @@
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
-from tasks.missions import correction, seed004, short, surfacing, survey, swarm
 
-__all__ = ["correction", "seed004", "short", "surfacing", "survey", "swarm"]
-
-# the looks of this package's methods in every figure and recording (tasks.core.style)
+# the looks of this package's methods in every figure and recording (tasks.core.style),
+# declared before its modules, which may read them when imported
 declare(
     __name__,
     {
@@ -26,3 +24,7 @@ declare(
         "UPMF": MethodStyle(P["bluish_green"], ls="--"),
     },
 )
+
+from tasks.missions import correction, seed004, short, surfacing, survey, swarm  # noqa: E402
+
+__all__ = ["correction", "seed004", "short", "surfacing", "survey", "swarm"]

@@ -3,11 +3,9 @@ USBL alone) and ``paper-000/accuracy`` (analytic USBL and DR accuracy). Importin
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
-from tasks.paper000 import accuracy, passage
 
-__all__ = ["accuracy", "passage"]
-
-# the looks of this package's methods in every figure and recording (tasks.core.style)
+# the looks of this package's methods in every figure and recording (tasks.core.style),
+# declared before its modules, which may read them when imported
 declare(
     __name__,
     {
@@ -16,3 +14,7 @@ declare(
         "USBL": MethodStyle(P["bluish_green"], ls="none", marker="."),
     },
 )
+
+from tasks.paper000 import accuracy, passage  # noqa: E402
+
+__all__ = ["accuracy", "passage"]

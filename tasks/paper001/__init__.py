@@ -3,11 +3,9 @@ kinematic world). Importing registers it."""
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
-from tasks.paper001 import replica
 
-__all__ = ["replica"]
-
-# the looks of this package's methods in every figure and recording (tasks.core.style)
+# the looks of this package's methods in every figure and recording (tasks.core.style),
+# declared before its modules, which may read them when imported
 declare(
     __name__,
     {
@@ -18,3 +16,7 @@ declare(
         "baseline": MethodStyle(P["olive"], ls="-."),
     },
 )
+
+from tasks.paper001 import replica  # noqa: E402
+
+__all__ = ["replica"]

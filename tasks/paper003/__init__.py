@@ -3,11 +3,9 @@ swarm leader on a square path: DR, GA1, GA2 and a range EKF). Importing register
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
-from tasks.paper003 import square
 
-__all__ = ["square"]
-
-# the looks of this package's methods in every figure and recording (tasks.core.style)
+# the looks of this package's methods in every figure and recording (tasks.core.style),
+# declared before its modules, which may read them when imported
 declare(
     __name__,
     {
@@ -18,3 +16,7 @@ declare(
         "leader": MethodStyle(P["grey"], ls="--"),
     },
 )
+
+from tasks.paper003 import square  # noqa: E402
+
+__all__ = ["square"]

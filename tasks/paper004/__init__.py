@@ -4,11 +4,9 @@ on the kinematic world). Importing registers them."""
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
-from tasks.paper004 import table1
 
-__all__ = ["table1"]
-
-# the looks of this package's methods in every figure and recording (tasks.core.style)
+# the looks of this package's methods in every figure and recording (tasks.core.style),
+# declared before its modules, which may read them when imported
 declare(
     __name__,
     {
@@ -18,3 +16,7 @@ declare(
         "PCRB": MethodStyle(P["black"], ls=":"),
     },
 )
+
+from tasks.paper004 import table1  # noqa: E402
+
+__all__ = ["table1"]
