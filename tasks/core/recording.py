@@ -36,8 +36,9 @@ Color = tuple[int, int, int]
 class _DeclaredColours(Mapping[str, Color]):
     """The colours of the declared methods (:data:`tasks.core.style.METHODS`) by method name in
     any case (``COLORS["dr"]`` is the colour of the method declared as DR), as 0-255 RGB: the colour
-    the figures draw, so a method looks the same in the PNGs and in rerun. Kept for the callers
-    of the former colour table of this module; new code calls :func:`tasks.core.style.rgb`."""
+    the figures draw, so a method looks the same in the PNGs and in rerun; grey for a method no
+    imported package declared, as in the figures. Kept for the callers of the former colour
+    table of this module; new code calls :func:`tasks.core.style.rgb`."""
 
     def _name(self, key: str) -> str:
         if key in style.METHODS:
@@ -45,10 +46,13 @@ class _DeclaredColours(Mapping[str, Color]):
         for name in style.METHODS:
             if name.lower() == str(key).lower():
                 return name
-        raise KeyError(key)
+        return key
 
     def __getitem__(self, key: str) -> Color:
         return style.rgb(self._name(key))
+
+    def __contains__(self, key: object) -> bool:
+        return isinstance(key, str) and self._name(key) in style.METHODS
 
     def __iter__(self) -> Iterator[str]:
         return iter(style.METHODS)

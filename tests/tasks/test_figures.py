@@ -190,5 +190,6 @@ def test_one_colour_per_method_in_the_figures_and_in_rerun():
         assert style.rgb(name) == want
         assert recording.COLORS[name] == want and recording.COLORS[name.lower()] == want
     assert recording.COLORS["dr"] == (0xD5, 0x5E, 0x00)
-    with pytest.raises(KeyError):
-        recording.COLORS["no such method"]
+    grey = style.MethodStyle(style.PALETTE["grey"]).rgb
+    assert recording.COLORS["no such method"] == style.rgb("no such method") == grey
+    assert "dr" in recording.COLORS and "no such method" not in recording.COLORS
