@@ -130,7 +130,7 @@ class Experiment:
 
     def memory(self, scenario: Config, n_runs: int) -> list[MemoryTerm]:
         """The batch's estimated peak memory, in parts, so that the runner can refuse a batch that
-        cannot fit before any work starts (:func:`tasks.core.runner.check_memory`). None by
+        cannot fit before any work starts (:func:`tasks.core.plan.check_memory`). None by
         default (an experiment whose size is bounded by its fields' ranges)."""
         return []
 
