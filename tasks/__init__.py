@@ -10,8 +10,12 @@ Layers (see ``docs/architecture.md``):
 * :mod:`tasks.missions`: the registered closed-loop missions.
 * :mod:`tasks.vehicle`: experiments on the vehicle itself (autopilot trials, the model's checks).
 
-Importing an experiment package registers its experiments; :mod:`tasks.core.registry` imports the
-packages named in :data:`tasks.core.registry.EXPERIMENT_PACKAGES`. Depends on :mod:`nav` and
+Each experiment package declares its family of names as an entry point of the group
+``bauv_sim.experiments`` (``pyproject.toml``) and the looks of its methods in its ``__init__``
+(:func:`tasks.core.style.declare`); importing it registers its experiments. The framework
+imports a family's package when a name of it is asked for (:mod:`tasks.core.families`,
+:mod:`tasks.core.registry`). ``catalog.json`` here lists every experiment's name and summary for
+``bauv list`` (generated: ``python -m tasks.core.catalog``). Depends on :mod:`nav` and
 :mod:`bauv_sim`; nothing depends on it.
 """
 
@@ -20,7 +24,7 @@ from nav._exports import lazy_exports
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchFailed": ("tasks.core.errors", "BatchFailed"),
     "BatchInterrupted": ("tasks.core.errors", "BatchInterrupted"),
-    "BatchPlan": ("tasks.core.runner", "BatchPlan"),
+    "BatchPlan": ("tasks.core.plan", "BatchPlan"),
     "Column": ("tasks.core.export", "Column"),
     "Experiment": ("tasks.core.registry", "Experiment"),
     "MissionRun": ("tasks.closed_loop.result", "MissionRun"),
@@ -30,7 +34,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "experiment_names": ("tasks.core.registry", "names"),
     "fly": ("tasks.closed_loop.world", "fly"),
     "get_experiment": ("tasks.core.registry", "get"),
-    "plan_batch": ("tasks.core.runner", "plan_batch"),
+    "plan_batch": ("tasks.core.plan", "plan_batch"),
     "read_parquet": ("tasks.core.export", "read_parquet"),
     "register": ("tasks.core.registry", "register"),
     "run": ("tasks.core.runner", "run"),

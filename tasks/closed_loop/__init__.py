@@ -44,3 +44,17 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 """Public name -> (module, attribute), imported on first use."""
 
 __all__, __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
+
+# the looks of the methods its report draws (tasks.core.style), the same as the missions'
+from tasks.core.style import PALETTE as _P  # noqa: E402
+from tasks.core.style import MethodStyle, declare  # noqa: E402
+
+declare(
+    __name__,
+    {
+        "DR": MethodStyle(_P["vermillion"]),
+        "EKF": MethodStyle(_P["blue"]),
+        "USBL": MethodStyle(_P["bluish_green"], ls="none", marker="."),
+        "GPS": MethodStyle(_P["orange"], ls="none", marker="x"),
+    },
+)

@@ -7,7 +7,7 @@ from nav._exports import lazy_exports
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchFailed": ("tasks.core.errors", "BatchFailed"),
     "BatchInterrupted": ("tasks.core.errors", "BatchInterrupted"),
-    "BatchPlan": ("tasks.core.runner", "BatchPlan"),
+    "BatchPlan": ("tasks.core.plan", "BatchPlan"),
     "Column": ("tasks.core.export", "Column"),
     "Experiment": ("tasks.core.registry", "Experiment"),
     "ExportError": ("tasks.core.export", "ExportError"),
@@ -18,7 +18,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "all_experiments": ("tasks.core.registry", "all_experiments"),
     "get": ("tasks.core.registry", "get"),
     "names": ("tasks.core.registry", "names"),
-    "plan_batch": ("tasks.core.runner", "plan_batch"),
+    "plan_batch": ("tasks.core.plan", "plan_batch"),
     "read_parquet": ("tasks.core.export", "read_parquet"),
     "read_text_log": ("tasks.core.recording", "read_text_log"),
     "read_time_series": ("tasks.core.recording", "read_time_series"),

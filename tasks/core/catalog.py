@@ -1,12 +1,13 @@
 """Every registered experiment's name and summary, for ``bauv list`` without importing any
-experiment package (the missions import MuJoCo and dm_control), and the package of each family of
-names (:data:`FAMILIES`), which the registry imports on demand and a ``bauv run`` on local workers
-hands to their fork server (where one is used) before it imports anything heavy
-(:mod:`tasks.core.workers`).
+experiment package (the missions import MuJoCo and dm_control) and without reading the installed
+distributions' metadata (:mod:`importlib.metadata` alone would add a third to ``bauv list``'s
+start-up).
 
-The list is data, ``catalog.json`` beside this module, generated from the registry by ``python -m
+The list is data, ``catalog.json`` in the ``tasks`` package (beside the experiment packages, not
+in the framework, which names no experiment), generated from the registry by ``python -m
 tasks.core.catalog``; ``tests/tasks/test_registry.py`` fails, saying how to regenerate it, when it
-differs from the registry.
+differs from the registry (every family declared by the installed distributions,
+:mod:`tasks.core.families`).
 """
 
 from __future__ import annotations
@@ -15,18 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-FAMILIES: dict[str, str] = {
-    "paper-000": "tasks.paper000",
-    "paper-001": "tasks.paper001",
-    "paper-003": "tasks.paper003",
-    "paper-004": "tasks.paper004",
-    "mission": "tasks.missions",
-    "vehicle": "tasks.vehicle",
-}
-"""Family of names (the part before ``/``) -> the package whose import registers them (also
-:data:`tasks.core.registry.FAMILIES`)."""
-
-PATH = Path(__file__).with_name("catalog.json")
+PATH = Path(__file__).resolve().parents[1] / "catalog.json"
 """The catalog file: a JSON list of ``[name, summary]`` pairs sorted by name."""
 
 

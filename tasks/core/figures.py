@@ -293,6 +293,8 @@ def consistency(
     n_runs: int,
     title: str = "",
     probability: float = 0.95,
+    *,
+    method: str,
 ) -> list[str]:
     """Average NEES over runs against its two-sided chi-square band.
 
@@ -305,6 +307,7 @@ def consistency(
         n_runs: the number of runs averaged.
         title: the figure's title, in words.
         probability: the band's probability.
+        method: the estimator whose NEES it is (its look and legend label, :mod:`style`).
 
     Returns:
         The files written (PNG, PDF).
@@ -324,7 +327,7 @@ def consistency(
     ax.plot(
         np.asarray(t_s)[keep],
         v[keep],
-        **style.line("EKF", label=f"EKF mean NEES over {n_runs} run{'s' * (n_runs != 1)}"),
+        **style.line(method, label=f"{method} mean NEES over {n_runs} run{'s' * (n_runs != 1)}"),
     )
     ax.set_yscale("log")
     style.log_ticks(ax)

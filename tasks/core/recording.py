@@ -6,16 +6,20 @@ mission hundreds of metres across or follows a 2 m vehicle.
 
 Per-sample ``log`` calls cost 70-100 us each in rerun 0.41; everything here sends whole columns
 (``send_columns``) and logs a finished track once as a static line strip.
+
+Colours are the figures' (:func:`tasks.core.style.rgb`): one table serves matplotlib and rerun.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim.frames import quat_wxyz_from_R, quat_wxyz_to_xyzw
+from tasks.core import style
 from tasks.core.files import atomic_write_bytes
 from tasks.core.lazy import LazyModule
 
@@ -27,14 +31,38 @@ UI_LINE = -1.5
 """Width of a track's line strip, UI points."""
 
 Color = tuple[int, int, int]
-COLORS: dict[str, Color] = {
-    "truth": (40, 40, 40),
-    "ekf": (31, 119, 180),
-    "dr": (214, 39, 40),
-    "usbl": (44, 160, 44),
-    "gps": (255, 127, 14),
-    "corrected": (148, 103, 189),
-}
+
+
+class _DeclaredColours(Mapping[str, Color]):
+    """The colours of the declared methods (:data:`tasks.core.style.METHODS`) by method name in
+    any case (``COLORS["dr"]`` is the colour of the method declared as DR), as 0-255 RGB: the colour
+    the figures draw, so a method looks the same in the PNGs and in rerun; grey for a method no
+    imported package declared, as in the figures. Kept for the callers of the former colour
+    table of this module; new code calls :func:`tasks.core.style.rgb`."""
+
+    def _name(self, key: str) -> str:
+        if key in style.METHODS:
+            return key
+        for name in style.METHODS:
+            if name.lower() == str(key).lower():
+                return name
+        return key
+
+    def __getitem__(self, key: str) -> Color:
+        return style.rgb(self._name(key))
+
+    def __contains__(self, key: object) -> bool:
+        return isinstance(key, str) and self._name(key) in style.METHODS
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(style.METHODS)
+
+    def __len__(self) -> int:
+        return len(style.METHODS)
+
+
+COLORS: Mapping[str, Color] = _DeclaredColours()
+"""Method -> its declared colour as 0-255 RGB (:func:`tasks.core.style.rgb`), any case."""
 
 
 class Recording:

@@ -1,15 +1,15 @@
 """The registry of experiments and missions, loaded by name.
 
-Experiments live in experiment packages, one per family of names (:data:`FAMILIES`:
-``paper-000/...`` in ``tasks.paper000``, ``mission/...`` in ``tasks.missions``, ...). A module
+Experiments live in experiment packages, one per family of names (the part of a name before
+``/``), each declared by its distribution as an entry point (:mod:`tasks.core.families`). A module
 builds :class:`Experiment` instances and passes them to :func:`register` at import time, the way
 dm_control's suite domains add themselves with ``@SUITE.add``; its package's ``__init__`` imports
 it, so importing the package registers all of its experiments. :func:`get` imports only the package
 of the name's family (a kinematic run never imports MuJoCo for the missions); :func:`names` and
 :func:`all_experiments` import every package. Registration is explicit: a module that its package
-does not import is not registered, whatever its file name. :data:`tasks.core.catalog.CATALOG`
-holds every name with its summary for ``bauv list`` without importing any experiment (a test keeps
-it equal to the registry).
+does not import is not registered, whatever its file name. :mod:`tasks.core.catalog` holds every
+name with its summary for ``bauv list`` without importing any experiment (a test keeps it equal
+to the registry).
 
 An experiment is split in two pure parts so that the runner can distribute it:
 
@@ -34,10 +34,7 @@ from pydantic import BaseModel
 
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
-from tasks.core.catalog import FAMILIES
-
-EXPERIMENT_PACKAGES = tuple(FAMILIES.values())
-"""The packages whose import registers every experiment and mission."""
+from tasks.core.families import families
 
 _REGISTRY: dict[str, Experiment] = {}
 _LOADED = False
@@ -104,7 +101,7 @@ class Experiment:
     """Base of every registered experiment or mission.
 
     Attributes:
-        name: registry name, ``family/name`` (e.g. ``paper-000/test-1``).
+        name: registry name, ``family/name`` (e.g. ``my-family/test-1``).
         summary: one line for ``bauv list``.
         preset: nested overrides of the scenario defaults that make this experiment (the same
             scenario type can serve several experiments).
@@ -133,7 +130,7 @@ class Experiment:
 
     def memory(self, scenario: Config, n_runs: int) -> list[MemoryTerm]:
         """The batch's estimated peak memory, in parts, so that the runner can refuse a batch that
-        cannot fit before any work starts (:func:`tasks.core.runner.check_memory`). None by
+        cannot fit before any work starts (:func:`tasks.core.plan.check_memory`). None by
         default (an experiment whose size is bounded by its fields' ranges)."""
         return []
 
@@ -170,7 +167,7 @@ def register(experiment: Experiment) -> Experiment:
 
     Raises:
         ValueError: if the name is taken by another experiment, or its family (the part before
-            ``/``) is not one of :data:`FAMILIES`.
+            ``/``) is not declared (:func:`tasks.core.families.families`).
         ConfigError: if ``experiment`` is not an :class:`Experiment` (a ``ValueError`` too).
     """
     if not isinstance(experiment, Experiment):
@@ -179,10 +176,12 @@ def register(experiment: Experiment) -> Experiment:
             "Experiment instance (tasks.core.registry.Experiment or a subclass)"
         )
     family = experiment.name.split("/", 1)[0]
-    if family not in FAMILIES:
+    declared = families()
+    if family not in declared:
         raise ValueError(
-            f"experiment name {experiment.name!r}: family {family!r} is not in FAMILIES "
-            f"({', '.join(FAMILIES)})"
+            f"experiment name {experiment.name!r}: family {family!r} is not declared (declared: "
+            f"{', '.join(declared)}); a package declares its family as an entry point of group "
+            "'bauv_sim.experiments' in its pyproject.toml"
         )
     if experiment.name in _REGISTRY and _REGISTRY[experiment.name] is not experiment:
         raise ValueError(f"experiment name {experiment.name!r} is registered twice")
@@ -190,11 +189,17 @@ def register(experiment: Experiment) -> Experiment:
     return experiment
 
 
+def experiment_packages() -> tuple[str, ...]:
+    """The packages whose import registers every experiment and mission (one per declared
+    family, :func:`tasks.core.families.families`)."""
+    return tuple(dict.fromkeys(families().values()))
+
+
 def _load_all() -> None:
     global _LOADED
     if _LOADED:
         return
-    for package in EXPERIMENT_PACKAGES:
+    for package in experiment_packages():
         importlib.import_module(package)
     _LOADED = True
 
@@ -218,10 +223,10 @@ def get(name: str) -> Experiment:
     if not isinstance(name, str):
         raise ConfigError(
             f"name = {name!r:.60} ({type(name).__name__}): must be an experiment name (a str), "
-            "e.g. 'mission/short'; experiment_names() lists them"
+            "'family/name'; experiment_names() lists them"
         )
     if name not in _REGISTRY:
-        package = FAMILIES.get(name.split("/", 1)[0])
+        package = families().get(name.split("/", 1)[0])
         if package is not None:
             importlib.import_module(package)
     if name not in _REGISTRY:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from pydantic import BaseModel
 
-from tasks.core.runner import atomic_write_text
+from tasks.core.run_folder import atomic_write_text
 
 Cell = str | float | int | None
 

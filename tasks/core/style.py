@@ -4,29 +4,42 @@ Sizes are those of a two-column journal page (a column about 3.5 in, the page ab
 fonts are sized for print at that width, every figure is written as a PNG (200 dpi, for a quick
 look) and a vector PDF beside it (for the paper), and each method has a fixed colour and line
 style from a colour-blind-safe palette (Okabe and Ito, "Color Universal Design", 2008; black and
-grey for truth and commands). A new experiment adopts it with one import::
+grey for truth and commands), the same in the figures and in the rerun recordings
+(:func:`rgb`). A new experiment adopts it with one import::
 
     from tasks.core import style
 
     @style.styled
     def my_figure(out_dir, t_s, err_m) -> list[str]:
         fig, ax = style.subplots("column", height_in=2.4)
-        ax.plot(t_s, err_m, **style.line("EKF"))
+        ax.plot(t_s, err_m, **style.line("my-filter"))
         ax.set_xlabel("time (s)")
         ax.set_ylabel(style.label("horizontal error", "m"))
         return style.save(fig, out_dir / "error.png")  # error.png and error.pdf
 
 ``styled`` applies the style's matplotlib settings while the figure is drawn and saved (the
 settings of a caller are restored afterwards); ``line(method)`` gives the colour, line style and
-legend label of a method (truth, DR, EKF, USBL, GPS, CP1, CP2, ...), so a method looks the same in
-every figure.
+legend label of a method, so a method looks the same in every figure, and ``rgb(method)`` its
+colour for a recording.
+
+The framework owns only the looks of what every experiment draws (truth, reference, command,
+way-points, current, a bound). An experiment package declares the looks of its methods once, in
+its ``__init__`` (:func:`declare`)::
+
+    style.declare(__name__, {"my-filter": style.MethodStyle(style.PALETTE["blue"])})
+
+and the declarations of all packages make one table (:data:`METHODS`): two packages may declare
+the same method with the same look, a different look is refused (:class:`StyleClash`).
 """
 
 from __future__ import annotations
 
 import functools
 import io
-from collections.abc import Callable
+import re
+import types
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, ParamSpec, TypeVar
 
@@ -47,14 +60,18 @@ __all__ = [
     "PAGE_IN",
     "PALETTE",
     "RC",
+    "MethodStyle",
+    "StyleClash",
     "color",
     "context",
+    "declare",
     "figure_legend",
     "label",
     "legend_outside",
     "line",
     "log_ticks",
     "panel_letters",
+    "rgb",
     "save",
     "styled",
     "subplots",
@@ -86,28 +103,95 @@ PALETTE: dict[str, str] = {
 """Okabe-Ito colour-blind-safe colours, plus greys and two of Paul Tol's muted colours."""
 
 _P = PALETTE
-METHODS: dict[str, dict[str, Any]] = {
-    "truth": {"color": _P["black"], "ls": "-", "label": "truth"},
-    "reference": {"color": _P["black"], "ls": "-", "label": "reference"},
-    "command": {"color": _P["grey"], "ls": "--", "label": "commanded"},
-    "DR": {"color": _P["vermillion"], "ls": "-", "label": "DR"},
-    "EKF": {"color": _P["blue"], "ls": "-", "label": "EKF"},
-    "USBL": {"color": _P["bluish_green"], "ls": "none", "marker": ".", "label": "USBL"},
-    "GPS": {"color": _P["orange"], "ls": "none", "marker": "x", "label": "GPS"},
-    "CP1": {"color": _P["reddish_purple"], "ls": "-", "label": "CP1"},
-    "CP2": {"color": _P["sky_blue"], "ls": "-", "label": "CP2"},
-    "baseline": {"color": _P["olive"], "ls": "-.", "label": "baseline"},
-    "current": {"color": _P["wine"], "ls": "-", "label": "current"},
-    "waypoint": {"color": _P["dark_grey"], "ls": "-", "label": "way-point"},
-    "bound": {"color": _P["blue"], "ls": ":", "label": "bound"},
-    "GA1": {"color": _P["reddish_purple"], "ls": "-", "label": "GA1"},
-    "GA2": {"color": _P["sky_blue"], "ls": "-", "label": "GA2"},
-    "leader": {"color": _P["grey"], "ls": "--", "label": "leader"},
-    "CMNF": {"color": _P["orange"], "ls": "-", "label": "CMNF"},
-    "UPMF": {"color": _P["bluish_green"], "ls": "--", "label": "UPMF"},
-    "PCRB": {"color": _P["black"], "ls": ":", "label": "PCRB"},
-}
-"""Fixed look of each method: colour, line style (marker for fixes) and legend label."""
+_HEX = re.compile(r"#[0-9A-Fa-f]{6}")
+
+
+@dataclass(frozen=True)
+class MethodStyle:
+    """The look of one method (or drawn thing) in every figure and recording.
+
+    Attributes:
+        color: ``"#RRGGBB"``; the figures draw it, a recording uses its :attr:`rgb`.
+        ls: matplotlib line style (``"none"`` for fixes drawn as markers).
+        label: the legend label (default: the method's name).
+        marker: matplotlib marker, or ``None``.
+    """
+
+    color: str
+    ls: str = "-"
+    label: str | None = None
+    marker: str | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.color, str) or not _HEX.fullmatch(self.color):
+            raise ValueError(f"color = {self.color!r}: must be a colour '#RRGGBB'")
+
+    @property
+    def rgb(self) -> tuple[int, int, int]:
+        """The colour as 0-255 integers (red, green, blue), as rerun takes it."""
+        return (int(self.color[1:3], 16), int(self.color[3:5], 16), int(self.color[5:7], 16))
+
+
+class StyleClash(ValueError):
+    """A method declared with a look other than the one another package declared for it."""
+
+
+FRAMEWORK = "tasks.core.style"
+"""The owner of the framework's own looks (what every experiment draws)."""
+
+_STYLES: dict[str, MethodStyle] = {}
+_OWNERS: dict[str, str] = {}
+METHODS: Mapping[str, MethodStyle] = types.MappingProxyType(_STYLES)
+"""Every declared look, read only: method -> :class:`MethodStyle` (the framework's own and those
+the imported experiment packages declared, :func:`declare`)."""
+
+
+def declare(owner: str, styles: Mapping[str, MethodStyle]) -> None:
+    """Add the looks of a package's methods to :data:`METHODS` (all of them, or none on an error).
+
+    A method may be declared by several packages with the same look; the package that declared it
+    first may change it (a reload).
+
+    Args:
+        owner: the declaring package (its ``__name__``).
+        styles: method name -> its look.
+
+    Raises:
+        StyleClash: naming the method, both packages and both looks, if another package declared
+            the method with another look.
+        ValueError: if a name is not a non-empty string or a look not a :class:`MethodStyle`.
+    """
+    resolved: dict[str, MethodStyle] = {}
+    for name, look in styles.items():
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{owner}: method name {name!r}: must be a non-empty string")
+        if not isinstance(look, MethodStyle):
+            raise ValueError(f"{owner}: style of {name!r} = {look!r:.60}: must be a MethodStyle")
+        look = replace(look, label=name) if look.label is None else look
+        prior = _STYLES.get(name)
+        if prior is not None and prior != look and _OWNERS[name] != owner:
+            raise StyleClash(
+                f"method {name!r}: {owner} declares {look}, but {_OWNERS[name]} declared "
+                f"{prior}; a method has one look in every figure and recording (declare the same "
+                "look, or name the method differently)"
+            )
+        resolved[name] = look
+    for name, look in resolved.items():
+        _STYLES[name] = look
+        _OWNERS.setdefault(name, owner)
+
+
+declare(
+    FRAMEWORK,
+    {
+        "truth": MethodStyle(_P["black"]),
+        "reference": MethodStyle(_P["black"]),
+        "command": MethodStyle(_P["grey"], ls="--", label="commanded"),
+        "waypoint": MethodStyle(_P["dark_grey"], label="way-point"),
+        "current": MethodStyle(_P["wine"]),
+        "bound": MethodStyle(_P["blue"], ls=":"),
+    },
+)
 
 RC: dict[str, Any] = {
     "font.size": 8,
@@ -227,9 +311,18 @@ def save(fig, path: Path, vector: Literal["pdf", "svg"] = "pdf") -> list[str]:
     return [png.name, vec.name]
 
 
+_UNKNOWN = MethodStyle(_P["grey"])
+
+
 def color(method: str) -> str:
     """The colour of a method (:data:`METHODS`), grey for an unknown one."""
-    return METHODS.get(method, {}).get("color", _P["grey"])
+    return METHODS.get(method, _UNKNOWN).color
+
+
+def rgb(method: str) -> tuple[int, int, int]:
+    """The colour of a method (:data:`METHODS`) as rerun takes it, 0-255 (red, green, blue):
+    the figures' colour; grey for an unknown one."""
+    return METHODS.get(method, _UNKNOWN).rgb
 
 
 def line(method: str, label: str | None = None, **overrides: Any) -> dict[str, Any]:
@@ -240,10 +333,10 @@ def line(method: str, label: str | None = None, **overrides: Any) -> dict[str, A
         label: the legend label (default the method's; ``"_"`` hides it from the legend).
         overrides: any other ``plot`` keyword (``lw``, ``alpha``, ``zorder``...).
     """
-    m = dict(METHODS.get(method, {"color": _P["grey"], "ls": "-", "label": method}))
-    out: dict[str, Any] = {"color": m["color"], "ls": m["ls"], "label": m["label"]}
-    if "marker" in m:
-        out["marker"] = m["marker"]
+    m = METHODS.get(method) or replace(_UNKNOWN, label=method)
+    out: dict[str, Any] = {"color": m.color, "ls": m.ls, "label": m.label}
+    if m.marker is not None:
+        out["marker"] = m.marker
     if label is not None:
         out["label"] = label
     out.update(overrides)

@@ -9,20 +9,22 @@ lock held by one. Where ``fork`` is not safe, because the process already runs o
 fork server (:mod:`multiprocessing.forkserver`) that imported the runner and the experiment's
 package once (:func:`start_fork_server` starts it before ``bauv`` imports the project, so that it
 imports it on another core meanwhile), and where there is no fork server they are spawned (a
-fresh interpreter each). Measured on the project machine (2 cores, 10,000 passages of
-``paper-000/test-1``, 5 paired runs): 1.69 s with forked workers against 1.82 s from the fork
-server, which is ready only after its own interpreter start and imports (issue 13).
+fresh interpreter each). Measured on the project machine (2 cores, 10,000 passages of seed
+000's straight-passage test 1, 5 paired runs): 1.69 s with forked workers against 1.82 s from
+the fork server, which is ready only after its own interpreter start and imports (issue 13).
 
-This module imports nothing of the project and nothing heavy (no numpy, no pydantic), so that
-``bauv run --workers K`` can start a fork server first thing where one is used.
+This module imports nothing heavy (no numpy, no pydantic; of the project only
+:mod:`tasks.core.families`, which reads the entry points that say which package holds an
+experiment, and only where a fork server is started), so that ``bauv run --workers K`` can start
+a fork server first thing where one is used.
 
 A process that computes blocks (a worker, or ``bauv`` itself on one worker) keeps the memory a
 block frees for the next one (:func:`keep_freed_memory`), and ``bauv run`` has numpy leave
 transparent huge pages alone (:func:`prepare_batch_process`): measured on the project machine (a
-2-core VM), a fresh process's first block of ``paper-000/test-1`` (1,000 passages, ~150 MB of
-arrays) spent 0.4 s of kernel time faulting in huge pages, twice its computing time, and every
-later block 0.03-0.2 s faulting in again the pages the previous one had returned; with 4 KiB
-pages kept in the process, 0.06 s once and nothing after.
+2-core VM), a fresh process's first block of seed 000's straight-passage test 1 (1,000
+passages, ~150 MB of arrays) spent 0.4 s of kernel time faulting in huge pages, twice its
+computing time, and every later block 0.03-0.2 s faulting in again the pages the previous one
+had returned; with 4 KiB pages kept in the process, 0.06 s once and nothing after.
 """
 
 from __future__ import annotations
@@ -36,8 +38,6 @@ import threading
 import time
 from collections.abc import MutableMapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
-
-from tasks.core.catalog import FAMILIES
 
 MMAP_THRESHOLD_B = 32 * 2**20
 """Allocations from this size up get their own mapping, returned to the system when freed (glibc
@@ -127,12 +127,15 @@ def start_fork_server(name: str) -> None:
     Args:
         name: the experiment's registered name (``family/name``).
     """
-    package = FAMILIES.get(name.split("/", 1)[0])
-    if (
-        fork_is_safe()
-        or package is None
-        or "forkserver" not in multiprocessing.get_all_start_methods()
-    ):
+    if fork_is_safe() or "forkserver" not in multiprocessing.get_all_start_methods():
+        return
+    from tasks.core.families import FamilyError, package_of
+
+    try:
+        package = package_of(name)
+    except FamilyError:  # the plan reports it
+        return
+    if package is None:
         return
     from multiprocessing import forkserver
 

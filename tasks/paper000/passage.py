@@ -1170,6 +1170,7 @@ def _figures(exp, ctx, scn, tot, truth, zeta, fix_tick, mean_nees, band) -> list
         n,
         title=f"{words}: EKF consistency (position NEES)",
         probability=scn.report.consistency_probability,
+        method="EKF",
     )
     return files
 

@@ -113,11 +113,11 @@ def test_executor_options_are_checked_before_the_folder_is_written(
     args, pattern, tmp_path, capsys, monkeypatch
 ):
     """Bad executor options: one line, exit 2, no folder; the same --out then works."""
-    from tasks.core import runner
+    from tasks.core import executors
 
     if "dask" in args:
         pytest.importorskip("distributed")
-    monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT_S", 1.0, raising=False)
+    monkeypatch.setattr(executors, "DASK_CONNECT_TIMEOUT_S", 1.0)
     out = tmp_path / "out"
     code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out), *args)
     lines = err.strip().splitlines()
@@ -132,9 +132,9 @@ def _no_space(names=None):
     name starts with one of ``names``, or for every file)."""
     import errno
 
-    from tasks.core import runner
+    from tasks.core import run_folder
 
-    real = runner.atomic_write_bytes
+    real = run_folder.atomic_write_bytes
 
     def write(path, data):
         if names is None or path.name.startswith(names):
@@ -163,11 +163,11 @@ def _read_only(path, data):
 def test_an_out_folder_that_cannot_be_written_is_one_line(
     tmp_path, capsys, monkeypatch, where, write, pattern
 ):
-    from tasks.core import runner
+    from tasks.core import run_folder
 
     (tmp_path / "afile").write_text("x")
     if write is not None:
-        monkeypatch.setattr(runner, "atomic_write_bytes", write)
+        monkeypatch.setattr(run_folder, "atomic_write_bytes", write)
     monkeypatch.chdir(tmp_path)
     before = sorted(p.name for p in tmp_path.iterdir())
     code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", where)
@@ -179,7 +179,7 @@ def test_an_out_folder_that_cannot_be_written_is_one_line(
 def test_a_disk_full_during_the_batch_keeps_the_saved_blocks(tmp_path, capsys, monkeypatch):
     """The disk fills while block 1 is written: one line, exit 1, block 0 kept; once there is room
     --resume completes the batch to the bytes of a batch run straight through."""
-    from tasks.core import runner
+    from tasks.core import run_folder
 
     args = ["paper-000/test-1", "--quiet", "--runs", "10", "--seed", "3"]
     args += [f"--set={s}" for s in ["runner.block_size=5", "passage.duration_s=100"]]
@@ -187,7 +187,7 @@ def test_a_disk_full_during_the_batch_keeps_the_saved_blocks(tmp_path, capsys, m
     args += ["--set=report.recording=false"]
     code, err = _main(capsys, "run", *args, "--out", str(tmp_path / "straight"))
     assert code == 0, err
-    monkeypatch.setattr(runner, "atomic_write_bytes", _no_space(("block-000001",)))
+    monkeypatch.setattr(run_folder, "atomic_write_bytes", _no_space(("block-000001",)))
     out = tmp_path / "full"
     code, err = _main(capsys, "run", *args, "--out", str(out))
     lines = err.strip().splitlines()

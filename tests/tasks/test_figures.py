@@ -51,6 +51,9 @@ def test_route_opacity_is_a_valid_alpha_for_any_count(n):
 
 
 def test_method_colours_are_fixed_and_distinct():
+    from tasks.core import registry
+
+    registry.names()  # every experiment package imported: every look declared
     # the methods that share a figure never share a colour (DR/EKF/USBL/GPS/truth; CP1/CP2)
     together = [
         ("truth", "DR", "EKF", "USBL", "GPS", "waypoint", "current", "command"),
@@ -128,3 +131,65 @@ def test_a_figure_whose_write_fails_part_way_leaves_no_partial_file(tmp_path):
     assert res[1].stdout.split() == ["OSError", str(errno.EFBIG)]
     assert sorted(p.name for p in limited.iterdir()) == ["f.png"]
     assert (limited / "f.png").read_bytes() == (whole / "f.png").read_bytes()
+
+
+def test_the_packages_declarations_make_one_table_and_the_framework_names_no_method():
+    """Every experiment package's looks are in the one table (importing them all raises no
+    clash), and tasks/core spells none of the methods the packages declare."""
+    from pathlib import Path
+
+    from tasks.core import registry
+
+    registry.names()
+    declared = {n for n, owner in style._OWNERS.items() if owner != style.FRAMEWORK}
+    assert {"DR", "EKF", "USBL", "GPS", "GA1", "UPMF"} <= declared
+    core = Path(style.__file__).parent
+    for path in sorted(core.glob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        for name in sorted(declared):
+            assert f'"{name}"' not in text and f"'{name}'" not in text, (path.name, name)
+
+
+@pytest.fixture
+def saved_styles():
+    styles, owners = dict(style._STYLES), dict(style._OWNERS)
+    yield
+    style._STYLES.clear()
+    style._STYLES.update(styles)
+    style._OWNERS.clear()
+    style._OWNERS.update(owners)
+
+
+def test_a_method_declared_with_another_look_is_refused(saved_styles):
+    blue, red = style.PALETTE["blue"], style.PALETTE["vermillion"]
+    style.declare("pkg.a", {"r22-filter": style.MethodStyle(blue)})
+    style.declare("pkg.b", {"r22-filter": style.MethodStyle(blue)})  # the same look: fine
+    with pytest.raises(style.StyleClash, match=r"'r22-filter': pkg\.c declares .*pkg\.a"):
+        style.declare(
+            "pkg.c", {"r22-other": style.MethodStyle(red), "r22-filter": style.MethodStyle(red)}
+        )
+    assert "r22-other" not in style.METHODS  # all or nothing
+    assert style.line("r22-filter") == {"color": blue, "ls": "-", "label": "r22-filter"}
+    with pytest.raises(style.StyleClash, match="'truth'"):  # the framework's own looks too
+        style.declare("pkg.d", {"truth": style.MethodStyle(red)})
+    with pytest.raises(ValueError, match="#RRGGBB"):
+        style.MethodStyle("blue")
+
+
+def test_one_colour_per_method_in_the_figures_and_in_rerun():
+    """A recording's colour of a method is the figures' colour of it (dead reckoning was red-ish
+    (214, 39, 40) in rerun and vermillion in the PNGs)."""
+    import matplotlib.colors
+
+    from tasks.core import recording, registry
+
+    registry.names()
+    assert len(recording.COLORS) == len(style.METHODS)
+    for name in style.METHODS:
+        want = tuple(round(255 * c) for c in matplotlib.colors.to_rgb(style.color(name)))
+        assert style.rgb(name) == want
+        assert recording.COLORS[name] == want and recording.COLORS[name.lower()] == want
+    assert recording.COLORS["dr"] == (0xD5, 0x5E, 0x00)
+    grey = style.MethodStyle(style.PALETTE["grey"]).rgb
+    assert recording.COLORS["no such method"] == style.rgb("no such method") == grey
+    assert "dr" in recording.COLORS and "no such method" not in recording.COLORS

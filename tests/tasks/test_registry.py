@@ -5,7 +5,7 @@ import json
 import pytest
 
 from bauv_sim.config import load_config, to_plain
-from tasks.core import registry
+from tasks.core import families, registry
 from tasks.core.schemas import schema_files
 
 NAMES = registry.names()
@@ -33,7 +33,7 @@ def test_every_registering_module_is_imported_by_its_package():
     import pkgutil
 
     before = set(registry.names())
-    for package in registry.EXPERIMENT_PACKAGES:
+    for package in registry.experiment_packages():
         pkg = importlib.import_module(package)
         for info in pkgutil.walk_packages(pkg.__path__, f"{package}."):
             importlib.import_module(info.name)
@@ -44,18 +44,18 @@ def test_the_catalog_of_bauv_list_is_the_registry():
     from tasks.core import catalog
 
     assert catalog.load() == catalog.from_registry(), (
-        "tasks/core/catalog.json is stale: run python -m tasks.core.catalog"
+        "tasks/catalog.json is stale: run python -m tasks.core.catalog"
     )
 
 
-@pytest.mark.parametrize("family", sorted(registry.FAMILIES))
+@pytest.mark.parametrize("family", sorted(families.families()))
 def test_each_family_is_registered_by_its_own_package_alone(family):
     """get() imports only the name's family package: that package alone must register every
     name of the family (checked in a fresh interpreter, where nothing else is imported)."""
     import subprocess
     import sys
 
-    package = registry.FAMILIES[family]
+    package = families.families()[family]
     code = (
         "import importlib, json; from tasks.core import registry;"
         f"importlib.import_module({package!r});"
@@ -69,3 +69,94 @@ def test_each_family_is_registered_by_its_own_package_alone(family):
 def test_a_name_outside_the_families_is_refused():
     with pytest.raises(ValueError, match="family"):
         registry.register(registry.Experiment(name="nofamily/x", summary="x"))
+
+
+def test_the_families_are_the_entry_points_of_pyproject():
+    """The installed metadata declares this project's families as its pyproject.toml does (a stale
+    install, or an entry point lost from pyproject.toml, fails here), and every family has names."""
+    from pathlib import Path
+
+    import tomllib
+
+    pyproject = Path(__file__).resolve().parents[2] / "pyproject.toml"
+    declared = tomllib.loads(pyproject.read_text())["project"]["entry-points"][families.GROUP]
+    assert families.families() == declared
+    assert {n.split("/", 1)[0] for n in NAMES} == set(declared)
+
+
+class _EntryPoint:
+    def __init__(self, name, value):
+        self.name, self.value = name, value
+
+
+@pytest.mark.parametrize(
+    ("points", "message"),
+    [
+        ([], "no experiment package is declared"),
+        ([("Paper 9", "pkg.a")], "the family must be lower-case"),
+        ([("x", "pkg.a:attr")], "must name a package"),
+        ([("x", "pkg.a"), ("x", "pkg.b")], "already declared by package 'pkg.a'"),
+    ],
+)
+def test_a_bad_declaration_is_refused_naming_it(monkeypatch, points, message):
+    import importlib.metadata
+
+    def entry_points(group):
+        assert group == families.GROUP
+        return [_EntryPoint(n, v) for n, v in points]
+
+    monkeypatch.setattr(importlib.metadata, "entry_points", entry_points)
+    families.families.cache_clear()
+    try:
+        with pytest.raises(families.FamilyError, match=message):
+            families.families()
+    finally:
+        families.families.cache_clear()
+
+
+def test_another_distributions_family_is_loaded_on_demand(monkeypatch, tmp_path):
+    """A family declared by another package (as a user's distribution would) is imported by get()
+    and its experiment registered, with no change to the framework."""
+    import importlib.metadata
+    import sys
+
+    pkg = tmp_path / "user_experiments_r22"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text(
+        "from tasks.core.registry import Experiment, register\n"
+        "register(Experiment(name='user-family/demo', summary='a user experiment'))\n"
+    )
+    real = importlib.metadata.entry_points
+
+    def entry_points(group):
+        return [*real(group=group), _EntryPoint("user-family", "user_experiments_r22")]
+
+    monkeypatch.setattr(importlib.metadata, "entry_points", entry_points)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    families.families.cache_clear()
+    try:
+        assert families.package_of("user-family/demo") == "user_experiments_r22"
+        assert registry.get("user-family/demo").summary == "a user experiment"
+    finally:
+        families.families.cache_clear()
+        registry._REGISTRY.pop("user-family/demo", None)
+        sys.modules.pop("user_experiments_r22", None)
+
+
+def test_the_framework_names_no_experiment():
+    """tasks/core names no family, no experiment package and no experiment (code, docstrings and
+    data alike): an experiment is added in its own package."""
+    from pathlib import Path
+
+    core = Path(registry.__file__).parent
+    words = set(families.families()) | set(families.families().values()) | set(NAMES)
+    for path in sorted(core.iterdir()):
+        if path.suffix not in (".py", ".json", ".toml", ".md"):
+            continue
+        text = path.read_text(encoding="utf-8")
+        for word in sorted(words):
+            if "/" in word or "." in word:
+                found = word in text
+            else:  # a family: as a name's prefix or a quoted word
+                found = f"{word}/" in text or f'"{word}"' in text or f"'{word}'" in text
+            assert not found, f"{path.name} names {word!r}"

@@ -448,17 +448,17 @@ def test_the_report_merges_each_block_while_the_next_ones_are_computed(
     """With worker processes the report reads block ``k`` (in block order) before block ``k + 1``
     is computed: its merge overlaps the batch instead of following it (issue 13); the metrics
     are the bytes of the one-worker batch."""
-    from tasks.core import runner
+    from tasks.core import run_folder, runner
 
     log, read = [], [threading.Event() for _ in range(N_HANDSHAKE_BLOCKS)]
-    real_load = runner.load_block
+    real_load = run_folder.load_block
 
     def load(plan, out_dir, index):
         log.append(("read", index))
         read[index].set()
         return real_load(plan, out_dir, index)
 
-    monkeypatch.setattr(runner, "load_block", load)
+    monkeypatch.setattr(run_folder, "load_block", load)
     out = tmp_path / "a"
     runner.execute(_planned(out), out, progress=False, pool=_Handshake(read, log))
     assert _bytes(out) == reference
@@ -488,7 +488,7 @@ def _report_threads():
 def test_a_batch_that_cannot_complete_stops_its_overlapped_report(tmp_path, monkeypatch, fault):
     """A block that raises (or a Ctrl-C while blocks are saved) on worker processes: the
     finished blocks are kept, no report is written, and the report's thread is gone."""
-    from tasks.core import runner
+    from tasks.core import run_folder, runner
 
     if fault == "block-raises":
         real = runner._run_block_in_worker
@@ -501,7 +501,7 @@ def test_a_batch_that_cannot_complete_stops_its_overlapped_report(tmp_path, monk
         monkeypatch.setattr(runner, "_run_block_in_worker", third_raises)
         expected = runner.BatchFailed
     else:
-        real_save, saves = runner._save_block, []
+        real_save, saves = run_folder.save_block, []
 
         def interrupt_third(out_dir, index, payload):
             saves.append(index)
@@ -509,7 +509,7 @@ def test_a_batch_that_cannot_complete_stops_its_overlapped_report(tmp_path, monk
                 raise KeyboardInterrupt
             real_save(out_dir, index, payload)
 
-        monkeypatch.setattr(runner, "_save_block", interrupt_third)
+        monkeypatch.setattr(run_folder, "save_block", interrupt_third)
         expected = runner.BatchInterrupted
     out = tmp_path / "a"
     with pytest.raises(expected):

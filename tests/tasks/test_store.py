@@ -619,7 +619,7 @@ def test_the_largest_mission_block_grows_within_the_block_file_ceiling():
     tick. The most vehicles a mission flies (mission/swarm: a leader and 4 followers) must grow
     by less: measured here as the bytes a block gains from 10 s to 30 s of flight."""
     from tasks.closed_loop.experiment import BYTES_PER_TICK
-    from tasks.core import runner
+    from tasks.core import run_folder, runner
 
     sizes = []
     for duration_s in (10, 30):
@@ -627,7 +627,7 @@ def test_the_largest_mission_block_grows_within_the_block_file_ceiling():
             "mission/swarm", 1, 1, [f"timing.max_duration_s={duration_s}", "followers.count=4"]
         )
         block = plan.experiment.run_block(plan.scenario, 1, plan.blocks[0])
-        sizes.append(len(store.dumps(block, runner._block_header(plan, 0))))
+        sizes.append(len(store.dumps(block, run_folder.block_header(plan, 0))))
         assert sizes[-1] <= plan.block_file_limit_b
     per_tick = (sizes[1] - sizes[0]) / (20.0 / plan.scenario.timing.control_tick_s)
     assert per_tick < runner.BLOCK_FILE_MEMORY_FACTOR * BYTES_PER_TICK, per_tick

@@ -190,3 +190,26 @@ def test_no_more_workers_are_started_than_blocks(tmp_path, monkeypatch, n_runs, 
     runner.run("paper-000/test-1", n_runs, 2, out, TWELVE_SET, workers=n_workers, progress=False)
     assert pools == started
     assert len(list((out / "blocks").glob("*.sha256"))) == -(-n_runs // 5)
+
+
+@pytest.mark.parametrize(
+    ("name", "preloaded"),
+    [("paper-000/test-1", ["tasks.core.runner", "tasks.paper000"]), ("nofamily/x", None)],
+)
+def test_the_fork_server_preloads_the_package_that_declares_the_family(
+    monkeypatch, name, preloaded
+):
+    """Where workers come from a fork server, bauv starts it first thing with the package that
+    declares the name's family (an entry point) preloaded; an undeclared family starts none."""
+    import multiprocessing
+    from multiprocessing import forkserver
+
+    monkeypatch.setattr(workers, "fork_is_safe", lambda: False)
+    monkeypatch.setattr(multiprocessing, "get_all_start_methods", lambda: ["fork", "forkserver"])
+    started, preload = [], []
+    monkeypatch.setattr(forkserver, "ensure_running", lambda: started.append(True))
+    ctx = multiprocessing.get_context("forkserver")
+    monkeypatch.setattr(ctx, "set_forkserver_preload", preload.append)
+    workers.start_fork_server(name)
+    assert preload == ([] if preloaded is None else [preloaded])
+    assert started == ([] if preloaded is None else [True])
