@@ -441,7 +441,7 @@ def check_determinism(seed: int = 11, duration_s: float = 60.0) -> DeterminismRe
     for _ in range(2):
         phys = _scene(depth_m=40.0)
         cfg = currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1)
-        phys.set_sea(sea.Sea(currents.make_current(cfg, rng.generator(seed, 0, "current"))))
+        sea.Sea(currents.make_current(cfg, rng.generator(seed, 0, "current"))).immerse(phys)
         runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0, record=True))
     a, b = runs
     return DeterminismResult(

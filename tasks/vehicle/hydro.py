@@ -84,11 +84,12 @@ BEFORE_21: dict[str, float] = {
     "speed_at_0.84_hz_m_s": 1.000,
 }
 """Figures of issue 21's items on the model before it (commit e4e897f), measured by the same
-procedures as :func:`check_set_sea` and :func:`check_fins` (the set_sea carry and the thin-plate
-fins reverted): an idle vehicle's velocity along a 0.3 m/s current set with ``set_sea``, as a
-fraction of it, 0.2 s and 1 s after; a swimming vehicle's lag behind the drifted track after 60 s
-in a cross current; the log's least reading after an along-track switch; the towed drag at 1 m/s
-with a yaw rate (MuJoCo's part: the audit's 7.2 N); the cruise speed at 0.84 Hz."""
+procedures as :func:`check_set_sea` and :func:`check_fins` (the carry of ``Sea.immerse``, then
+``set_sea``, and the thin-plate fins reverted): an idle vehicle's velocity along a 0.3 m/s current
+set with ``Sea.immerse``, as a fraction of it, 0.2 s and 1 s after; a swimming vehicle's lag
+behind the drifted track after 60 s in a cross current; the log's least reading after an
+along-track switch; the towed drag at 1 m/s with a yaw rate (MuJoCo's part: the audit's 7.2 N);
+the cruise speed at 0.84 Hz."""
 
 OLD_FIN_FLUIDCOEF = {"caudal_fin_fluid": (0.08, 0.003781), "dorsal_fin_fluid": (0.08, 0.0046943)}
 """MuJoCo's blunt and slender drag coefficients of the fins before issue 21 (commit e4e897f)."""
@@ -637,7 +638,7 @@ class StepRow:
 
 def _step_run(vel: tuple[float, float, float], swim: bool, frequency_hz: float) -> NDArray:
     ph = _open_water(speed_m_s=1.0 if swim else 0.0)
-    ph.set_sea(Sea(StepCurrent(20.0, vel)))
+    Sea(StepCurrent(20.0, vel)).immerse(ph)
     ph.set_tail_beat_frequency_hz(frequency_hz if swim else 0.0)
     hold = manoeuvres.DepthHold(ph.depth_m())
     tick = ph.control_tick_s
@@ -685,7 +686,7 @@ def check_current_step(frequency_hz: float | None = None) -> tuple[StepRow, ...]
 
 @dataclass(frozen=True)
 class SetSeaResult:
-    """A steady uniform current injected with ``set_sea`` (issue 21): the idle vehicle's
+    """A steady uniform current put in with ``Sea.immerse`` (issue 21): the idle vehicle's
     velocity along a 0.3 m/s current, as a fraction of it, 0.2 s and 1 s after (across and along
     its heading); a vehicle placed at 1 m/s through the water and put in a cross current of 0.3
     and 2 m/s: its offset across the track from the still-water track plus the drift after 60 s
@@ -710,7 +711,7 @@ def check_set_sea(frequency_hz: float | None = None) -> SetSeaResult:
         ph.advance(1.0)
         c = UniformCurrent(0.3, direction)
         w = c.velocity_world(0.0, np.zeros(3))
-        ph.set_sea(Sea(c))
+        Sea(c).immerse(ph)
         fr = []
         for _ in range(10):
             ph.advance(0.1)
@@ -724,7 +725,7 @@ def check_set_sea(frequency_hz: float | None = None) -> SetSeaResult:
         p0 = ph.position_world()
         for k in range(ticks):
             if k in seas:
-                ph.set_sea(seas[k])
+                seas[k].immerse(ph)
             a = hold.fins_rad(ph)
             ph.set_lateral_fins_rad(a, a)
             ph.advance(ph.control_tick_s)
@@ -888,7 +889,7 @@ def check_own_water(frequency_hz: float | None = None, duration_s: float = 60.0)
         beacons=(),
     )
     two = build.build_physics(cfg)
-    two.set_sea(Sea(_TwoWaters()))
+    Sea(_TwoWaters()).immerse(two)
     for name in ("leader", "follower"):
         two.set_tail_beat_frequency_hz(f, name)
     p0 = two.position_world("follower")
@@ -1227,7 +1228,7 @@ def render(name: str, res: object) -> str:
             ]
         )
         return _table(
-            ["steady uniform current set with set_sea", "measured", "before (e4e897f)"], rows
+            ["steady uniform current set with Sea.immerse", "measured", "before (e4e897f)"], rows
         )
     if name == "fins":
         fr: FinDragResult = res  # type: ignore[assignment]
