@@ -175,7 +175,7 @@ class BauvPhysics(Actuation, mjcf.Physics):
         """Set the physics timestep (``option timestep``), kept over model reloads.
 
         The presets validated against 1 ms on cruise speed, turn rate and depth response are in
-        ``models/bauv/README.md`` ("Timestep presets", ``python -m tasks.vehicle.timestep``).
+        ``models/bauv/README.md`` ("Timestep presets", ``python models/bauv/tools/timestep.py``).
         Call it before stepping: it does not rescale anything already integrated.
 
         Args:

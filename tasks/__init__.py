@@ -8,7 +8,8 @@ Layers (see ``docs/architecture.md``):
   sensor rig, a navigator, guidance and an autopilot) for any number of vehicles in one scene.
 * :mod:`tasks.paper000`, :mod:`tasks.paper001`: the papers' experiments, one subpackage per paper.
 * :mod:`tasks.missions`: the registered closed-loop missions.
-* :mod:`tasks.vehicle`: experiments on the vehicle itself (autopilot trials, the model's checks).
+* :mod:`tasks.vehicle`: experiments on the vehicle itself (autopilot trials; the model's tooling is
+  ``models/bauv/tools``, outside the package).
 
 Importing an experiment package registers its experiments; :mod:`tasks.core.registry` imports the
 packages named in :data:`tasks.core.registry.EXPERIMENT_PACKAGES`. Depends on :mod:`nav` and
