@@ -24,10 +24,10 @@ The facade is assembled from parts that read alone, each standing on the one bef
 The physics owns no sea. Whoever runs it applies one (:class:`bauv_sim.sea.Sea`: current and free
 surface) through the primitives of the actuation part: the water at each vehicle and the scale of
 its buoyancy. A mission's task applies its sea before every physics step; a loop that advances
-the physics by control ticks (:meth:`BauvPhysics.advance`) has it applied at the start of every tick
-by the tick hook the sea installs (:meth:`bauv_sim.sea.Sea.immerse`,
-:meth:`BauvPhysics.set_tick_hook`). Without one the water is still and every vehicle fully buoyant,
-at any depth.
+the physics by control ticks (:meth:`BauvPhysics.advance`) has it applied at the start of every
+tick by the tick hook the sea installs (:meth:`bauv_sim.sea.Sea.immerse`,
+:meth:`BauvPhysics.set_tick_hook`). Without a sea nothing is applied: the water and the buoyancy
+stay as last set (still water and full buoyancy, at any depth, as loaded).
 
 Time advances in control ticks (:meth:`BauvPhysics.advance`): at the start of each tick the tick
 hook runs, then the physics runs the tick's ``n`` steps of ``timestep``. The control tick is an
@@ -53,7 +53,6 @@ with warnings.catch_warnings():
     warnings.filterwarnings("ignore", message=".*DISPLAY environment variable is missing.*")
     from dm_control import mjcf
 
-
 from bauv_sim import frames, hydro
 from bauv_sim.errors import ConfigError, PhysicsError
 from bauv_sim.physics_actuation import Actuation
@@ -66,7 +65,6 @@ __all__ = [
     "BauvPhysics",
     "TickHook",
     "VehicleTruth",
-    "mjcf",
 ]
 
 DEFAULT_CONTROL_TICK_S = 0.1

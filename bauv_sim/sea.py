@@ -23,10 +23,9 @@ a neutrally buoyant body when the whole sea changes its velocity; a vehicle plac
 through still water starts moving with the water) and installs :meth:`Sea.apply` as the physics'
 tick hook, so that :meth:`~bauv_sim.physics.BauvPhysics.advance` applies the sea at the start of
 every control tick; a ``dm_control`` task that steps the physics itself (a mission's world) calls
-:meth:`Sea.apply` in ``before_step``. The sea acts on the physics only through its primitives
-(:class:`bauv_sim.physics_actuation.Actuation`: the water at each vehicle, the scale of its
-buoyancy, a vehicle carried with the water); it indexes no MuJoCo array, and the physics does not
-import this module.
+:meth:`Sea.apply` in ``before_step``. The primitives the sea acts through are the actuation
+part's (:class:`bauv_sim.physics_actuation.Actuation`: the water at each vehicle, the scale of its
+buoyancy, a vehicle carried with the water); the physics does not import this module.
 Frames: world ENU (x east, y north, z up), depth positive down from the surface z = 0.
 """
 
