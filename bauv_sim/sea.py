@@ -67,11 +67,12 @@ def submerged_fraction(depth_m: float) -> float:
 class Sea:
     """The water the vehicles swim in: a current field (or still water) and the free surface z = 0.
 
-    A sea is a description: it keeps no state of the physics it is applied to (the water applied
-    to each vehicle is the physics', :meth:`~bauv_sim.physics.BauvPhysics.set_water_world`), so it
-    can be built before the physics and put around its vehicles with :meth:`immerse`. Its current
-    field may keep state of its own (a randomised current draws its realisation as time goes on):
-    give every run its own.
+    A sea is a description: the water applied to each vehicle is the physics'
+    (:meth:`~bauv_sim.physics.BauvPhysics.set_water_world`), so a sea can be built before the
+    physics and put around its vehicles with :meth:`immerse`. It remembers only the simulation it
+    was last applied to, so that a steady uniform current is written once per immersion (and again
+    after the model is reloaded), not at every tick. Its current field may keep state of its own (a
+    randomised current draws its realisation as time goes on): give every run its own.
 
     Args:
         current: the current field; None for still water.
@@ -79,6 +80,7 @@ class Sea:
 
     def __init__(self, current: CurrentField | None = None) -> None:
         self._current = current
+        self._applied_to: object | None = None  # the MuJoCo data last applied to
 
     @property
     def current(self) -> CurrentField | None:
@@ -109,6 +111,7 @@ class Sea:
         names = physics.vehicle_names()
         before = [physics.current_at_vehicle_world(n) for n in names]
         physics.set_tick_hook(self.apply)
+        self._applied_to = None  # a new immersion: the current is written anew
         self.apply(physics)
         carried = False
         for name, w_before in zip(names, before, strict=True):
@@ -123,29 +126,20 @@ class Sea:
 
     def apply(self, physics: BauvPhysics) -> None:
         """Evaluate the sea at every vehicle now and apply it until the next call: the current, then
-        the free surface. A current that is the same everywhere and always (``steady_uniform``)
-        and is already the water at every vehicle is left as it is.
+        the free surface. A current that is the same everywhere and always (``steady_uniform``) is
+        left as it was applied when this sea was applied to the same simulation before since it
+        was immersed (:meth:`immerse`) and the model was (re)loaded.
 
         Args:
             physics: the physics the vehicles are in.
         """
-        if not self._steady_in_place(physics):
+        data = physics.data.ptr  # a model reload gives the physics new data
+        again = self._applied_to is data
+        if not (again and getattr(self._current, "steady_uniform", False)):
             self._apply_current(physics)
+        self._applied_to = data
         for name in physics.vehicle_names():
             physics.set_buoyancy_scale(submerged_fraction(physics.depth_m(name)), name)
-
-    def _steady_in_place(self, physics: BauvPhysics) -> bool:
-        """Whether the current is steady and uniform and already the water at every vehicle."""
-        if not getattr(self._current, "steady_uniform", False):
-            return False
-        t = physics.time_s()
-        for name in physics.vehicle_names():
-            w = np.asarray(self._current.velocity_world(t, physics.position_world(name)), float)
-            if np.any(physics.current_at_vehicle_world(name) != w) or np.any(
-                physics.water_acceleration_world(name) != 0.0
-            ):
-                return False
-        return True
 
     def _apply_current(self, physics: BauvPhysics) -> None:
         names = physics.vehicle_names()

@@ -66,20 +66,25 @@ def test_a_new_sea_replaces_a_steady_one_at_once(phys):
     assert np.array_equal(phys.truth().current_world_m_s, np.zeros(3))
 
 
-def test_a_steady_sea_is_written_again_when_the_water_is_not_it(phys):
-    """A steady uniform current is left as it is only while it is the water at every vehicle:
-    after a reset (the plugin's water back to still) or a water set by hand, the next tick writes
-    it again."""
+def test_a_steady_sea_is_written_once_per_immersion_and_again_after_a_reload(phys):
+    """A steady uniform current is written when the sea is put around the vehicles and left as
+    it is at the following ticks; a reload of the model (the plugin's water back to still) has
+    it written again at the next tick."""
     sea = Sea(currents.UniformCurrent(0.5, 0.0))
     sea.immerse(phys)
-    phys.reset()
+    assert np.allclose(phys.current_at_vehicle_world(), [0.0, 0.5, 0.0], atol=1e-15)
+    phys.set_water_world([0.25, 0.0, 0.0])  # by hand: a steady sea leaves it at its ticks
+    phys.advance(0.1)
+    assert np.array_equal(phys.current_at_vehicle_world(), [0.25, 0.0, 0.0])
+    from bauv_sim.hull import MODEL_DIR
+
+    phys.reload_from_xml_path(str(MODEL_DIR / "scene.xml"))
     assert np.array_equal(phys.current_at_vehicle_world(), np.zeros(3))
     phys.advance(0.1)
     assert np.allclose(phys.current_at_vehicle_world(), [0.0, 0.5, 0.0], atol=1e-15)
     assert np.allclose(phys.model.opt.wind, [0.0, 0.5, 0.0], atol=1e-15)
-    phys.set_water_world([0.0, 0.5, 0.0], [0.1, 0.0, 0.0])
-    sea.apply(phys)
-    assert np.array_equal(phys.water_acceleration_world(), np.zeros(3))
+    sea.immerse(phys)  # a new immersion writes it anew
+    assert np.allclose(phys.current_at_vehicle_world(), [0.0, 0.5, 0.0], atol=1e-15)
 
 
 def test_without_a_sea_the_physics_keeps_the_water_and_the_buoyancy_it_was_given():
