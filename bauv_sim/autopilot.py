@@ -24,7 +24,7 @@ beat, which the gains below allow for.
 Every integrator has anti-windup: it stops integrating while the loop's output is saturated in
 the direction the integral would push it (conditional integration), and is clamped. Gains and
 limits are in :class:`AutopilotConfig` with their reasoning; they were tuned on the model of
-``models/bauv`` (step responses in ``tasks/vehicle/checks.py``, recorded in the model README).
+``models/bauv`` (step responses in ``models/bauv/tools/checks.py``, recorded in the model README).
 """
 
 from __future__ import annotations
@@ -236,7 +236,7 @@ class Autopilot:
         frequency_for_speed: feed-forward map desired speed (m/s) -> tail-beat frequency (Hz),
             from the vehicle's speed table.
         tail_bias_sign: +1 if a positive tail bias turns the vehicle to starboard on this model,
-            -1 otherwise (a property of the model, measured by ``tasks/vehicle/checks.py``).
+            -1 otherwise (a property of the model, measured by ``models/bauv/tools/checks.py``).
         fin_sign: +1 if a positive symmetric fin angle pitches the nose up, else -1.
         battery0_m: initial battery position, m.
     """

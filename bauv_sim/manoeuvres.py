@@ -310,15 +310,15 @@ def tow_test(
     out = []
     sea = Sea(currents.UniformCurrent(current_m_s, 0.0) if current_m_s else None)
     physics.reset()
-    physics.set_sea(sea)
+    sea.immerse(physics)
     for u in speeds_m_s:
         physics.reset()
-        physics.set_sea(sea)
+        sea.immerse(physics)
         physics.set_pose([0.0, 0.0, -20.0], [0.0, 0.0, 0.0], [0.0, u + current_m_s, 0.0])
         f = physics.fluid_force_world()
         drag = -float(f[1])
         out.append(TowPoint(u, drag, float(f[0]), drag / (0.5 * rho * u * u * reference_area_m2)))
-    physics.set_sea(Sea())
+    Sea().immerse(physics)
     return out
 
 
@@ -578,14 +578,14 @@ def roll_recovery(
 
 def release_in_current(physics: BauvPhysics, field: currents.CurrentField) -> None:
     """Put the (first) vehicle at rest over ground in a current that was always there: the sea is
-    set (:meth:`~bauv_sim.physics.BauvPhysics.set_sea` carries the vehicle with the water) and the
+    put around it (:meth:`~bauv_sim.sea.Sea.immerse` carries the vehicle with the water) and the
     vehicle is stopped where it is, attitude and joints kept.
 
     Args:
         physics: the physics.
         field: the current field.
     """
-    physics.set_sea(Sea(field))
+    Sea(field).immerse(physics)
     physics.set_pose(physics.position_world(), physics.roll_pitch_heading(), np.zeros(3))
 
 
@@ -671,7 +671,7 @@ def swim_in_current(
 ) -> CurrentSwimResult:
     """Swim with a fixed tail-beat frequency and level fins, once in still water and once in a
     current, from the same state relative to the water (putting the vehicle in the current
-    carries it with the water at its start point, :meth:`~bauv_sim.physics.BauvPhysics.set_sea`);
+    carries it with the water at its start point, :meth:`~bauv_sim.sea.Sea.immerse`);
     compare velocities over the same window.
 
     The fluid forces see only the velocity relative to the water, so in a uniform current the
@@ -691,7 +691,7 @@ def swim_in_current(
     results = []
     for sea in (Sea(), Sea(field)):
         phys = make_physics()
-        phys.set_sea(sea)
+        sea.immerse(phys)
         phys.set_tail_beat_frequency_hz(frequency_hz)
         tick = phys.control_tick_s
         phys.advance(round(settle_s / tick) * tick)

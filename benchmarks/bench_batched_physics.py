@@ -171,7 +171,7 @@ def one_seed(run: int, seconds: float, timestep_s: float) -> tuple[np.ndarray, f
     c0 = time.process_time()
     cur = current_of(run)
     p = _start(timestep_s)
-    p.set_sea(Sea(UniformCurrent(*speed_direction(run))))
+    Sea(UniformCurrent(*speed_direction(run))).immerse(p)
     pilot = Pilot(p)  # its setters write p's own controls
     for _ in range(round(seconds / TICK_S)):
         p.data.ctrl[:] = pilot.ctrl(p.data.qpos[:7], p.data.qvel[:6], cur)

@@ -52,7 +52,7 @@ def raw_physics(env, actions: list) -> None:
         p.set_tail_bias_rad(float(a[1]))
         p.set_lateral_fins_rad(float(a[2]), float(a[3]))
         p.set_battery_position_m(float(a[4]))
-        p.apply_sea()
+        env.task.parts.sea.apply(p)
         p.step(p.steps_per_tick)
 
 

@@ -106,7 +106,7 @@ def facade_steps_per_s(seconds: float, repeats: int, energy: bool) -> float:
     from bauv_sim.currents import UniformCurrent
     from bauv_sim.sea import Sea
 
-    phys.set_sea(Sea(UniformCurrent(0.3, 0.5)))
+    Sea(UniformCurrent(0.3, 0.5)).immerse(phys)
     n = round(seconds / phys.timestep())
 
     def run() -> int:

@@ -8,7 +8,8 @@ Layers (see ``docs/architecture.md``):
   sensor rig, a navigator, guidance and an autopilot) for any number of vehicles in one scene.
 * :mod:`tasks.paper000`, :mod:`tasks.paper001`: the papers' experiments, one subpackage per paper.
 * :mod:`tasks.missions`: the registered closed-loop missions.
-* :mod:`tasks.vehicle`: experiments on the vehicle itself (autopilot trials, the model's checks).
+* :mod:`tasks.vehicle`: experiments on the vehicle itself (autopilot trials; the model's tooling is
+  ``models/bauv/tools``, outside the package).
 
 Each experiment package declares its family of names as an entry point of the group
 ``bauv_sim.experiments`` (``pyproject.toml``) and the looks of its methods in its ``__init__``

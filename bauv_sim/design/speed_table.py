@@ -3,9 +3,10 @@
 The table is a design-time product of the model: :func:`measure_speed_table` swims the vehicle
 straight and level in still water at each of :data:`SPEED_TABLE_FREQUENCIES_HZ` (one run, each
 frequency settling from the previous one) and :func:`write_speed_table` writes the result to
-``models/bauv/speed_table.csv`` (``python -m tasks.vehicle.checks cruise`` does both and rewrites
-the model README's tables). At run time :func:`load_speed_table` reads it as a :class:`SpeedTable`:
-the speed feed-forward of the autopilot and the odometry's frequency-to-speed law.
+``models/bauv/speed_table.csv`` (``python models/bauv/tools/checks.py cruise`` does both and
+rewrites the model README's tables). At run time :func:`load_speed_table` reads it as a
+:class:`SpeedTable`: the speed feed-forward of the autopilot and the odometry's frequency-to-speed
+law.
 """
 
 from __future__ import annotations
@@ -103,7 +104,7 @@ def load_speed_table(path: str | Path = SPEED_TABLE_CSV) -> SpeedTable:
             rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
     except FileNotFoundError:
         raise ConfigError(
-            f"speed table {str(p)!r}: not found (run python -m tasks.vehicle.checks)"
+            f"speed table {str(p)!r}: not found (run python models/bauv/tools/checks.py)"
         ) from None
     try:
         cols = {c: np.array([float(r[c]) for r in rows]) for c in SPEED_TABLE_COLUMNS}
@@ -169,7 +170,7 @@ def write_speed_table(
     with Path(path).open("w", newline="") as fh:
         fh.write(
             "# BAUV self-propelled straight swim, still water, depth held by the lateral fins;"
-            " written by tasks/vehicle/checks.py\n"
+            " written by models/bauv/tools/checks.py\n"
         )
         w = csv.writer(fh)
         w.writerow(SPEED_TABLE_COLUMNS)

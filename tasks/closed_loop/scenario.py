@@ -32,7 +32,7 @@ MODES = ("transit", "ascend", "surface", "dive", "done")
 
 PHYSICS_TIMESTEP_S = 0.004
 """The missions' physics timestep, s: the 4 ms preset, validated against 1 ms by
-``python -m tasks.vehicle.timestep`` (models/bauv/README.md, "Timestep presets")."""
+``python models/bauv/tools/timestep.py`` (models/bauv/README.md, "Timestep presets")."""
 """Guidance modes, in the order of their integer codes in observations and run data."""
 
 

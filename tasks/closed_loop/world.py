@@ -237,8 +237,8 @@ class MissionWorld(control.Task):
     def initialize_episode(self, physics) -> None:
         physics.set_control_tick(self.scn.timing.control_tick_s)
         self.parts = self.design.build(self.scn, self.seed, self.run, physics)
-        # after the vehicles are placed: the sea carries each with the water at it (set_sea)
-        physics.set_sea(self.parts.sea)
+        # after the vehicles are placed: the sea carries each with the water at it (Sea.immerse)
+        self.parts.sea.immerse(physics)
         got = tuple(v.name for v in self.parts.vehicles)
         if got != self.names:
             raise BauvSimError(f"the design built vehicles {got}, it declared {self.names}")
@@ -261,7 +261,7 @@ class MissionWorld(control.Task):
             physics.set_tail_bias_rad(float(ai[1]), vehicle=v)
             physics.set_lateral_fins_rad(float(ai[2]), float(ai[3]), vehicle=v)
             physics.set_battery_position_m(float(ai[4]), vehicle=v)
-        physics.apply_sea()
+        self.parts.sea.apply(physics)
         f = getattr(self.scn, "faults", None)
         if (
             f is not None

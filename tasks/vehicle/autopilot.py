@@ -111,8 +111,8 @@ def fly_trial(
         [0.0, 0.0, heading0_rad],
         [*unit_vector_scalar(heading0_rad), 0.0],
     )
-    # placed at 1 m/s through the water; the sea carries it with the current (BauvPhysics.set_sea)
-    p.set_sea(Sea(UniformCurrent(current_north_m_s, 0.0) if current_north_m_s else None))
+    # placed at 1 m/s through the water; the sea carries it with the current (Sea.immerse)
+    Sea(UniformCurrent(current_north_m_s, 0.0) if current_north_m_s else None).immerse(p)
     table = load_speed_table()
     ap = Autopilot(s.autopilot, lambda v: float(table.frequency_for(v)))
     lim = p.command_limits()

@@ -127,11 +127,11 @@ def _lamb(a: float, b: float) -> tuple[float, float, float]:
 
 
 def _spheroid_model(tmp_path) -> mujoco.MjModel:
-    """The 5:1 spheroid of ``tasks.vehicle.hydro`` (neutral, ideal fluid, added mass through the
-    BAUV's pipeline: ``design.fluid.added_mass_matrix`` and the plugin)."""
-    from tasks.vehicle.hydro import spheroid_model
+    """The 5:1 spheroid of ``models/bauv/tools/hydro_body.py`` (neutral, ideal fluid, added mass
+    through the BAUV's pipeline: ``design.fluid.added_mass_matrix`` and the plugin)."""
+    from tests.model_tools import tool
 
-    return spheroid_model(tmp_path, A_SPH, B_SPH)
+    return tool("hydro_body").spheroid_model(tmp_path, A_SPH, B_SPH)
 
 
 def test_spheroid_added_mass_is_lambs(tmp_path):

@@ -1,4 +1,4 @@
-"""Short versions of the acceptance experiments (the full ones: ``tasks/vehicle_checks.py``)."""
+"""Short versions of the acceptance experiments (the full ones: ``models/bauv/tools/checks.py``)."""
 
 from __future__ import annotations
 

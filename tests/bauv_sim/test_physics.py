@@ -285,6 +285,67 @@ def test_the_primitives_the_sea_acts_through(phys):
     assert np.allclose(phys.truth().current_world_m_s, phys.current_at_vehicle_world())
 
 
+def test_the_tick_hook_runs_at_the_start_of_every_tick_of_advance(phys):
+    """What a sea relies on (``Sea.immerse`` installs its ``apply``): the hook sees the time at
+    the start of each control tick, before the tick's steps; ``step`` does not run it."""
+    seen = []
+    phys.set_tick_hook(lambda p: seen.append(p.time_s()))
+    phys.advance(0.5)
+    assert seen == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4], abs=1e-12)
+    phys.step(10)
+    assert len(seen) == 5
+    assert phys.tick_hook is not None
+    phys.set_tick_hook(None)
+    phys.advance(0.2)
+    assert len(seen) == 5
+    with pytest.raises(ConfigError, match="tick hook"):
+        phys.set_tick_hook("sea")  # type: ignore[arg-type]
+
+
+def test_a_velocity_shift_moves_the_whole_vehicle_and_keeps_its_rotation_and_joints(phys):
+    """The carry a sea gives when it is put around the vehicles (``Sea.immerse``)."""
+    phys.set_pose(
+        [0, 0, -3], [0.1, 0.0, 1.0], [0.4, 0.3, -0.1], angular_velocity_body_rad_s=[0.0, 0.0, 0.2]
+    )
+    phys.set_tail_beat_frequency_hz(1.0)
+    phys.advance(0.5)
+    qvel, qpos = np.array(phys.data.qvel), np.array(phys.data.qpos)
+    phys.shift_velocity_world([0.25, -0.5, 0.125])
+    assert np.array_equal(phys.velocity_world(), qvel[:3] + [0.25, -0.5, 0.125])
+    assert np.array_equal(phys.data.qvel[3:], qvel[3:])
+    assert np.array_equal(phys.data.qpos, qpos)
+    with pytest.raises(ConfigError, match="velocity change"):
+        phys.shift_velocity_world([0.0, math.nan, 0.0])
+    with pytest.raises(ConfigError, match="velocity change"):
+        phys.shift_velocity_world([0.0, 1.0])
+
+
+def test_the_physics_modules_do_not_import_the_sea():
+    """The sea is applied by whoever runs the physics (issue 22): no module of the facade imports
+    ``bauv_sim.sea``, at run time or for type checking."""
+    import ast
+    from pathlib import Path
+
+    import bauv_sim
+
+    root = Path(bauv_sim.__file__).parent
+    modules = sorted(root.glob("physics*.py"))
+    assert {p.name for p in modules} >= {
+        "physics.py",
+        "physics_index.py",
+        "physics_state.py",
+        "physics_actuation.py",
+    }
+    for path in modules:
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [node.module or ""] + [f"{node.module}.{a.name}" for a in node.names]
+            assert not any(n == "bauv_sim.sea" for n in names), (path.name, names)
+
+
 def test_model_without_disabled_autoreset_is_refused():
     from bauv_sim.hull import MODEL_DIR
 
@@ -308,14 +369,12 @@ def test_same_commands_give_bit_identical_trajectories(energy):
     def run(track: bool) -> np.ndarray:
         p = BauvPhysics.from_scene_xml()
         p.set_energy_tracking(track)
-        p.set_sea(
-            Sea(
-                currents.make_current(
-                    currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
-                    np.random.default_rng(7),
-                )
+        Sea(
+            currents.make_current(
+                currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1),
+                np.random.default_rng(7),
             )
-        )
+        ).immerse(p)
         rows = []
         for k in range(30):
             p.set_tail_beat_frequency_hz(0.5 + 0.05 * k)

@@ -21,20 +21,23 @@ def phys() -> BauvPhysics:
 def test_the_sea_is_held_until_it_is_applied_again(phys):
     """What a dm_control environment that steps the physics itself relies on: the sea applied in
     ``before_step`` holds through the steps."""
-    phys.set_sea(Sea(currents.GyreCurrent((0.0, 0.0), 10.0, 0.3)))
+    sea = Sea(currents.GyreCurrent((0.0, 0.0), 10.0, 0.3))
+    sea.immerse(phys)
     phys.set_pose([10.0, 0.0, -3.0])
     first = phys.current_at_vehicle_world()
     phys.set_pose([0.0, 10.0, -3.0])
     phys.step(5)
     assert np.allclose(phys.current_at_vehicle_world(), first)  # held until applied again
-    phys.apply_sea()
+    sea.apply(phys)
     assert np.allclose(phys.current_at_vehicle_world(), [0.3, 0.0, 0.0], atol=1e-12)
 
 
 def test_current_is_applied_and_velocity_through_water_is_ground_minus_current(phys):
     field = currents.UniformCurrent(0.5, math.radians(30))
-    phys.set_sea(Sea(field))
-    assert phys.sea.current is field
+    sea = Sea(field)
+    sea.immerse(phys)
+    assert sea.current is field
+    assert phys.tick_hook == sea.apply  # advance applies it at every tick
     cur = field.velocity_world(0.0, np.zeros(3))
     assert np.allclose(phys.current_at_vehicle_world(), cur)
     assert np.allclose(phys.model.opt.wind, cur)
@@ -51,16 +54,49 @@ def test_a_new_sea_replaces_a_steady_one_at_once(phys):
     """A steady uniform current is written once per injection, not at every tick: injecting another
     sea writes the water anew."""
     a = currents.UniformCurrent(0.5, 0.0)
-    phys.set_sea(Sea(a))
+    Sea(a).immerse(phys)
     phys.advance(0.2)
     assert np.allclose(phys.model.opt.wind, [0.0, 0.5, 0.0])
-    phys.set_sea(Sea(currents.UniformCurrent(0.2, math.pi / 2)))
+    Sea(currents.UniformCurrent(0.2, math.pi / 2)).immerse(phys)
     assert np.allclose(phys.model.opt.wind, [0.2, 0.0, 0.0])
     assert np.allclose(phys.current_at_vehicle_world(), [0.2, 0.0, 0.0])
-    phys.set_sea(Sea())
+    Sea().immerse(phys)
     phys.advance(0.1)
     assert np.array_equal(phys.model.opt.wind, np.zeros(3))
     assert np.array_equal(phys.truth().current_world_m_s, np.zeros(3))
+
+
+def test_a_steady_sea_is_written_once_per_immersion_and_again_after_a_reload(phys):
+    """A steady uniform current is written when the sea is put around the vehicles and left as
+    it is at the following ticks; a reload of the model (the plugin's water back to still) has
+    it written again at the next tick."""
+    sea = Sea(currents.UniformCurrent(0.5, 0.0))
+    sea.immerse(phys)
+    assert np.allclose(phys.current_at_vehicle_world(), [0.0, 0.5, 0.0], atol=1e-15)
+    phys.set_water_world([0.25, 0.0, 0.0])  # by hand: a steady sea leaves it at its ticks
+    phys.advance(0.1)
+    assert np.array_equal(phys.current_at_vehicle_world(), [0.25, 0.0, 0.0])
+    from bauv_sim.hull import MODEL_DIR
+
+    phys.reload_from_xml_path(str(MODEL_DIR / "scene.xml"))
+    assert np.array_equal(phys.current_at_vehicle_world(), np.zeros(3))
+    phys.advance(0.1)
+    assert np.allclose(phys.current_at_vehicle_world(), [0.0, 0.5, 0.0], atol=1e-15)
+    assert np.allclose(phys.model.opt.wind, [0.0, 0.5, 0.0], atol=1e-15)
+    sea.immerse(phys)  # a new immersion writes it anew
+    assert np.allclose(phys.current_at_vehicle_world(), [0.0, 0.5, 0.0], atol=1e-15)
+
+
+def test_without_a_sea_the_physics_keeps_the_water_and_the_buoyancy_it_was_given():
+    """The physics owns no sea (issue 22): a fresh physics advanced with no sea put around it
+    keeps still water and full buoyancy, even above the surface, until a sea is applied."""
+    p = build.build_physics()
+    p.set_pose([0.0, 0.0, 0.5])
+    p.advance(0.1)
+    assert p.buoyancy_scale() == 1.0
+    assert np.array_equal(p.current_at_vehicle_world(), np.zeros(3))
+    Sea().apply(p)
+    assert p.buoyancy_scale() == 0.0
 
 
 def test_each_vehicle_feels_the_current_at_its_own_position():
@@ -77,7 +113,7 @@ def test_each_vehicle_feels_the_current_at_its_own_position():
         )
     )
     two = build.build_physics(cfg)
-    two.set_sea(Sea(gyre))
+    Sea(gyre).immerse(two)
     ca, cb = two.current_at_vehicle_world("a"), two.current_at_vehicle_world("b")
     assert not np.allclose(ca, cb)
     total_b = two.fluid_force_world("b")
@@ -93,7 +129,7 @@ def test_drag_depends_only_on_the_velocity_through_water(phys):
     phys.set_pose([0, 0, -3], [0.1, -0.05, 0.3], [0.3, 0.9, 0.05])
     still = phys.fluid_force_world()
     c = np.array([0.4, -0.2, 0.0])
-    phys.set_sea(Sea(currents.UniformCurrent(float(np.hypot(*c[:2])), math.atan2(c[0], c[1]))))
+    Sea(currents.UniformCurrent(float(np.hypot(*c[:2])), math.atan2(c[0], c[1]))).immerse(phys)
     phys.set_pose([0, 0, -3], [0.1, -0.05, 0.3], [0.3 + c[0], 0.9 + c[1], 0.05])
     assert np.allclose(phys.fluid_force_world(), still, rtol=1e-9, atol=1e-12)
 
@@ -102,6 +138,8 @@ def test_free_surface_buoyancy_fraction_and_motion():
     """Above the surface the hull loses its buoyancy: the submerged fraction follows the area of
     an elliptic section, a vehicle released in the air falls back, and one deep stays put."""
     p = build.build_physics()
+    sea = Sea()
+    sea.immerse(p)
     h = HULL_HALF_HEIGHT_M
     for depth, want in [
         (1.0, 1.0),
@@ -113,7 +151,7 @@ def test_free_surface_buoyancy_fraction_and_motion():
     ]:
         assert submerged_fraction(depth) == pytest.approx(want, abs=1e-12)
         p.set_pose([0.0, 0.0, -depth])
-        p.apply_sea()
+        sea.apply(p)
         assert p.buoyancy_scale() == pytest.approx(want, abs=1e-12)
     # released 0.5 m above the surface, still water, no commands: it falls into the water
     p.set_pose([0.0, 0.0, 0.5])
@@ -127,7 +165,7 @@ def test_free_surface_buoyancy_fraction_and_motion():
 
 
 # ------------------------------------------------------------------------------------------
-# a sea injected with set_sea carries the vehicles with the water (issue 21)
+# a sea put around the vehicles (Sea.immerse) carries them with the water (issue 21)
 
 
 def _swim(sea_at: dict[float, Sea], seconds: float, heading_deg: float = 0.0, f: float = 0.84):
@@ -142,7 +180,7 @@ def _swim(sea_at: dict[float, Sea], seconds: float, heading_deg: float = 0.0, f:
     pos, through = [], []
     for k in range(round(seconds / p.control_tick_s)):
         if k * p.control_tick_s in sea_at:
-            p.set_sea(sea_at[k * p.control_tick_s])
+            sea_at[k * p.control_tick_s].immerse(p)
         a = hold.fins_rad(p)
         p.set_lateral_fins_rad(a, a)
         p.advance(p.control_tick_s)
@@ -165,7 +203,7 @@ def test_an_idle_vehicle_follows_a_step_of_a_steady_uniform_current(direction_de
     idle, still = manoeuvres.open_water_scene(), manoeuvres.open_water_scene()
     for p in (idle, still):
         p.advance(0.5)
-    idle.set_sea(Sea(c))
+    Sea(c).immerse(idle)
     for k in range(10):
         idle.advance(0.1)
         still.advance(0.1)
@@ -195,7 +233,7 @@ def test_the_log_keeps_reading_speed_through_water_after_an_along_track_switch()
     assert np.allclose(through, through_still, atol=1e-9)
 
 
-def test_set_sea_carries_each_vehicle_by_the_water_at_it():
+def test_immerse_carries_each_vehicle_by_the_water_at_it():
     """Two vehicles in a gyre: each one's velocity over ground changes by its own water's velocity
     (its velocity through the water, angular velocity and joints are kept)."""
     cfg = build.SceneConfig(
@@ -208,7 +246,7 @@ def test_set_sea_carries_each_vehicle_by_the_water_at_it():
     before = {n: two.velocity_world(n) for n in "ab"}
     joints = np.array(two.data.qvel[6:]), np.array(two.data.qpos)
     gyre = currents.GyreCurrent((0.0, 0.0), 50.0, 0.4)
-    two.set_sea(Sea(gyre))
+    Sea(gyre).immerse(two)
     for n in "ab":
         w = gyre.velocity_world(0.0, two.position_world(n))
         assert np.allclose(two.current_at_vehicle_world(n), w)
@@ -217,7 +255,7 @@ def test_set_sea_carries_each_vehicle_by_the_water_at_it():
     assert np.array_equal(two.data.qpos, joints[1])
     # a second injection of the same sea carries nothing
     again = {n: two.velocity_world(n) for n in "ab"}
-    two.set_sea(Sea(gyre))
+    Sea(gyre).immerse(two)
     for n in "ab":
         assert np.array_equal(two.velocity_world(n), again[n])
 

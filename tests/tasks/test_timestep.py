@@ -1,11 +1,14 @@
-"""The timestep validation script's measures (tasks.vehicle.timestep) against analytic cases."""
+"""The timestep validation script's measures (``models/bauv/tools/timestep.py``) against analytic
+cases."""
 
 import math
 
 import numpy as np
 import pytest
 
-from tasks.vehicle import timestep as ts
+from tests.model_tools import tool
+
+ts = tool("timestep")
 
 
 def test_rise_time_of_a_first_order_step_is_tau_ln_9():

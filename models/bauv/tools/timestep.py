@@ -22,8 +22,8 @@ the autopilot's own margins (its loops settle within +-2 deg and +-0.1 m).
 
 Run from the repository root (re-run after any change to the hull or its hydrodynamics)::
 
-    python -m tasks.vehicle.timestep                   # 1, 2, 4 ms; rewrites the README tables
-    python -m tasks.vehicle.timestep 0.001 0.004 --no-write
+    python models/bauv/tools/timestep.py                   # 1, 2, 4 ms; rewrites the README tables
+    python models/bauv/tools/timestep.py 0.001 0.004 --no-write
 """
 
 from __future__ import annotations
@@ -54,8 +54,10 @@ THRESHOLDS: dict[str, tuple[str, float]] = {
 """Allowed difference of each quantity from the reference: (kind, bound); relative is
 |x - x_ref| / |x_ref|, absolute is |x - x_ref| in the quantity's unit."""
 
-README = Path(__file__).resolve().parents[2] / "models" / "bauv" / "README.md"
-BENCH_README = Path(__file__).resolve().parents[2] / "benchmarks" / "README.md"
+ROOT = Path(__file__).resolve().parents[3]
+"""The repository root (this file is ``models/bauv/tools/timestep.py``)."""
+README = ROOT / "models" / "bauv" / "README.md"
+BENCH_README = ROOT / "benchmarks" / "README.md"
 
 
 @dataclass(frozen=True)
@@ -123,9 +125,10 @@ def fly(timestep_s: float, frequency_hz: float | None = None) -> TimestepResult:
     Returns:
         The :class:`TimestepResult`.
     """
+    from checks import cruise_frequency_hz
+
     from bauv_sim import manoeuvres
     from tasks.vehicle.autopilot import AutopilotTrialsScenario, beat_average, fly_trial
-    from tasks.vehicle.checks import cruise_frequency_hz
 
     f = frequency_hz or cruise_frequency_hz()
 
@@ -285,7 +288,7 @@ def mission_metrics(args: list[str], timestep_s: float) -> dict[str, float]:
     import sys
     import tempfile
 
-    root = Path(__file__).resolve().parents[2]
+    root = ROOT
     with tempfile.TemporaryDirectory(prefix="timestep-") as tmp:
         cmd = [sys.executable, "-m", "tasks.core.cli", "run", *args, "--out", tmp]
         cmd += ["--set", f"timing.physics_timestep_s={timestep_s}"]

@@ -5,10 +5,10 @@ runs them all, prints them, writes the speed calibration ``models/bauv/speed_tab
 updates the ``trim`` keyframe of ``models/bauv/bauv.xml`` and rewrites the results tables of
 ``models/bauv/README.md`` (between ``<!-- BEGIN results:NAME -->`` and ``<!-- END ... -->``).
 
-Run from the repository root::
+Run from the repository root (model tooling, outside the installed package)::
 
-    python -m tasks.vehicle.checks            # everything (about 3 minutes on 2 cores)
-    python -m tasks.vehicle.checks tow swim   # some checks only
+    python models/bauv/tools/checks.py            # everything (about 3 minutes on 2 cores)
+    python models/bauv/tools/checks.py tow swim   # some checks only
 
 Fast versions of the same checks are the unit tests in ``tests/bauv_sim``.
 """
@@ -16,47 +16,26 @@ Fast versions of the same checks are the unit tests in ``tests/bauv_sim``.
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import re
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from bauv_sim import currents, hull, manoeuvres, rng, sea
+from bauv_sim.design import fluid, speed_table
 from bauv_sim.errors import ConfigError
 
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics
 
 
-class _Lazy:
-    """A module imported on first use: the experiment registry imports every ``tasks/vehicle*``
-    module when the CLI starts, and MuJoCo, dm_control and trimesh need not load for that."""
-
-    def __init__(self, name: str) -> None:
-        self._name = name
-        self._module: ModuleType | None = None
-
-    def __getattr__(self, attr: str) -> Any:
-        if self._module is None:
-            self._module = importlib.import_module(self._name)
-        return getattr(self._module, attr)
-
-
-currents = _Lazy("bauv_sim.currents")
-fluid = _Lazy("bauv_sim.design.fluid")
-manoeuvres = _Lazy("bauv_sim.manoeuvres")
-hull = _Lazy("bauv_sim.hull")
-rng = _Lazy("bauv_sim.rng")
-sea = _Lazy("bauv_sim.sea")
-speed_table = _Lazy("bauv_sim.design.speed_table")
-
-MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "bauv"
+MODEL_DIR = Path(__file__).resolve().parents[1]
+"""``models/bauv`` (this file is ``models/bauv/tools/checks.py``)."""
 README = MODEL_DIR / "README.md"
 VEHICLE_XML = MODEL_DIR / "bauv.xml"
 
@@ -441,7 +420,7 @@ def check_determinism(seed: int = 11, duration_s: float = 60.0) -> DeterminismRe
     for _ in range(2):
         phys = _scene(depth_m=40.0)
         cfg = currents.RandomisedCurrentConfig(speed_m_s=0.3, hold_step_s=0.1)
-        phys.set_sea(sea.Sea(currents.make_current(cfg, rng.generator(seed, 0, "current"))))
+        sea.Sea(currents.make_current(cfg, rng.generator(seed, 0, "current"))).immerse(phys)
         runs.append(run_commands(phys, varied_commands(seed, duration_s, 10.0), 10.0, record=True))
     a, b = runs
     return DeterminismResult(
