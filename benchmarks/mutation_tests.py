@@ -78,8 +78,8 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_paper000.py",
     ),
     "nav/metrics.py": ("tests/nav/test_metrics.py", "tests/tasks/test_paper000.py"),
-    "nav/accuracy.py": ("tests/nav/test_accuracy.py", "tests/tasks/test_paper000.py"),
-    "nav/track_ekf.py": ("tests/nav/test_track_ekf.py", "tests/tasks/test_paper000.py"),
+    "nav/usbl/accuracy.py": ("tests/nav/test_accuracy.py", "tests/tasks/test_paper000.py"),
+    "nav/usbl/tracks.py": ("tests/nav/test_track_ekf.py", "tests/tasks/test_paper000.py"),
     "nav/navigator.py": ("tests/nav/test_navigator.py", "tests/tasks/test_run_data.py"),
     "nav/dead_reckoning.py": ("tests/nav/test_dead_reckoning.py", "tests/nav/test_navigator.py"),
     "nav/bearings.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
@@ -290,10 +290,11 @@ OWN: list[Mutation] = [
         "paper000-gate-limits-dof-plus-one",
         "own",
         "dof",
-        "tasks/paper000/passage.py",
+        "nav/ekf.py",
         "*(gate_limit(gate_probability, d) for d in (1, 2, 3))",
         "*(gate_limit(gate_probability, d + 1) for d in (1, 2, 3))",
-        "seed 000's passage EKF gates 1, 2, 3 active components with 2, 3, 4 dof",
+        "seed 000's passage EKF (the update's fast path) gates 1, 2, 3 active components with "
+        "2, 3, 4 dof",
     ),
     Mutation(
         "nees-band-dof-plus-one",
@@ -437,7 +438,7 @@ OWN: list[Mutation] = [
         "seed000-dr-accuracy-sin-cos-swapped",
         "own",
         "transpose",
-        "nav/accuracy.py",
+        "nav/usbl/accuracy.py",
         "sx2 = dt**2 * ((s * sigma_course_rad * np.cos(c)) ** 2"
         " + (sigma_speed_m_s * np.sin(c)) ** 2)",
         "sx2 = dt**2 * ((s * sigma_course_rad * np.sin(c)) ** 2"
