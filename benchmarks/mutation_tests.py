@@ -90,12 +90,22 @@ GUARDS: dict[str, tuple[str, ...]] = {
     ),
     "nav/pcrb.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
     "nav/relative.py": ("tests/nav/test_relative.py", "tests/tasks/test_paper003.py"),
-    "nav/correction.py": (
+    "nav/surfacing/estimate.py": (
         "tests/nav/test_correction.py",
         "tests/nav/test_drns.py",
         "tests/tasks/test_paper001.py",
     ),
-    "nav/drns.py": ("tests/nav/test_drns.py", "tests/tasks/test_paper001.py"),
+    "nav/surfacing/procedures.py": (
+        "tests/nav/test_correction.py",
+        "tests/nav/test_drns.py",
+        "tests/tasks/test_paper001.py",
+    ),
+    "nav/surfacing/course.py": ("tests/nav/test_correction.py", "tests/tasks/test_paper001.py"),
+    "nav/surfacing/drns.py": (
+        "tests/nav/test_correction.py",
+        "tests/nav/test_drns.py",
+        "tests/tasks/test_paper001.py",
+    ),
     "nav/seabed.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
     "nav/angles.py": ("tests/nav/test_angles.py", "tests/bauv_sim/test_frames.py"),
     # bauv_sim: the devices, the rig and the sea
