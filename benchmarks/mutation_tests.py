@@ -153,6 +153,16 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_recording.py",
         "tests/tasks/test_missions.py",
     ),
+    "tasks/closed_loop/recording.py": (
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_recording.py",
+        "tests/tasks/test_missions.py",
+    ),
+    "tasks/closed_loop/figures.py": (
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_recording.py",
+        "tests/tasks/test_missions.py",
+    ),
     "tasks/closed_loop/world.py": (
         "tests/tasks/test_run_data.py",
         "tests/tasks/test_missions.py",
@@ -319,7 +329,7 @@ OWN: list[Mutation] = [
         "mission-nees-band-dof-2",
         "own",
         "dof",
-        "tasks/closed_loop/report.py",
+        "tasks/closed_loop/recording.py",
         "(1 + probability) / 2]), 3)",
         "(1 + probability) / 2]), 2)",
         "the mission recording's NEES band of the 3-D position taken with 2 dof",
