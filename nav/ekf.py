@@ -20,11 +20,6 @@ gate_probability) -> (x, P, UpdateInfo)`` take and return states ``(n, d)`` and 
 :func:`update`), and :class:`SingleRunEKF`, the same filter for one run (n = 1) without the batch
 machinery (the motion model's closed-form ``predict_one`` and :func:`update_one`), for the online
 navigator's per-tick path; the two give the same numbers (tested to 1e-12).
-
-**The fast path for many runs** (:func:`update_packed3`): the same update for a 3-D state measured
-in three components with a diagonal ``R`` (seed 000's USBL fixes of a position), written out on a
-structure of arrays (component-major states, packed covariances), in place; equal to
-:func:`update` to 1e-12 (tested) in a fraction of its time for thousands of runs.
 """
 
 from __future__ import annotations
@@ -398,7 +393,10 @@ def check_estimate(x: Array, P: Array, t_s: float) -> None:
 
 
 # ----------------------------------------------------------------------------------------------
-# The update's fast path for three-component states and measurements (structure of arrays)
+# The update's fast path for many runs (:func:`update_packed3`): the same update for a 3-D state
+# measured in three components with a diagonal R (seed 000's USBL fixes of a position), written
+# out on a structure of arrays (component-major states, packed covariances), in place; equal to
+# :func:`update` to 1e-12 (tested) in a fraction of its time for thousands of runs.
 
 SYM3 = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 """The (row, column) of each stored component of a packed symmetric 3 x 3 covariance (the
