@@ -78,8 +78,8 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_paper000.py",
     ),
     "nav/metrics.py": ("tests/nav/test_metrics.py", "tests/tasks/test_paper000.py"),
-    "nav/accuracy.py": ("tests/nav/test_accuracy.py", "tests/tasks/test_paper000.py"),
-    "nav/track_ekf.py": ("tests/nav/test_track_ekf.py", "tests/tasks/test_paper000.py"),
+    "nav/usbl/accuracy.py": ("tests/nav/test_accuracy.py", "tests/tasks/test_paper000.py"),
+    "nav/usbl/tracks.py": ("tests/nav/test_track_ekf.py", "tests/tasks/test_paper000.py"),
     "nav/navigator.py": ("tests/nav/test_navigator.py", "tests/tasks/test_run_data.py"),
     "nav/dead_reckoning.py": ("tests/nav/test_dead_reckoning.py", "tests/nav/test_navigator.py"),
     "nav/bearings.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
@@ -90,12 +90,22 @@ GUARDS: dict[str, tuple[str, ...]] = {
     ),
     "nav/pcrb.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
     "nav/relative.py": ("tests/nav/test_relative.py", "tests/tasks/test_paper003.py"),
-    "nav/correction.py": (
+    "nav/surfacing/estimate.py": (
         "tests/nav/test_correction.py",
         "tests/nav/test_drns.py",
         "tests/tasks/test_paper001.py",
     ),
-    "nav/drns.py": ("tests/nav/test_drns.py", "tests/tasks/test_paper001.py"),
+    "nav/surfacing/procedures.py": (
+        "tests/nav/test_correction.py",
+        "tests/nav/test_drns.py",
+        "tests/tasks/test_paper001.py",
+    ),
+    "nav/surfacing/course.py": ("tests/nav/test_correction.py", "tests/tasks/test_paper001.py"),
+    "nav/surfacing/drns.py": (
+        "tests/nav/test_correction.py",
+        "tests/nav/test_drns.py",
+        "tests/tasks/test_paper001.py",
+    ),
     "nav/seabed.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
     "nav/angles.py": ("tests/nav/test_angles.py", "tests/bauv_sim/test_frames.py"),
     # bauv_sim: the devices, the rig and the sea
@@ -139,6 +149,16 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_missions.py",
     ),
     "tasks/closed_loop/report.py": (
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_recording.py",
+        "tests/tasks/test_missions.py",
+    ),
+    "tasks/closed_loop/recording.py": (
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_recording.py",
+        "tests/tasks/test_missions.py",
+    ),
+    "tasks/closed_loop/figures.py": (
         "tests/tasks/test_run_data.py",
         "tests/tasks/test_recording.py",
         "tests/tasks/test_missions.py",
@@ -290,10 +310,11 @@ OWN: list[Mutation] = [
         "paper000-gate-limits-dof-plus-one",
         "own",
         "dof",
-        "tasks/paper000/passage.py",
+        "nav/ekf.py",
         "*(gate_limit(gate_probability, d) for d in (1, 2, 3))",
         "*(gate_limit(gate_probability, d + 1) for d in (1, 2, 3))",
-        "seed 000's passage EKF gates 1, 2, 3 active components with 2, 3, 4 dof",
+        "seed 000's passage EKF (the update's fast path) gates 1, 2, 3 active components with "
+        "2, 3, 4 dof",
     ),
     Mutation(
         "nees-band-dof-plus-one",
@@ -308,7 +329,7 @@ OWN: list[Mutation] = [
         "mission-nees-band-dof-2",
         "own",
         "dof",
-        "tasks/closed_loop/report.py",
+        "tasks/closed_loop/recording.py",
         "(1 + probability) / 2]), 3)",
         "(1 + probability) / 2]), 2)",
         "the mission recording's NEES band of the 3-D position taken with 2 dof",
@@ -437,7 +458,7 @@ OWN: list[Mutation] = [
         "seed000-dr-accuracy-sin-cos-swapped",
         "own",
         "transpose",
-        "nav/accuracy.py",
+        "nav/usbl/accuracy.py",
         "sx2 = dt**2 * ((s * sigma_course_rad * np.cos(c)) ** 2"
         " + (sigma_speed_m_s * np.sin(c)) ** 2)",
         "sx2 = dt**2 * ((s * sigma_course_rad * np.sin(c)) ** 2"

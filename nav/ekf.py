@@ -390,3 +390,118 @@ def check_estimate(x: Array, P: Array, t_s: float) -> None:
     if bad.any():
         runs = np.flatnonzero(bad)[:5].tolist()
         raise FilterDivergedError(f"EKF diverged at t = {t_s:g} s in batch rows {runs}")
+
+
+# ----------------------------------------------------------------------------------------------
+# The update's fast path for many runs (:func:`update_packed3`): the same update for a 3-D state
+# measured in three components with a diagonal R (seed 000's USBL fixes of a position), written
+# out on a structure of arrays (component-major states, packed covariances), in place; equal to
+# :func:`update` to 1e-12 (tested) in a fraction of its time for thousands of runs.
+
+SYM3 = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+"""The (row, column) of each stored component of a packed symmetric 3 x 3 covariance (the
+layout of :func:`update_packed3`): 00, 01, 02, 11, 12, 22."""
+_IDX3 = ((0, 1, 2), (1, 3, 4), (2, 4, 5))  # _IDX3[i][j]: where P[i][j] is stored
+
+
+def update_packed3(
+    x: Array,
+    Pp: Array,
+    y: Array,
+    H: Array,
+    r_diag: Array,
+    active: NDArray[np.bool_],
+    present: NDArray[np.bool_],
+    gate_probability: float | None = None,
+) -> UpdateInfo:
+    """The update of :func:`update` (eq. 19-23, Joseph form, inactive components removed,
+    absent runs unchanged, chi-square gate) for a 3-D state measured in three components with a
+    diagonal ``R``, on a structure of arrays, in place: its fast path for many runs.
+
+    With that structure every matrix product of the update is a few products of length-n
+    vectors, so the state is kept component-major (``x[i]`` is component i of every run) and the
+    covariance as its upper triangle (``Pp[c]`` holds entry :data:`SYM3` ``[c]`` of every run):
+    an update is about 200 vector operations whatever n, where :func:`update` spends most of its
+    time in numpy's per-matrix dispatch of 3 x 3 products (seed 000's passage EKF over 1,000
+    runs of 600 ticks, fixes every 5 s, took 1.4x as long with :func:`update` at its fixes). The
+    numbers equal :func:`update`'s to rounding (tested to 1e-12 on random inputs); the
+    operations are written out in the order of eq. 20-23.
+
+    Args:
+        x: prior states, shape (3, n), updated in place.
+        Pp: prior covariances packed, shape (6, n) in the order of :data:`SYM3`, updated in
+            place.
+        y: innovations ``z - h(x)`` with angles already wrapped, shape (n, 3); rows of absent
+            runs may hold anything finite.
+        H: measurement Jacobians, shape (n, 3, 3).
+        r_diag: the diagonal of ``R``, shape (3,), each > 0.
+        active: components to use, shape (n, 3); an inactive component is removed exactly
+            (its H row and innovation are zeroed; R is diagonal, so no cross term remains).
+        present: runs that have a measurement, shape (n,).
+        gate_probability: if given, reject runs whose NIS exceeds the chi-square quantile of
+            this probability for their number of active components.
+
+    Returns:
+        The update's diagnostics (NIS NaN where nothing was measured; ``dof`` counts the active
+        components of present runs, 0 for absent runs).
+
+    Raises:
+        NavInputError: if a variance of ``R`` is <= 0 or an innovation covariance is not
+            positive definite.
+    """
+    r = np.asarray(r_diag, dtype=float)
+    if np.any(r <= 0):
+        raise NavInputError("measurement noise R must have positive variances")
+    act = active & present[:, None]
+    H = [[np.where(act[:, a], H[:, a, c], 0.0) for c in range(3)] for a in range(3)]
+    y = [np.where(act[:, a], y[:, a], 0.0) for a in range(3)]
+    P = [[Pp[_IDX3[i][j]] for j in range(3)] for i in range(3)]
+    PHt = [
+        [P[i][0] * H[a][0] + P[i][1] * H[a][1] + P[i][2] * H[a][2] for a in range(3)]
+        for i in range(3)
+    ]  # (state i, measurement a)
+    S = {}
+    for a, b in SYM3:  # eq. 20, upper triangle
+        S[a, b] = H[a][0] * PHt[0][b] + H[a][1] * PHt[1][b] + H[a][2] * PHt[2][b]
+        if a == b:
+            S[a, b] = S[a, b] + r[a]
+    (c00, c01, c02, c11, c12, c22), det = adjugate_sym3(*(S[ab] for ab in SYM3))
+    if np.any(det <= 0):
+        raise NavInputError("innovation covariance is not positive definite")
+    inv_det = 1.0 / det
+    Si = [[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]]
+    Si = [[v * inv_det for v in row] for row in Si]
+    Siy = [Si[a][0] * y[0] + Si[a][1] * y[1] + Si[a][2] * y[2] for a in range(3)]
+    nis = y[0] * Siy[0] + y[1] * Siy[1] + y[2] * Siy[2]
+    dof = act.sum(axis=1)
+    measured = dof > 0
+    rejected = np.zeros(len(dof), dtype=bool)
+    if gate_probability is not None:
+        limits = np.array([np.inf, *(gate_limit(gate_probability, d) for d in (1, 2, 3))])
+        rejected = measured & (nis > limits[dof])
+    applied = measured & ~rejected
+    K = [
+        [PHt[i][0] * Si[0][a] + PHt[i][1] * Si[1][a] + PHt[i][2] * Si[2][a] for a in range(3)]
+        for i in range(3)
+    ]  # eq. 21
+    A = [
+        [
+            (1.0 if i == c else 0.0) - (K[i][0] * H[0][c] + K[i][1] * H[1][c] + K[i][2] * H[2][c])
+            for c in range(3)
+        ]
+        for i in range(3)
+    ]  # I - K H
+    AP = [
+        [A[i][0] * P[0][c] + A[i][1] * P[1][c] + A[i][2] * P[2][c] for c in range(3)]
+        for i in range(3)
+    ]
+    new = []
+    for i, j in SYM3:  # eq. 23, Joseph form: (I - KH) P (I - KH)^T + K R K^T
+        v = AP[i][0] * A[j][0] + AP[i][1] * A[j][1] + AP[i][2] * A[j][2]
+        v = v + K[i][0] * r[0] * K[j][0] + K[i][1] * r[1] * K[j][1] + K[i][2] * r[2] * K[j][2]
+        new.append(v)
+    for i in range(3):  # eq. 22
+        np.copyto(x[i], x[i] + K[i][0] * y[0] + K[i][1] * y[1] + K[i][2] * y[2], where=applied)
+    for c in range(6):
+        np.copyto(Pp[c], new[c], where=applied)
+    return UpdateInfo(np.where(measured, nis, np.nan), dof, applied, rejected)

@@ -1,7 +1,7 @@
 """Seed 000 sections 2-3: analytic accuracy of USBL fixes and dead reckoning (Figures 3-6).
 
 Registers ``paper-000/accuracy``: no simulation, only the propagation of the devices' mean errors
-(:mod:`nav.accuracy`):
+(:mod:`nav.usbl.accuracy`):
 
 * Figure 3: map of the USBL mean error M_xy around the transceiver (eq. 5), 26.2 m at 500 m;
 * Figure 4: USBL mean error ellipse semi-axes against distance (eq. 6-7);
@@ -21,7 +21,7 @@ from pydantic import BaseModel, Field
 
 from bauv_sim.config import Config
 from bauv_sim.frames import unit_vector_scalar
-from nav import accuracy as acc
+from nav.usbl import accuracy as acc
 from tasks.core import style
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables

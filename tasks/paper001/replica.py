@@ -6,8 +6,8 @@ for CP1 (three random courses, the first two neither the same nor opposite) and 
 
 1. legs 1 and 2 in the kinematic world (:mod:`bauv_sim.kinematic.seed001`, eq. 27-29) on the direct
    courses, each from a GPS fix with DR restarted there (eq. 30-31), surfacing at its end;
-2. the correction procedure on the two legs' position errors (:func:`nav.correction.cp1` /
-   :func:`nav.correction.cp2`), and the baseline (current = (GPS - DR) / time) on leg 2;
+2. the correction procedure on the two legs' position errors (:func:`nav.surfacing.cp1` /
+   :func:`nav.surfacing.cp2`), and the baseline (current = (GPS - DR) / time) on leg 2;
 3. leg 3 on the direct course ``nu_3``, dead-reckoned uncorrected (eq. 30-31), with the CP's
    correction (eq. 32-33) and with the baseline's: Tables 1 and 2;
 4. leg 3 again (same random draws) on the compensated course of eq. 22-26 (CP2: three phases):
@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -41,55 +40,26 @@ from bauv_sim import rng as rng_mod
 from bauv_sim.config import Config
 from bauv_sim.frames import velocity_from_course_speed
 from bauv_sim.kinematic import seed001 as kin
-from nav import correction as corr
+from nav.angles import course_of, diff_course, unit_vector
+from nav.surfacing import (
+    CurrentResponse,
+    baseline,
+    compensated_course,
+    cp1,
+    cp2,
+    dr_track,
+    dr_velocity,
+)
 from tasks.core import store
 from tasks.core.registry import Experiment, ReportContext, ReportSummary, register
 from tasks.core.report import Table, write_metrics, write_tables
+from tasks.paper001.figures import replica_figures
+from tasks.paper001.paper import PAPER, PAPER_COLUMNS, paper_value
 
 Array = NDArray[np.float64]
 PROCEDURES = ("cp1", "cp2")
 DR_KINDS = ("nocp", "cp", "baseline")
 NAME = "paper-001/replica"
-
-# --------------------------------------------------------------------------------------------
-# The paper's Tables 1-3 (columns: (|Vg|, |Vc|) = (0.1, 0.1), (0.1, 0.5), (0.3, 0.1), (0.3, 0.5))
-
-PAPER_COLUMNS = ((0.1, 0.1), (0.1, 0.5), (0.3, 0.1), (0.3, 0.5))
-PAPER: dict[str, dict[tuple[str, float | None], tuple[float, ...]]] = {
-    "table1": {
-        ("nocp", None): (12.84, 47.96, 31.1, 43.19),
-        ("cp1", 5.0): (2.58, 10.9, 2.45, 11.4),
-        ("cp2", 5.0): (1.17, 4.68, 0.93, 4.42),
-        ("cp1", 20.0): (3.39, 8.33, 2.51, 10.6),
-        ("cp2", 20.0): (1.21, 4.57, 1.01, 5.4),
-    },
-    "table2": {
-        ("nocp", None): (18.83, 58.7, 38.61, 74.92),
-        ("cp1", 5.0): (6.07, 35.64, 15.69, 28.69),
-        ("cp2", 5.0): (2.74, 11.57, 1.87, 10.92),
-        ("cp1", 20.0): (15.89, 19.51, 8.77, 43.12),
-        ("cp2", 20.0): (2.24, 11.04, 2.49, 9.46),
-    },
-    "table3": {
-        ("nocp", None): (4.77, 13.29, 4.68, 16.52),
-        ("cp1", 5.0): (0.73, 2.92, 0.65, 3.45),
-        ("cp2", 5.0): (0.46, 2.31, 0.25, 2.4),
-        ("cp1", 20.0): (0.99, 2.7, 0.63, 4.04),
-        ("cp2", 20.0): (0.48, 3.34, 0.29, 2.2),
-    },
-}
-
-
-def paper_value(
-    table: str, method: str, beta_deg: float | None, vg: float, vc: float
-) -> float | None:
-    """The paper's value for a cell, or ``None`` where the paper has none."""
-    key = (method, None if method == "nocp" else beta_deg)
-    try:
-        col = next(i for i, c in enumerate(PAPER_COLUMNS) if np.allclose(c, (vg, vc)))
-        return PAPER[table][key][col]
-    except (StopIteration, KeyError):
-        return None
 
 
 # --------------------------------------------------------------------------------------------
@@ -231,10 +201,10 @@ def simulate_procedure(
 
     leg1 = leg(np.zeros((n, 2)), 1, nu[:, 0])
     leg2 = leg(leg1.pos_world_m[:, -1], 2, nu[:, 1])
-    dr_disp = va * T * corr.unit_vector(nu[:, :2])  # eq. 30-31 over each leg
+    dr_disp = va * T * unit_vector(nu[:, :2])  # eq. 30-31 over each leg
     delta = np.stack([leg1.displacement_world_m, leg2.displacement_world_m], axis=1) - dr_disp
     if procedure == "cp1":
-        est = corr.cp1(
+        est = cp1(
             delta,
             T,
             nu[:, :2],
@@ -243,17 +213,17 @@ def simulate_procedure(
             min_separation_rad=math.radians(scenario.cp1_min_course_separation_deg),
         )
     else:
-        est = corr.cp2(delta, T, nu[:, :2], response=corr.CurrentResponse(cfg.rho_s_cos_coeffs))
+        est = cp2(delta, T, nu[:, :2], response=CurrentResponse(cfg.rho_s_cos_coeffs))
     fix2 = leg2.pos_world_m[:, -1]
-    base = corr.baseline(fix2, leg2.pos_world_m[:, 0] + dr_disp[:, 1], T)
+    base = baseline(fix2, leg2.pos_world_m[:, 0] + dr_disp[:, 1], T)
 
     # leg 3 on the direct course: Tables 1-2
     leg3 = leg(fix2, 3, nu[:, 2])
     k = cfg.samples_per_leg
     dr = {
-        kind: corr.dr_track(
+        kind: dr_track(
             fix2,
-            np.broadcast_to(corr.dr_velocity(nu[:, 2], va, e)[:, None, :], (n, k, 2)),
+            np.broadcast_to(dr_velocity(nu[:, 2], va, e)[:, None, :], (n, k, 2)),
             cfg.sample_s,
         )
         for kind, e in (("nocp", None), ("cp", est), ("baseline", base))
@@ -261,13 +231,13 @@ def simulate_procedure(
     err = {kind: np.linalg.norm(dr[kind] - leg3.pos_world_m, axis=-1) for kind in DR_KINDS}
 
     # leg 3 on the compensated course (same draws): Table 3
-    sol_cp = corr.compensated_course(nu[:, 2], va, est)
-    sol_base = corr.compensated_course(nu[:, 2], va, base)
+    sol_cp = compensated_course(nu[:, 2], va, est)
+    sol_base = compensated_course(nu[:, 2], va, base)
     leg3_cp = leg(fix2, 3, sol_cp.course_rad)
     leg3_base = leg(fix2, 3, sol_base.course_rad)
 
     def deviation(lt: kin.LegTruth) -> Array:
-        return np.degrees(corr.diff_course(corr.course_of(lt.displacement_world_m), nu[:, 2]))
+        return np.degrees(diff_course(course_of(lt.displacement_world_m), nu[:, 2]))
 
     c_est3 = est.current_for_course(nu[:, 2])
     true_vs_world = velocity_from_course_speed(nu[:, 0] + vehicle.beta_rad, vehicle.vs_m_s)
@@ -316,7 +286,7 @@ def simulate_procedure(
                     "dr": {kind: dr[kind][i] for kind in DR_KINDS},
                     "nu_deg": np.degrees(nu[i]),
                     "alpha3_compensated_deg": float(np.degrees(sol_cp.course_rad[i])),
-                    "waypoint3": fix2[i] + cfg.leg_length_m * corr.unit_vector(nu[i, 2]),
+                    "waypoint3": fix2[i] + cfg.leg_length_m * unit_vector(nu[i, 2]),
                     "current_est": c_est3[i],
                     "current_baseline": base.current_world_m_s[i],
                     "current_true": leg3.mean_current_world_m_s[i],
@@ -576,7 +546,7 @@ def paper_fit_objective(
     """RMS over the paper's Table 1 and 3 means of ``log(ours / paper)``, each averaged over seeds.
 
     This is how the default hull response ``rho_s`` was chosen (see
-    :class:`nav.correction.CurrentResponse`)::
+    :class:`nav.surfacing.CurrentResponse`)::
 
         for a1, a2 in itertools.product(np.arange(0, 0.26, 0.05), repeat=2):
             sc = load_config(Paper001Scenario, {}, (), ["world.step_s=0.02",
@@ -594,185 +564,6 @@ def paper_fit_objective(
     runs = tuple(range(n_missions))
     logs = [paper_log_ratios(merge_blocks([simulate_block(scenario, s, runs)])) for s in seeds]
     return float(np.sqrt(np.mean(np.mean(logs, axis=0) ** 2)))
-
-
-# --------------------------------------------------------------------------------------------
-# Figures
-
-
-def _figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> list[str]:
-    """Tracks, leg-3 courses and the DR error along leg 3 (PNG and PDF, project style)."""
-    from tasks.core import style
-
-    with style.context():
-        return _draw(out_dir, block, scenario, style)
-
-
-def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style) -> list[str]:
-    files: list[str] = []
-    T = scenario.world.leg_duration_s
-    for tr in block.tracks:
-        fig, ax = style.subplots("page", 4.2)
-        truth = np.concatenate(tr["truth"])
-        ax.plot(truth[:, 0], truth[:, 1], "k-", lw=1.8, label="truth")
-        fixes = np.array([tr["truth"][0][0], tr["truth"][0][-1], tr["truth"][1][-1]])
-        ax.plot(
-            fixes[:, 0],
-            fixes[:, 1],
-            "o",
-            ms=8,
-            mfc="none",
-            mec=style.color("GPS"),
-            mew=2,
-            label="GPS fixes",
-        )
-        styles = {
-            "nocp": (style.color("DR"), "uncorrected DR (ends at way-point 3)"),
-            "cp": (style.color(tr["procedure"].upper()), f"{tr['procedure'].upper()}-corrected DR"),
-            "baseline": (style.color("baseline"), "baseline-corrected DR"),
-        }
-        for kind, (col, lab) in styles.items():
-            p = tr["dr"][kind]
-            ax.plot(p[:, 0], p[:, 1], "--", color=col, lw=1.5, label=lab)
-            ax.plot(p[-1, 0], p[-1, 1], "x", color=col, ms=8)
-        ax.plot(tr["truth"][2][-1, 0], tr["truth"][2][-1, 1], "ks", ms=6)
-        wp = tr["waypoint3"]
-        ax.plot(wp[0], wp[1], "*", color=style.color("waypoint"), ms=9, label="way-point 3")
-        # current vectors in an inset (m/s, from a common origin)
-        ins = ax.inset_axes((1.06, 0.0, 0.38, 0.38))
-        vecs = (
-            (tr["current_true"], "k", 6.0, 0.35, "true mean current, leg 3"),
-            (tr["current_baseline"], style.color("baseline"), 2.0, 1.0, "baseline estimate"),
-            (
-                tr["current_est"],
-                style.color(tr["procedure"].upper()),
-                2.0,
-                1.0,
-                f"{tr['procedure'].upper()} estimate",
-            ),
-        )
-        lim = 1.25 * max(float(np.hypot(*v)) for v, *_ in vecs) + 1e-3
-        for vec, col, lw, alpha, lab in vecs:
-            x, y = float(vec[0]), float(vec[1])
-            if lw > 3:  # the truth: a wide band with a dot at its tip, under the estimates
-                ins.plot([0, x], [0, y], "-", color=col, lw=lw, alpha=alpha, solid_capstyle="butt")
-                ins.plot([x], [y], "o", color=col, alpha=alpha, ms=lw)
-            else:
-                ins.quiver(
-                    0, 0, x, y, angles="xy", scale_units="xy", scale=1.0, color=col, width=0.012
-                )
-            ax.plot([], [], "-", color=col, lw=lw, alpha=alpha, label=f"current: {lab}")
-        ins.set_xlim(-lim, lim)
-        ins.set_ylim(-lim, lim)
-        ins.set_aspect("equal")
-        ins.axhline(0, color="0.8", lw=0.5)
-        ins.axvline(0, color="0.8", lw=0.5)
-        ins.tick_params(labelsize=6)
-        ins.set_title("current (m/s)", fontsize=7)
-        vg, vc, b = tr["cell"]
-        ax.set_title(
-            f"Seed 001 {tr['procedure'].upper()} mission {tr['run']}: |Vg|={vg:g} m/s, "
-            f"|Vc|={vc:g} m/s, $\\beta$={b:g}°\ncourses "
-            f"{', '.join(f'{c:.0f}' for c in tr['nu_deg'])} deg; DR restarted at each fix"
-        )
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
-        name = f"tracks-{tr['procedure']}-mission{tr['run']}.png"
-        files += style.save(fig, out_dir / name)
-
-        # Table 3: direct vs compensated leg 3
-        fig, ax = style.subplots("column", 3.4)
-        start = tr["truth"][2][0]
-        ax.plot(
-            [start[0], wp[0]],
-            [start[1], wp[1]],
-            ":",
-            color=style.color("waypoint"),
-            lw=2,
-            label=f"desired track $\\nu$ = {tr['nu_deg'][2]:.0f}°",
-        )
-        ax.plot(
-            tr["truth"][2][:, 0],
-            tr["truth"][2][:, 1],
-            "-",
-            color=style.color("DR"),
-            label="steering $\\nu$ (without CP)",
-        )
-        ax.plot(
-            tr["truth_compensated"][:, 0],
-            tr["truth_compensated"][:, 1],
-            "-",
-            color=style.color(tr["procedure"].upper()),
-            label=f"steering eq. 22-26 with {tr['procedure'].upper()} "
-            f"($\\alpha$ = {tr['alpha3_compensated_deg']:.1f}°)",
-        )
-        ax.plot(
-            tr["truth_compensated_baseline"][:, 0],
-            tr["truth_compensated_baseline"][:, 1],
-            "-",
-            color=style.color("baseline"),
-            label="steering eq. 22-26 with baseline current",
-        )
-        ax.plot(wp[0], wp[1], "*", color=style.color("waypoint"), ms=9)
-        ax.set_title(
-            f"Seed 001 Table 3, {tr['procedure'].upper()} mission {tr['run']}: true leg-3 tracks\n"
-            f"(each leg lasts {T:g} s; a faster track runs past the way-point)"
-        )
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        name = f"course-{tr['procedure']}-mission{tr['run']}.png"
-        files += style.save(fig, out_dir / name)
-
-    # mean DR error along leg 3, figure cell
-    fig_cell = tuple(scenario.report.figure_cell)
-    if fig_cell in block.cells:
-        ci = block.cells.index(fig_cell)
-        fig, ax = style.subplots("page", 3.0)
-        t = np.linspace(0.0, T, scenario.world.samples_per_leg + 1)
-        d = block.data
-        for key, procs, col, lab in (
-            ("error_curve_nocp_m", [0, 1], style.color("DR"), "uncorrected DR"),
-            ("error_curve_baseline_m", [0, 1], style.color("baseline"), "baseline"),
-            ("error_curve_cp_m", [0], style.color("CP1"), "CP1"),
-            ("error_curve_cp_m", [1], style.color("CP2"), "CP2"),
-        ):
-            curves = d[key][:, ci, procs].reshape(-1, t.size)[:, 1:]  # t > 0: log axis
-            ax.plot(
-                t[1:],
-                curves.mean(axis=0),
-                color=col,
-                lw=1.3,
-                ls="-." if lab == "baseline" else "-",
-                label=f"{lab} (mean)",
-            )
-            ax.fill_between(
-                t[1:],
-                np.percentile(curves, 10, axis=0),
-                np.percentile(curves, 90, axis=0),
-                color=col,
-                alpha=0.12,
-            )
-        vg, vc, b = fig_cell
-        ax.set_title(
-            f"Seed 001: DR error on leg 3, after the correction\n|Vg| = {vg:g} m/s, "
-            f"|Vc| = {vc:g} m/s, $\\beta$ = {b:g}°; {len(block.runs)} missions, mean and "
-            "10-90 % band",
-            loc="left",
-        )
-        ax.set_yscale("log")  # the corrected DR's metres beside the uncorrected tens of metres
-        style.log_ticks(ax)
-        ax.set_xlabel("time since the fix at way-point 2 (s)")
-        ax.set_ylabel("|DR - truth| (m)")
-        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
-        name = "error-along-leg3.png"
-        files += style.save(fig, out_dir / name)
-    return files
 
 
 # --------------------------------------------------------------------------------------------
@@ -825,7 +616,7 @@ class Paper001Replica(Experiment):
         )
         files.append(write_metrics(ctx.out_dir, metrics))
         if scenario.report.figures:
-            files += _figures(ctx.out_dir, block, scenario)
+            files += replica_figures(ctx.out_dir, block, scenario)
         text = "\n".join(t.to_text() for t in tables)
         ordering = "yes" if not failed else "NO: " + "; ".join(failed)
         text += (

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from nav import accuracy as acc
+from nav.usbl import accuracy as acc
 
 
 def test_usbl_mean_error_at_500_m_is_26_2():

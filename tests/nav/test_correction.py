@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from nav import correction as corr
+from nav import surfacing as corr
 from nav.angles import course_of, wrap_pi
 from nav.errors import NavInputError
 

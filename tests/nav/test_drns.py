@@ -5,9 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from nav.correction import CurrentResponse
-from nav.drns import CorrectedDeadReckoning
 from nav.errors import NavInputError
+from nav.surfacing import CorrectedDeadReckoning, CurrentResponse
 
 
 def fly(drns, truth, t, course_deg, seconds, speed_odo, vel_true, dt=0.1):

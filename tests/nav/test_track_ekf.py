@@ -1,13 +1,14 @@
-"""The structure-of-arrays EKF of seed 000 against the stacked-matrix EKF of nav.ekf (itself
-tested against filterpy), with inactive components, absent fixes and the gate."""
+"""The structure-of-arrays EKF of seed 000 (nav.usbl.tracks, its updates nav.ekf's fast path
+update_packed3) against the stacked-matrix EKF of nav.ekf (itself tested against filterpy), with
+inactive components, absent fixes and the gate; and the fast path against nav.ekf.update."""
 
 import numpy as np
 import pytest
 
-from nav import track_ekf
-from nav.ekf import BatchEKF, gate_limit
+from nav.ekf import SYM3, BatchEKF, update, update_packed3
 from nav.errors import NavInputError
 from nav.models import CourseSpeedDepthMotion, UsblMeasurement
+from nav.usbl import tracks as track_ekf
 
 MOTION = CourseSpeedDepthMotion(np.radians(8.0), 0.26, 0.05)
 # the azimuth is left out within 15 m of the vertical: many fixes have two components
@@ -59,8 +60,7 @@ def _stacked(u, x0, P0, fix_tick, z, present, gate):
 def test_tracks_equal_the_stacked_matrix_ekf(gate):
     u, x0, P0, fix_tick, z, present = _case()
     inc, Q = MOTION.increment_and_packed_Q(u, 1.0)
-    limits = None if gate is None else np.array([np.inf, *(gate_limit(gate, d) for d in (1, 2, 3))])
-    tr = track_ekf.ekf_tracks(x0, P0, inc, Q, fix_tick, z, present, USBL, limits)
+    tr = track_ekf.ekf_tracks(x0, P0, inc, Q, fix_tick, z, present, USBL, gate)
     xs, Ps, nis, rej = _stacked(u, x0, P0, fix_tick, z, present, gate)
     np.testing.assert_allclose(tr.positions(), xs, rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(tr.covariances(), Ps, rtol=1e-12, atol=1e-9)
@@ -108,3 +108,52 @@ def test_usbl_linearisation_at_once_is_h_H_and_active():
     h, H, act = USBL.linearise(x)
     assert np.array_equal(h, USBL.h(x)) and np.array_equal(H, USBL.H(x))
     assert np.array_equal(act, USBL.active(x)) and not act[:3, 1].any()
+
+
+def _random_update_case(seed, n=400):
+    g = np.random.default_rng(seed)
+    A = g.normal(0.0, 3.0, (n, 3, 3))
+    P = A @ np.swapaxes(A, 1, 2) + 0.05 * np.eye(3)
+    x = g.normal(0.0, 50.0, (n, 3))
+    H = np.eye(3) + g.normal(0.0, 0.3, (n, 3, 3))  # well conditioned: S far from singular
+    y = g.normal(0.0, 2.0, (n, 3))
+    r = g.uniform(0.01, 4.0, 3)
+    active = g.random((n, 3)) < 0.7
+    active[:5] = False  # runs with no active component
+    present = g.random(n) < 0.85
+    return x, P, y, H, r, active, present
+
+
+@pytest.mark.parametrize("gate", [None, 0.9])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_fast_path_equals_the_update_on_random_inputs(seed, gate):
+    x, P, y, H, r, active, present = _random_update_case(seed)
+    want_x, want_P, want = update(x, P, y, H, np.diag(r), active, present, gate)
+    xs = np.ascontiguousarray(x.T)
+    Pp = np.stack([P[:, i, j] for i, j in SYM3])
+    info = update_packed3(xs, Pp, y, H, r, active, present, gate)
+    np.testing.assert_allclose(xs.T, want_x, rtol=1e-12, atol=1e-12 * np.abs(x).max())
+    got_P = np.empty_like(P)
+    for c, (i, j) in enumerate(SYM3):
+        got_P[:, i, j] = got_P[:, j, i] = Pp[c]
+    np.testing.assert_allclose(got_P, want_P, rtol=1e-12, atol=1e-12 * np.abs(P).max())
+    np.testing.assert_allclose(info.nis, want.nis, rtol=1e-12)
+    assert np.array_equal(np.isnan(info.nis), np.isnan(want.nis))
+    assert np.array_equal(info.dof, np.where(present, want.dof, 0))  # absent: nothing active
+    assert np.array_equal(info.applied, want.applied)
+    assert np.array_equal(info.rejected, want.rejected)
+    assert want.applied.sum() > n_min(x) and (~want.applied).sum() > 0
+    if gate is not None:
+        assert 0 < want.rejected.sum() < present.sum()
+
+
+def n_min(x):
+    """At least a quarter of the runs must be updated for the comparison to say something."""
+    return len(x) // 4
+
+
+def test_the_fast_path_refuses_a_non_positive_variance():
+    x, P, y, H, _r, active, present = _random_update_case(4, n=10)
+    Pp = np.stack([P[:, i, j] for i, j in SYM3])
+    with pytest.raises(NavInputError, match="positive variances"):
+        update_packed3(x.T.copy(), Pp, y, H, np.array([1.0, 0.0, 1.0]), active, present)

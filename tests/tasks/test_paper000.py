@@ -8,7 +8,9 @@ import pytest
 
 from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
-from tasks.paper000 import passage as paper000
+from tasks.paper000 import run as paper000
+from tasks.paper000.paper import PAPER_TABLES
+from tasks.paper000.scenario import Paper000Scenario
 
 FAST = ["report.figures=false", "report.recording=false"]
 GAUSSIAN = ["initial_error.distribution=gaussian"] + [
@@ -40,7 +42,7 @@ def test_hundred_passages_within_25_percent_of_the_paper(test, tmp_path):
     out = tmp_path / "run"
     run(f"paper-000/{test}", n_runs=100, seed=0, out_dir=out, overrides=FAST, progress=False)
     m = _metrics(out)
-    _, paper = paper000.PAPER_TABLES[test]["hundred"]
+    _, paper = PAPER_TABLES[test]["hundred"]
     for method in ("EKF", "DR", "USBL"):
         mean = m["passages"][method]["mean_m"]
         assert mean == pytest.approx(paper[method][2], rel=0.25), (test, method, mean)
@@ -145,7 +147,7 @@ def test_usbl_range_limit_and_dropouts_reduce_availability(tmp_path):
     m = _metrics(out)
     # beyond 200 m slant range there are no fixes: with the passage geometry, fixes exist only
     # while the horizontal distance is below sqrt(200^2 - 3^2)
-    scn = paper000.Paper000Scenario()
+    scn = Paper000Scenario()
     from bauv_sim.kinematic.passage import straight_passage
 
     tr = straight_passage(scn.passage, scn.transceiver)
@@ -162,7 +164,7 @@ def test_the_shipped_ekf_equals_filterpy_on_real_passages():
     from filterpy.kalman import ExtendedKalmanFilter
 
     from tasks.core.runner import plan_batch
-    from tasks.paper000.passage import measure_passages, run_ekf
+    from tasks.paper000.run import measure_passages, run_ekf
 
     scn = plan_batch("paper-000/test-1").scenario
     inp = measure_passages(scn, 3, (0, 1, 2))
@@ -228,7 +230,7 @@ def test_only_the_papers_setting_is_compared_with_the_paper(tmp_path):
     m_on, m_off = _metrics(on), _metrics(off)
     assert m_on["paper_setting"] == "paper" and m_on["paper_table"] == "Table 4"
     assert m_on["mean_ratio_to_paper"]["EKF"] == pytest.approx(
-        m_on["passages"]["EKF"]["mean_m"] / paper000.PAPER_TABLES["test-1"]["hundred"][1]["EKF"][2]
+        m_on["passages"]["EKF"]["mean_m"] / PAPER_TABLES["test-1"]["hundred"][1]["EKF"][2]
     )
     assert m_on["single_passages"][0]["paper_table"] == "Table 1"
     assert m_off["paper_setting"] == "passage.speed_m_s"
@@ -258,7 +260,7 @@ def test_a_passage_straight_over_the_transceiver_keeps_the_ekf_on_track():
     top (azimuth + 180 deg). The EKF must take them in the prediction's chart: no azimuth
     innovation beyond 90 deg, and no jump of its error at the zenith (before the fold was
     handled, the mean error rose from 1 m to 8.6 m at t = 303 s with 50 passages)."""
-    from tasks.paper000.passage import measure_passages, run_ekf
+    from tasks.paper000.run import measure_passages, run_ekf
 
     scn = plan_batch("paper-000/test-1", overrides=OVERHEAD).scenario
     inp = measure_passages(scn, 0, tuple(range(50)))
@@ -287,7 +289,7 @@ def test_the_passage_gate_rejects_exactly_beyond_the_chi_square_quantile():
     and the quantile of 4 (9.49), so one degree of freedom too many would show."""
     from scipy.stats import chi2
 
-    from tasks.paper000.passage import measure_passages, run_ekf
+    from tasks.paper000.run import measure_passages, run_ekf
 
     scn = plan_batch("paper-000/test-1").scenario
     inp = measure_passages(scn, 3, tuple(range(20)))

@@ -1,21 +1,21 @@
-"""Seed 000's EKF over many passages at once, written for throughput.
+"""Seed 000's EKF over many passages at once, written for throughput, and the reductions of its
+tracks that are metrics (distance to a reference, NEES, the 1-sigma radius).
 
 The filter is the one of :mod:`nav.ekf` (seed 000 eq. 17-23, Joseph form, inactive components
 left out, optional chi-square gate) for its particular structure: a 3-D position state whose
 state Jacobian is the identity (eq. 17-18: ``x- = x + inc``, ``P- = P + Q``) and a measurement
 of three components with a diagonal noise ``R`` (the USBL's range, azimuth and elevation, eq.
-15 and 20). With that structure every matrix product of the update is a few products of
-length-n vectors, so the tracks are kept as a *structure of arrays*: the time axis first, then
-the component, then the passages,
+15 and 20). With that structure every matrix product is a few products of length-n vectors, so
+the tracks are kept as a *structure of arrays*: the time axis first, then the component, then
+the passages,
 
 - states ``xs``, shape (T + 1, 3, n): ``xs[k, i]`` is component i of every passage at tick k;
 - covariances ``Ps``, shape (T + 1, 6, n), the upper triangle in the order of :data:`SYM`
   (00, 01, 02, 11, 12, 22).
 
 Each tick's prediction is then one contiguous addition for the states and one for the
-covariances, and an update is about 200 vector operations whatever n, where the stacked-matrix
-form of :func:`nav.ekf.update` spends most of its time in numpy's per-matrix dispatch of
-3 x 3 products. The numbers equal :func:`nav.ekf.update` and filterpy's ``ExtendedKalmanFilter``
+covariances, and each update is :func:`nav.ekf.update_packed3`, the one update's fast path for
+this layout. The numbers equal :func:`nav.ekf.update` and filterpy's ``ExtendedKalmanFilter``
 to rounding (tested to 1e-9 against filterpy stepped tick by tick).
 """
 
@@ -27,14 +27,15 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from nav.ekf import adjugate_sym3
+from nav.ekf import SYM3, adjugate_sym3, update_packed3
 from nav.errors import FilterDivergedError, NavInputError
+from nav.models import TIME_CHUNK
 
 Array = NDArray[np.float64]
 
-SYM = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-"""The (row, column) of each stored component of a symmetric 3 x 3 covariance."""
-_IDX = ((0, 1, 2), (1, 3, 4), (2, 4, 5))  # _IDX[i][j]: where P[i][j] is stored
+SYM = SYM3
+"""The (row, column) of each stored component of a symmetric 3 x 3 covariance
+(:data:`nav.ekf.SYM3`)."""
 
 
 class ThreeComponentMeasurement(Protocol):
@@ -113,7 +114,7 @@ def ekf_tracks(
     z: Array,
     present: NDArray[np.bool_],
     model: ThreeComponentMeasurement,
-    gate_limits: Array | None = None,
+    gate_probability: float | None = None,
 ) -> Tracks:
     """Run the EKF over n passages of T ticks (seed 000 eq. 17-23, F = I).
 
@@ -128,8 +129,8 @@ def ekf_tracks(
         z: measurements, shape (n, k, 3); rows where ``present`` is False may hold anything.
         present: which passages have each measurement, shape (n, k).
         model: the measurement model; its ``R`` must be diagonal.
-        gate_limits: chi-square limits of the NIS by number of active components, shape (4,)
-            (index 0 unused), or None for no gate.
+        gate_probability: the chi-square gate on the NIS (e.g. 0.99; the quantile for each
+            fix's number of active components), or None for no gate.
 
     Returns:
         The tracks.
@@ -157,7 +158,7 @@ def ekf_tracks(
         j = fix_at.get(k + 1)
         if j is not None:
             nis[:, j], rejected[:, j] = _update(
-                xs[k + 1], Ps[k + 1], model, z[:, j], present[:, j], r_diag, gate_limits
+                xs[k + 1], Ps[k + 1], model, z[:, j], present[:, j], r_diag, gate_probability
             )
     if not (np.isfinite(xs[T]).all() and np.isfinite(Ps[T]).all()):
         bad = np.flatnonzero(~(np.isfinite(xs[T]).all(0) & np.isfinite(Ps[T]).all(0)))
@@ -172,9 +173,9 @@ def _update(
     z: Array,
     present: NDArray[np.bool_],
     r: Array,
-    gate_limits: Array | None,
+    gate_probability: float | None,
 ) -> tuple[Array, NDArray[np.bool_]]:
-    """One update of all passages in place (eq. 19-23, Joseph form).
+    """One update of all passages in place (eq. 19-23: :func:`nav.ekf.update_packed3`).
 
     Args:
         x: states, shape (3, n), updated in place.
@@ -183,7 +184,7 @@ def _update(
         z: measurements, shape (n, 3).
         present: shape (n,).
         r: the diagonal of R, shape (3,).
-        gate_limits: see :func:`ekf_tracks`.
+        gate_probability: see :func:`ekf_tracks`.
 
     Returns:
         ``(nis (n,), rejected (n,))``; NIS NaN where nothing was measured.
@@ -193,58 +194,57 @@ def _update(
         hx, Hm, act = model.linearise(xt)
     else:
         hx, Hm, act = model.h(xt), model.H(xt), model.active(xt)
-    act = act & present[:, None]
-    y_all = model.residual(np.where(present[:, None], z, hx), hx)
-    # inactive components leave the update exactly: their H rows and innovations are zero (R is
-    # diagonal, so no cross term remains), as nav.ekf.update does
-    H = [[np.where(act[:, a], Hm[:, a, c], 0.0) for c in range(3)] for a in range(3)]
-    y = [np.where(act[:, a], y_all[:, a], 0.0) for a in range(3)]
-    P = [[Pp[_IDX[i][j]] for j in range(3)] for i in range(3)]
-    PHt = [
-        [P[i][0] * H[a][0] + P[i][1] * H[a][1] + P[i][2] * H[a][2] for a in range(3)]
-        for i in range(3)
-    ]  # (state i, measurement a)
-    S = {}
-    for a, b in SYM:  # eq. 20, upper triangle
-        S[a, b] = H[a][0] * PHt[0][b] + H[a][1] * PHt[1][b] + H[a][2] * PHt[2][b]
-        if a == b:
-            S[a, b] = S[a, b] + r[a]
-    (c00, c01, c02, c11, c12, c22), det = adjugate_sym3(*(S[ab] for ab in SYM))
-    if np.any(det <= 0):
-        raise NavInputError("innovation covariance is not positive definite")
-    inv_det = 1.0 / det
-    Si = [[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]]
-    Si = [[v * inv_det for v in row] for row in Si]
-    Siy = [Si[a][0] * y[0] + Si[a][1] * y[1] + Si[a][2] * y[2] for a in range(3)]
-    nis = y[0] * Siy[0] + y[1] * Siy[1] + y[2] * Siy[2]
-    dof = act.sum(axis=1)
-    measured = dof > 0
-    rejected = np.zeros(len(dof), dtype=bool)
-    if gate_limits is not None:
-        rejected = measured & (nis > np.asarray(gate_limits)[dof])
-    applied = measured & ~rejected
-    K = [
-        [PHt[i][0] * Si[0][a] + PHt[i][1] * Si[1][a] + PHt[i][2] * Si[2][a] for a in range(3)]
-        for i in range(3)
-    ]  # eq. 21
-    A = [
-        [
-            (1.0 if i == c else 0.0) - (K[i][0] * H[0][c] + K[i][1] * H[1][c] + K[i][2] * H[2][c])
-            for c in range(3)
-        ]
-        for i in range(3)
-    ]  # I - K H
-    AP = [
-        [A[i][0] * P[0][c] + A[i][1] * P[1][c] + A[i][2] * P[2][c] for c in range(3)]
-        for i in range(3)
-    ]
-    new = []
-    for i, j in SYM:  # eq. 23, Joseph form: (I - KH) P (I - KH)^T + K R K^T
-        v = AP[i][0] * A[j][0] + AP[i][1] * A[j][1] + AP[i][2] * A[j][2]
-        v = v + K[i][0] * r[0] * K[j][0] + K[i][1] * r[1] * K[j][1] + K[i][2] * r[2] * K[j][2]
-        new.append(v)
-    for i in range(3):  # eq. 22
-        np.copyto(x[i], x[i] + K[i][0] * y[0] + K[i][1] * y[1] + K[i][2] * y[2], where=applied)
-    for c in range(6):
-        np.copyto(Pp[c], new[c], where=applied)
-    return np.where(measured, nis, np.nan), rejected
+    y = model.residual(np.where(present[:, None], z, hx), hx)
+    info = update_packed3(x, Pp, y, Hm, r, act, present, gate_probability)
+    return info.nis, info.rejected
+
+
+# ----------------------------------------------------------------------------------------------
+# Reductions of tracks that are metrics
+
+
+def horizontal_distance_tm(pos: Array, ref: Array) -> Array:
+    """Horizontal distance of tracks to a reference, ``sqrt(de^2 + dn^2)``, shape (n, T + 1), m.
+
+    Args:
+        pos: positions, shape (n, T + 1, 3), m, world: a view of time-major (T + 1, 3, n) tracks
+            (as :meth:`Tracks.positions`), which this reads in its time-major order.
+        ref: the reference, shape (T + 1, 3), m, world.
+
+    A few dozen ticks at a time on the time-major layout, so the temporaries stay in cache (the
+    numbers of :func:`nav.metrics.horizontal_distance` to rounding: a square root of the sum of
+    squares rather than ``hypot``, 5x faster).
+    """
+    tm = pos.transpose(1, 2, 0)  # (T + 1, 3, n)
+    out = np.empty(tm.shape[::2])
+    for a in range(0, len(out), TIME_CHUNK):
+        b = a + TIME_CHUNK
+        de = tm[a:b, 0] - ref[a:b, 0, None]
+        dn = tm[a:b, 1] - ref[a:b, 1, None]
+        de *= de
+        dn *= dn
+        de += dn
+        np.sqrt(de, out=out[a:b])
+    return out.T
+
+
+def nees_tm(xs: Array, Pp: Array, ref: Array) -> Array:
+    """NEES ``e^T P^-1 e`` of time-major tracks against a reference, shape (n, T + 1).
+
+    Args:
+        xs: states, shape (T + 1, 3, n), m, world.
+        Pp: packed covariances, shape (T + 1, 6, n), m^2, order :data:`SYM`.
+        ref: the reference (truth), shape (T + 1, 3), m, world.
+    """
+    out = np.empty(xs.shape[::2])
+    for a in range(0, len(out), TIME_CHUNK):  # a few dozen ticks at a time: in the cache
+        b = a + TIME_CHUNK
+        err = np.moveaxis(xs[a:b] - ref[a:b, :, None], 1, 0)  # (3, ticks, n)
+        out[a:b] = nees_packed(err, np.moveaxis(Pp[a:b], 1, 0))
+    return out.T
+
+
+def sigma_h(Pp: Array) -> Array:
+    """The horizontal 1-sigma radius ``sqrt(P_ee + P_nn)`` of packed covariance tracks
+    (T + 1, 6, ...), shape (T + 1, ...), m (seed 000 eq. 11's mean error of the estimate)."""
+    return np.sqrt(np.maximum(Pp[:, 0] + Pp[:, 3], 0.0))
