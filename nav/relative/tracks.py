@@ -42,13 +42,13 @@ class LeaderRanges:
     leader_m: Array
 
     def __post_init__(self) -> None:
-        K = len(self.fix_tick)
+        n_fix = len(self.fix_tick)
         n = self.range_m.shape[0] if np.ndim(self.range_m) == 2 else -1
         shapes = (np.shape(self.range_m), np.shape(self.present), np.shape(self.leader_m))
-        if n < 0 or shapes != ((n, K), (n, K), (n, K, 2)):
+        if n < 0 or shapes != ((n, n_fix), (n, n_fix), (n, n_fix, 2)):
             raise NavInputError(
                 f"LeaderRanges: range_m (n, K), present (n, K) and leader_m (n, K, 2) with K = "
-                f"{K} ranges, not shapes {shapes}"
+                f"{n_fix} ranges, not shapes {shapes}"
             )
 
 
@@ -157,17 +157,17 @@ def ga_track(
     pos = dr.position_m
     n = pos.shape[0]
     rows = np.arange(n)
-    K = len(ranges.fix_tick)
+    n_fix = len(ranges.fix_tick)
     anchor = pos[:, 0].copy()  # the estimate at the last accepted fix
     prev = np.zeros(n, dtype=np.intp)  # tick of the last accepted fix
-    offsets = np.zeros((n, K + 1, 2))
-    fix_pos = np.empty((n, K, 2))
-    fix_cov = np.empty((n, K, 2, 2))
-    fix_prior = np.empty((n, K, 2, 2))
-    accepted = np.zeros((n, K), dtype=bool)
-    hd = np.zeros((n, K))
-    short = np.zeros((n, K), dtype=bool)
-    high = np.zeros((n, K), dtype=bool)
+    offsets = np.zeros((n, n_fix + 1, 2))
+    fix_pos = np.empty((n, n_fix, 2))
+    fix_cov = np.empty((n, n_fix, 2, 2))
+    fix_prior = np.empty((n, n_fix, 2, 2))
+    accepted = np.zeros((n, n_fix), dtype=bool)
+    hd = np.zeros((n, n_fix))
+    short = np.zeros((n, n_fix), dtype=bool)
+    high = np.zeros((n, n_fix), dtype=bool)
     for j, t in enumerate(ranges.fix_tick):
         since = dr.displacement(t, prev)
         cov = dr.covariance_between(t, prev)
@@ -229,18 +229,18 @@ def ekf_track(dr: DeadReckonedTrack, ranges: LeaderRanges, options: RangeEkfOpti
     _check(dr, ranges)
     pos = dr.position_m
     n = pos.shape[0]
-    K = len(ranges.fix_tick)
+    n_fix = len(ranges.fix_tick)
     x = pos[:, 0].copy()
     x_last = x  # the estimate after the previous range: the start of the HDOP's DR segment
     P = np.broadcast_to(np.eye(2) * options.initial_sigma_m**2, (n, 2, 2)).copy()
     F = np.broadcast_to(np.eye(2), (n, 2, 2))
     prev = 0
-    offsets = np.zeros((n, K + 1, 2))
-    fix_pos = np.empty((n, K, 2))
-    fix_cov = np.empty((n, K, 2, 2))
-    accepted = np.zeros((n, K), dtype=bool)
-    hd = np.zeros((n, K))
-    short = np.zeros((n, K), dtype=bool)
+    offsets = np.zeros((n, n_fix + 1, 2))
+    fix_pos = np.empty((n, n_fix, 2))
+    fix_cov = np.empty((n, n_fix, 2, 2))
+    accepted = np.zeros((n, n_fix), dtype=bool)
+    hd = np.zeros((n, n_fix))
+    short = np.zeros((n, n_fix), dtype=bool)
     leader_cov = None
     if options.leader_sigma_m > 0:
         leader_cov = np.broadcast_to(np.eye(2) * options.leader_sigma_m**2, (n, 2, 2))
@@ -275,5 +275,5 @@ def ekf_track(dr: DeadReckonedTrack, ranges: LeaderRanges, options: RangeEkfOpti
         accepted,
         hd,
         short,
-        np.zeros((n, K), dtype=bool),
+        np.zeros((n, n_fix), dtype=bool),
     )

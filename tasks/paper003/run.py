@@ -200,10 +200,10 @@ def _consistency(s: Samples, row: str) -> Array:
 def _fix_stats(s: Samples, name: str, t_end_s: float) -> tuple[Array, Array]:
     f = s.fixed[name]
     m = s.meas
-    K = len(m.fix_tick)
+    n_fix = len(m.fix_tick)
     stats = np.stack(
         [
-            np.full(len(s.runs), K, dtype=float),
+            np.full(len(s.runs), n_fix, dtype=float),
             m.range_produced.sum(1),
             f.accepted.sum(1),
             f.refused_short.sum(1),
