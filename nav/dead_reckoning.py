@@ -7,8 +7,12 @@ corrected velocity, :func:`nav.correction.dr_velocity`). Two forms:
 
 * :func:`track`, batched over runs and steps: the start plus the cumulative sum of the
   displacements (``F = I``, so no time loop), also used for the covariance (eq. 9-10: ``P0`` plus
-  the cumulative sum of the per-step ``Q``); :func:`dead_reckon` is seed 000's DR with it;
-* :class:`DeadReckoning`, online, one step at a time (the navigator's DR, seed 001's DRNS).
+  the cumulative sum of the per-step ``Q``); :func:`dead_reckon` is seed 000's DR with it and
+  :func:`track_with_covariance` the general form (seed 003's DR with its eq. 5 covariance,
+  :func:`nav.relative.dr_track`), returning a :class:`DeadReckonedTrack`;
+* :func:`step`, one step of a batch (``x + dx``), and :class:`DeadReckoning`, online, one step at
+  a time, optionally with the covariance accumulated beside the position (the navigator's DR,
+  seed 001's DRNS, seed 003's follower).
 
 The two sum in different orders (the cumulative sum adds the displacements before the start, the
 online form adds each one to the position), so they agree to rounding, not bit for bit.
@@ -16,9 +20,12 @@ online form adds each one to the position), so they agree to rounding, not bit f
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from nav.errors import NavInputError
 from nav.models import CourseSpeedDepthMotion
 
 Array = NDArray[np.float64]
@@ -39,8 +46,88 @@ def track(start: ArrayLike, increments: ArrayLike) -> Array:
     inc = np.asarray(increments, dtype=float)
     out = np.empty((inc.shape[0], inc.shape[1] + 1, *inc.shape[2:]))
     out[:, 0] = s
-    out[:, 1:] = s[:, None] + np.cumsum(inc, axis=1)
+    np.cumsum(inc, axis=1, out=out[:, 1:])  # in place: no temporary of the track's size
+    out[:, 1:] += s[:, None]
     return out
+
+
+def step(position: ArrayLike, increment: ArrayLike) -> Array:
+    """One dead-reckoning step of a batch: ``x_{k+1} = x_k + dx_k``.
+
+    Args:
+        position: positions at step k, shape (n, d) (or any shape), m.
+        increment: the step's displacement, the same shape (or broadcastable), m.
+
+    Returns:
+        Positions at step k + 1, shape of the broadcast, m.
+    """
+    return np.asarray(position, dtype=float) + increment
+
+
+@dataclass(frozen=True)
+class DeadReckonedTrack:
+    """Dead-reckoned tracks of a batch of runs with the covariance accumulated along them.
+
+    Attributes:
+        position_m: positions at samples 0..T, shape (n, T + 1, d), m.
+        cov_m2: the start covariance plus the per-step covariances summed to each sample, shape
+            (n, T + 1, d, d), m^2 (the covariance accumulated between samples j and k is
+            ``cov_m2[:, k] - cov_m2[:, j]``, :meth:`covariance_between`).
+    """
+
+    position_m: Array
+    cov_m2: Array
+
+    def displacement(self, k: int | NDArray[np.intp], j: int | NDArray[np.intp]) -> Array:
+        """DR displacement from sample ``j`` to sample ``k`` of every run, shape (n, d), m.
+
+        Args:
+            k, j: samples, ints or per-run arrays of shape (n,).
+        """
+        rows = np.arange(self.position_m.shape[0])
+        return self.position_m[rows, k] - self.position_m[rows, j]
+
+    def covariance_between(self, k: int | NDArray[np.intp], j: int | NDArray[np.intp]) -> Array:
+        """Covariance accumulated from sample ``j`` to sample ``k``, shape (n, d, d), m^2."""
+        rows = np.arange(self.cov_m2.shape[0])
+        return self.cov_m2[rows, k] - self.cov_m2[rows, j]
+
+
+def track_with_covariance(
+    start: ArrayLike,
+    increments: ArrayLike,
+    increment_cov: ArrayLike,
+    start_cov: ArrayLike | None = None,
+) -> DeadReckonedTrack:
+    """Dead-reckoned tracks of a batch of runs and their covariance (:func:`track` of both).
+
+    ``x_k = x_0 + sum_{i < k} dx_i`` and ``P_k = P_0 + sum_{i < k} Q_i`` (``F = I``: seed 000 eq.
+    9-10, seed 003 eq. 1 and 5).
+
+    Args:
+        start: positions at sample 0, shape (n, d), m.
+        increments: the displacement of each step, shape (n, T, d), m.
+        increment_cov: the covariance of each step's displacement, shape (n, T, d, d), m^2.
+        start_cov: covariance at sample 0, shape (n, d, d) or (d, d), m^2 (default zero: the
+            start is known).
+
+    Returns:
+        The tracks, samples 0..T.
+
+    Raises:
+        NavInputError: if the shapes do not match.
+    """
+    inc = np.asarray(increments, dtype=float)
+    q = np.asarray(increment_cov, dtype=float)
+    if inc.ndim != 3 or q.shape != (*inc.shape, inc.shape[-1]):
+        raise NavInputError(
+            f"increments (n, T, d) and increment_cov (n, T, d, d) must match, not shapes "
+            f"{inc.shape} and {q.shape}"
+        )
+    n, _, d = inc.shape
+    s = np.broadcast_to(np.asarray(start, dtype=float), (n, d))
+    P0 = np.zeros((n, d, d)) if start_cov is None else np.asarray(start_cov, dtype=float)
+    return DeadReckonedTrack(track(s, inc), track(np.broadcast_to(P0, (n, d, d)), q))
 
 
 def dead_reckon(
@@ -72,19 +159,40 @@ def dead_reckon(
 
 
 class DeadReckoning:
-    """One dead-reckoned position, advanced one step at a time (the online form of :func:`track`).
+    """One dead-reckoned position, advanced one step at a time (the online form of :func:`track`),
+    optionally with the covariance accumulated beside it (the online form of
+    :func:`track_with_covariance`).
 
     Args:
         position: the start, shape (d,), e.g. (east, north[, up]), m, world.
+        covariance: the start's covariance, shape (d, d), m^2, or ``None`` to carry none.
+
+    Attributes:
+        position: the current position, shape (d,), m.
+        covariance: its accumulated covariance, shape (d, d), m^2, or ``None``.
     """
 
-    def __init__(self, position: ArrayLike):
+    def __init__(self, position: ArrayLike, covariance: ArrayLike | None = None):
         self.position = np.array(position, dtype=float)
+        self.covariance = None if covariance is None else np.array(covariance, dtype=float)
 
-    def advance(self, increment: Array) -> None:
-        """Add the displacement of one step, shape (d,), m."""
+    def advance(self, increment: Array, increment_cov: Array | None = None) -> None:
+        """Add the displacement of one step, shape (d,), m, and its covariance, shape (d, d), m^2.
+
+        Raises:
+            NavInputError: if ``increment_cov`` is given to a track that carries no covariance,
+                or not given to one that does.
+        """
+        if (increment_cov is None) != (self.covariance is None):
+            raise NavInputError(
+                "increment_cov must be given exactly when the track carries a covariance"
+            )
         self.position = self.position + increment
+        if self.covariance is not None:
+            self.covariance = self.covariance + increment_cov
 
-    def reset(self, position: ArrayLike) -> None:
-        """Restart from a position, shape (d,) (e.g. at a fix)."""
+    def reset(self, position: ArrayLike, covariance: ArrayLike | None = None) -> None:
+        """Restart from a position, shape (d,) (e.g. at a fix), with its covariance, shape (d, d)
+        (``None``: the track carries no covariance from now on)."""
         self.position = np.array(position, dtype=float)
+        self.covariance = None if covariance is None else np.array(covariance, dtype=float)

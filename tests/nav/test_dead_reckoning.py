@@ -1,10 +1,12 @@
-"""Dead reckoning: the batched track, seed 000's DR with its covariance, and the online form."""
+"""Dead reckoning: the batched track (alone and with its covariance), seed 000's DR with its
+covariance, and the online form."""
 
 import numpy as np
 import pytest
 
-from nav.dead_reckoning import DeadReckoning, dead_reckon, track
+from nav.dead_reckoning import DeadReckoning, dead_reckon, step, track, track_with_covariance
 from nav.ekf import BatchEKF
+from nav.errors import NavInputError
 from nav.models import CourseSpeedDepthMotion
 
 RNG = np.random.default_rng(8)
@@ -53,3 +55,50 @@ def test_online_dead_reckoning_follows_the_batched_track(dt):
         assert np.allclose(dr.position, x[0, k + 1], atol=1e-11)
     dr.reset([1.0, 2.0, 3.0])
     assert np.array_equal(dr.position, [1.0, 2.0, 3.0])
+
+
+def test_track_with_covariance_sums_displacements_and_covariances_from_the_start():
+    n, T = 3, 7
+    start = RNG.normal(0, 10, (n, 2))
+    inc = RNG.normal(0, 1, (n, T, 2))
+    B = RNG.normal(0, 0.1, (n, T, 2, 2))
+    Q = B @ np.swapaxes(B, -1, -2)
+    P0 = np.diag([0.5, 2.0])
+    tr = track_with_covariance(start, inc, Q, P0)
+    assert tr.position_m.shape == (n, T + 1, 2) and tr.cov_m2.shape == (n, T + 1, 2, 2)
+    for i in range(n):  # written out, one run and one sample at a time
+        x, P = start[i].copy(), P0.copy()
+        for k in range(T + 1):
+            np.testing.assert_allclose(tr.position_m[i, k], x, atol=1e-12)
+            np.testing.assert_allclose(tr.cov_m2[i, k], P, atol=1e-12)
+            if k < T:
+                x, P = x + inc[i, k], P + Q[i, k]
+    # without a start covariance the start is known; between two samples, per-run samples
+    known = track_with_covariance(start, inc, Q)
+    assert np.array_equal(known.cov_m2[:, 0], np.zeros((n, 2, 2)))
+    k, j = np.array([5, 7, 2]), np.array([1, 3, 2])
+    np.testing.assert_allclose(
+        known.displacement(k, j), [inc[i, j[i] : k[i]].sum(0) for i in range(n)], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        known.covariance_between(k, j), [Q[i, j[i] : k[i]].sum(0) for i in range(n)], atol=1e-12
+    )
+    with pytest.raises(NavInputError, match="increment_cov"):
+        track_with_covariance(start, inc, Q[:, :, :1])
+
+
+def test_online_dead_reckoning_with_covariance_and_one_batched_step():
+    dr = DeadReckoning([1.0, 2.0], np.eye(2))
+    dr.advance(np.array([0.5, -1.0]), np.diag([0.1, 0.2]))
+    assert dr.position.tolist() == [1.5, 1.0]
+    np.testing.assert_array_equal(dr.covariance, np.diag([1.1, 1.2]))
+    with pytest.raises(NavInputError, match="increment_cov"):
+        dr.advance(np.array([0.5, -1.0]))
+    with pytest.raises(NavInputError, match="increment_cov"):
+        DeadReckoning([0.0, 0.0]).advance(np.zeros(2), np.eye(2))
+    dr.reset([0.0, 0.0], np.zeros((2, 2)))
+    assert dr.position.tolist() == [0.0, 0.0] and not dr.covariance.any()
+    np.testing.assert_array_equal(
+        step(np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([[0.5, 0.5], [-1.0, 0.0]])),
+        [[1.5, 2.5], [2.0, 4.0]],
+    )

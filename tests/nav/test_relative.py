@@ -11,15 +11,27 @@ import pytest
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.optimize import minimize_scalar
 
+from nav.errors import NavInputError
 from nav.relative import (
     FollowerNavigator,
     GaOptions,
+    LeaderRanges,
+    RangeEkfOptions,
     RangeMeasurement,
+    consistency_sums,
     design_rows,
+    distance_sums,
+    distances,
     dr_increment_covariance,
     dr_step,
+    dr_track,
+    ekf_track,
     ga_fix,
+    ga_track,
     hdop,
+    hdop_after_step,
+    longest_gaps,
+    pooled_stats,
     range_update,
 )
 
@@ -319,3 +331,180 @@ def test_dr_method_ignores_ranges_and_zero_range_is_refused():
     assert not out.accepted and out.reason == "range below minimum"
     assert out.position.tolist() == [0.0, 1.0]
     assert g.fix([5.0, 0.0], None).reason == "no range"
+
+
+# --- the batched tracks and reductions (nav.relative.tracks, nav.relative.metrics) ------------
+
+
+def _synthetic_runs(n=3, T=600, every=50, seed=5):
+    """Hand-made runs: a follower turning slowly at ~1 m/s, the leader 10 m abeam (starboard),
+    course and speed measured with noise and a bias, ranges every ``every`` ticks; run 1 misses
+    its second range and gets a zero range at its fourth."""
+    rng = np.random.default_rng(seed)
+    dt = 0.1
+    course = np.radians(30.0) + np.cumsum(np.full((n, T), np.radians(0.02)), axis=1)
+    speed = 1.0 + 0.1 * np.sin(np.arange(T) * dt / 7.0) * np.ones((n, 1))
+    truth = np.zeros((n, T + 1, 2))
+    for k in range(T):
+        truth[:, k + 1] = truth[:, k] + dt * speed[:, k, None] * np.stack(
+            [np.sin(course[:, k]), np.cos(course[:, k])], axis=-1
+        )
+    c_meas = course + np.radians(1.0) + rng.normal(0, np.radians(1.0), (n, T))
+    s_meas = speed * 1.05 + rng.normal(0, 0.05, (n, T))
+    tick = np.arange(every, T + 1, every)
+    c_at = course[:, tick - 1] + np.pi / 2
+    leader = truth[:, tick] + 10.0 * np.stack([np.sin(c_at), np.cos(c_at)], axis=-1)
+    rng_m = np.hypot(*(leader - truth[:, tick]).transpose(2, 0, 1)) + rng.normal(
+        0, 0.1, (n, len(tick))
+    )
+    present = np.ones((n, len(tick)), dtype=bool)
+    if len(tick) > 3:
+        present[1, 1] = False
+        rng_m[1, 3] = 0.0
+    return dt, c_meas, s_meas, LeaderRanges(tick, rng_m, present, leader)
+
+
+def _online(method, dt, c, s, ranges, i, restart=True, initial_cov=None, leader_cov=None):
+    nav = FollowerNavigator(
+        method,
+        [0.0, 0.0],
+        math.radians(2.0),
+        0.3,
+        GaOptions(restart=restart),
+        initial_cov=initial_cov,
+    )
+    at = {int(t): j for j, t in enumerate(ranges.fix_tick)}
+    out = [nav.position]
+    for k in range(c.shape[1]):
+        nav.advance(c[i, k], s[i, k], dt)
+        j = at.get(k + 1)
+        if j is not None:
+            r = ranges.range_m[i, j] if ranges.present[i, j] else None
+            nav.fix(ranges.leader_m[i, j], r, leader_cov)
+        out.append(nav.position)
+    return np.array(out)
+
+
+def test_dr_track_is_eq_1_summed_with_eq_5_summed():
+    dt, c, s, _ = _synthetic_runs(n=2, T=40)
+    sc, ss = math.radians(2.0), 0.3
+    tr = dr_track(c, s, np.array([1.0, -2.0]), dt, sc, ss)
+    for i in range(2):  # written out with math's sine and cosine
+        x, P = np.array([1.0, -2.0]), np.zeros((2, 2))
+        for k in range(40):
+            x = x + dt * s[i, k] * np.array([math.sin(c[i, k]), math.cos(c[i, k])])
+            P = P + dr_increment_covariance(c[i, k : k + 1], s[i, k : k + 1], dt, sc, ss)[0]
+            np.testing.assert_allclose(tr.position_m[i, k + 1], x, atol=1e-12)
+            np.testing.assert_allclose(tr.cov_m2[i, k + 1], P, atol=1e-15)
+
+
+@pytest.mark.parametrize("restart", [True, False])
+@pytest.mark.parametrize("method", ["ga1", "ga2"])
+def test_ga_track_equals_the_online_follower_stepped_tick_by_tick(method, restart):
+    dt, c, s, ranges = _synthetic_runs()
+    dr = dr_track(c, s, np.zeros(2), dt, math.radians(2.0), 0.3)
+    got = ga_track(method, dr, ranges, GaOptions(restart=restart))
+    assert got.accepted.sum() == got.accepted.size - 2  # the missing and the zero range
+    assert got.refused_short[1, 3] and not got.accepted[1, 1] and not got.accepted[1, 3]
+    for i in range(3):
+        online = _online(method, dt, c, s, ranges, i, restart)
+        np.testing.assert_allclose(got.position_m[i], online, rtol=0, atol=1e-9)
+    # the fixes moved the estimate off the DR track (the comparison above is not DR against DR)
+    assert np.abs(got.position_m - dr.position_m).max() > 0.1
+
+
+def test_ga_track_refuses_fixes_above_max_hdop():
+    dt, c, s, ranges = _synthetic_runs()
+    dr = dr_track(c, s, np.zeros(2), dt, math.radians(2.0), 0.3)
+    free = ga_track("ga2", dr, ranges, GaOptions())
+    h = free.hdop[free.accepted]
+    limit = float(np.median(h))
+    cut = ga_track("ga2", dr, ranges, GaOptions(), max_hdop=limit)
+    assert cut.refused_hdop.any() and (cut.hdop[cut.accepted] <= limit).all()
+    none = ga_track("ga2", dr, ranges, GaOptions(), max_hdop=0.99 * float(h.min()))
+    assert not none.accepted.any()
+    np.testing.assert_array_equal(none.position_m, dr.position_m)
+
+
+def test_ekf_track_equals_the_online_follower_and_uses_the_leaders_covariance():
+    dt, c, s, ranges = _synthetic_runs()
+    dr = dr_track(c, s, np.zeros(2), dt, math.radians(2.0), 0.3)
+    opt = RangeEkfOptions(sigma_range_m=0.1, initial_sigma_m=0.5, leader_sigma_m=0.4)
+    got = ekf_track(dr, ranges, opt)
+    for i in range(3):
+        online = _online(
+            "ekf", dt, c, s, ranges, i, initial_cov=np.eye(2) * 0.25, leader_cov=np.eye(2) * 0.16
+        )
+        np.testing.assert_allclose(got.position_m[i], online, rtol=0, atol=1e-9)
+    assert got.refused_short[1, 3] and not got.accepted[1, 1]
+    exact = ekf_track(dr, ranges, RangeEkfOptions(sigma_range_m=0.1, initial_sigma_m=0.5))
+    ok = got.accepted
+    assert (
+        np.trace(got.fix_cov_m2, axis1=-2, axis2=-1)[ok]
+        > np.trace(exact.fix_cov_m2, axis1=-2, axis2=-1)[ok]
+    ).all()
+
+
+def test_bad_track_inputs_are_refused_with_one_clear_error():
+    dt, c, s, ranges = _synthetic_runs(n=2, T=100)
+    dr = dr_track(c, s, np.zeros(2), dt, 0.03, 0.3)
+    with pytest.raises(NavInputError, match="leader_m"):
+        LeaderRanges(ranges.fix_tick, ranges.range_m, ranges.present, ranges.leader_m[:, :, :1])
+    late = LeaderRanges(ranges.fix_tick + 60, ranges.range_m, ranges.present, ranges.leader_m)
+    with pytest.raises(NavInputError, match="fix_tick"):
+        ga_track("ga1", dr, late, GaOptions())
+    with pytest.raises(NavInputError, match="leader_sigma_m"):
+        RangeEkfOptions(leader_sigma_m=-1.0)
+    with pytest.raises(NavInputError, match="sigma_range_m"):
+        RangeEkfOptions(sigma_range_m=0.0)
+
+
+def test_pooled_statistics_of_the_distance_sums_are_those_of_every_sample():
+    rng = np.random.default_rng(2)
+    d = rng.gamma(2.0, 3.0, (7, 51))
+    sums = np.concatenate([distance_sums(d[:3]), distance_sums(d[3:])])  # two blocks
+    mx, mean, std = pooled_stats(sums)
+    every = d[:, 1:].ravel()  # sample 0 (on the reference) is left out
+    assert mx == every.max()
+    assert mean == pytest.approx(every.mean(), rel=1e-12)
+    assert std == pytest.approx(every.std(), rel=1e-9)
+    assert pooled_stats(np.zeros((2, 4))) is None
+    est = rng.normal(0, 1, (2, 5, 2))
+    np.testing.assert_allclose(
+        distances(est, np.zeros((5, 2))), np.sqrt((est**2).sum(-1)), atol=1e-15
+    )
+
+
+def test_consistency_sums_count_only_accepted_fixes_with_a_usable_covariance():
+    rng = np.random.default_rng(4)
+    e = rng.normal(0, 1, (2, 4, 2))
+    B = rng.normal(0, 1, (2, 4, 2, 2))
+    C = B @ np.swapaxes(B, -1, -2) + 0.1 * np.eye(2)
+    C[0, 1] = np.zeros((2, 2))  # singular
+    C[1, 2, 0, 0] = np.inf
+    acc = np.ones((2, 4), dtype=bool)
+    acc[1, 3] = False
+    got = consistency_sums(e, C, acc)
+    for i in range(2):
+        use = [k for k in range(4) if acc[i, k] and np.isfinite(C[i, k]).all()]
+        use = [k for k in use if np.linalg.det(C[i, k]) > 0]
+        nees = sum(e[i, k] @ np.linalg.inv(C[i, k]) @ e[i, k] for k in use)
+        tr = sum(np.trace(C[i, k]) for k in use)
+        e2 = sum(e[i, k] @ e[i, k] for k in use)
+        np.testing.assert_allclose(got[i], [len(use), nees, tr, e2], rtol=1e-12)
+
+
+def test_longest_gaps_between_accepted_fixes():
+    t = np.array([5.0, 10.0, 15.0, 20.0])
+    acc = np.array([[1, 1, 1, 1], [0, 0, 0, 0], [1, 0, 0, 1], [0, 1, 0, 0]], dtype=bool)
+    np.testing.assert_array_equal(longest_gaps(t, acc, 22.0), [5.0, 22.0, 15.0, 12.0])
+
+
+@pytest.mark.parametrize("beta_deg", [90.0, 0.0, 30.0, 135.0])
+def test_hdop_after_a_step_is_the_closed_form(beta_deg):
+    course = math.radians(70.0)
+    b = course + math.radians(beta_deg)
+    leader = np.zeros((1, 2))
+    position = -10.0 * np.array([[math.sin(b), math.cos(b)]])  # the leader 10 m at bearing b
+    got = hdop_after_step(position, leader, course, 10.0)[0]
+    assert got == pytest.approx(_hdop_closed_form(math.radians(beta_deg), 10.0), rel=1e-9)

@@ -9,7 +9,9 @@ import pytest
 
 from nav.relative import FollowerNavigator
 from tasks.core.runner import run
-from tasks.paper003 import square as sq
+from tasks.paper003.paper import PAPER_TABLES
+from tasks.paper003.run import simulate
+from tasks.paper003.scenario import scenario_of
 
 FAST = ["report.figures=false", "report.recording=false", "report.run_data=false"]
 
@@ -32,7 +34,7 @@ def tests100(tmp_path_factory):
 @pytest.mark.parametrize("test", ["test-1", "test-2", "test-3"])
 def test_dr_rows_within_10_percent_of_the_paper_on_every_100_sample_cell(tests100, test):
     m = tests100[test]
-    _, paper = sq.PAPER_TABLES[test]
+    _, paper = PAPER_TABLES[test]
     got = m["methods"]["DR"]["all_runs"]
     for i, st in enumerate(("max_m", "mean_m", "std_m")):
         assert got[st] == pytest.approx(paper["DR"][1][i], rel=0.10), (test, st, got[st])
@@ -88,7 +90,7 @@ def test_the_reading_notes_ga_observations_hold_on_the_printed_equations(tmp_pat
     m = _metrics(out)
     by = {r["label"]: r for r in m["readings"]}
     assert len(by) == 16 and m["readings"][0]["label"] == m["reading"]
-    _, paper = sq.PAPER_TABLES["test-1"]
+    _, paper = PAPER_TABLES["test-1"]
     restart = by["world/F-from-L/true/restart"]["methods"]
     assert restart["GA2"]["all_runs"]["mean_m"] == pytest.approx(paper["GA2"][1][1], rel=0.3)
     assert restart["GA1"]["all_runs"]["mean_m"] == pytest.approx(
@@ -128,15 +130,15 @@ def _one_run_online(scn, s, method, restart, leader_cov=None):
 
 @pytest.mark.parametrize("restart", [True, False])
 def test_batched_navigation_equals_the_online_follower(restart):
-    scn = sq.scenario_of(
+    scn = scenario_of(
         "test-1",
         {
             "navigation": {"restart": restart},
             "sensors": {"modem": {"dropout_windows_s": [[100.0, 130.0]]}},
         },
     )
-    s = sq.simulate(scn, 4, (2, 3))
-    one = sq.simulate(scn, 4, (3,))
+    s = simulate(scn, 4, (2, 3))
+    one = simulate(scn, 4, (3,))
     for k in ("DR", "GA1", "GA2", "EKF"):  # a run's numbers do not depend on its block
         np.testing.assert_allclose(one.tracks[k][0], s.tracks[k][1], atol=1e-9)
     for k, method in (("GA1", "ga1"), ("GA2", "ga2"), ("EKF", "ekf"), ("DR", "dr")):
@@ -146,11 +148,11 @@ def test_batched_navigation_equals_the_online_follower(restart):
 
 def test_noisy_broadcast_and_the_ekf_that_knows_it():
     over = {"sensors": {"modem": {"broadcast": {"sigma_m": 0.5}}}}
-    scn = sq.scenario_of("test-3", {**over, "navigation": {"leader_sigma_m": 0.5}})
-    one = sq.simulate(scn, 2, (1,))
+    scn = scenario_of("test-3", {**over, "navigation": {"leader_sigma_m": 0.5}})
+    one = simulate(scn, 2, (1,))
     online = _one_run_online(scn, one, "ekf", True, np.eye(2) * 0.25)
     np.testing.assert_allclose(one.tracks["EKF"][0], online, rtol=0, atol=1e-9)
-    blind = sq.simulate(sq.scenario_of("test-3", over), 2, (1,))
+    blind = simulate(scenario_of("test-3", over), 2, (1,))
     np.testing.assert_array_equal(blind.meas.leader_m, one.meas.leader_m)  # the same draws
     # R grows by the leader's variance on the line of sight: a larger stated covariance
     tr = np.trace(one.fixed["EKF"].fix_cov_m2[0], axis1=-2, axis2=-1)
@@ -179,8 +181,8 @@ def test_same_seed_same_numbers_whatever_the_block_split(tmp_path):
 
 
 def _samples(over, runs=(0, 1, 2)):
-    scn = sq.scenario_of("test-1", over)
-    return scn, sq.simulate(scn, 0, runs)
+    scn = scenario_of("test-1", over)
+    return scn, simulate(scn, 0, runs)
 
 
 def _report(tmp_path, over, test="test-1", runs=4, name="run"):
@@ -222,7 +224,7 @@ def test_leader_out_of_modem_range_degrades_to_dr_with_a_warning(tmp_path):
 def test_ranges_missing_for_minutes_dead_reckon_through_the_gap(tmp_path):
     over = {"sensors": {"modem": {"dropout_windows_s": [[60.0, 240.0]]}}}
     _, s = _samples(over)
-    base = sq.simulate(sq.scenario_of("test-1"), 0, (0, 1, 2))
+    base = simulate(scenario_of("test-1"), 0, (0, 1, 2))
     # identical up to the last range before the gap; in the gap the estimate is the last fix
     # plus the DR displacement since it
     np.testing.assert_array_equal(s.tracks["GA1"][:, :551], base.tracks["GA1"][:, :551])

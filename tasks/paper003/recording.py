@@ -1,0 +1,91 @@
+"""Run data and recording of seed 003's tests: per-run statistics and the single sample's time
+series as Parquet, and the single sample's ``recording.rrd``, from the blocks' own numbers."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tasks.core import export
+from tasks.core.recording import COLORS, Recording
+from tasks.core.registry import Experiment, ReportContext
+from tasks.paper003.run import FIXED, METHODS
+from tasks.paper003.scenario import (
+    Paper003Scenario,
+    periodic_fix_ticks,
+    scenario_reading,
+    truth_of,
+)
+
+Array = NDArray[np.float64]
+
+REC_COLORS = {
+    "DR": COLORS["dr"],
+    "GA1": (44, 160, 44),
+    "GA2": (148, 103, 189),
+    "EKF": COLORS["ekf"],
+}
+
+
+def write_run_data(
+    exp: Experiment, ctx: ReportContext, scn: Paper003Scenario, per_run: Array
+) -> list[str]:
+    """Parquet: per-run statistics (one row per run) and the single sample's distances."""
+    meta = {"experiment": exp.name, "seed": str(ctx.seed), "runs": str(ctx.n_runs)}
+    cols = {"run": export.Column(np.arange(ctx.n_runs, dtype=np.int64), "1", "run index")}
+    for m, name in enumerate(METHODS):
+        st = per_run[:, m]
+        mean = st[:, 1] / st[:, 0]
+        std = np.sqrt(np.maximum(st[:, 2] / st[:, 0] - mean * mean, 0.0))
+        cols[f"{name}.max"] = export.Column(st[:, 3], "m", f"{name}: largest distance to reference")
+        cols[f"{name}.mean"] = export.Column(mean, "m", f"{name}: mean distance to reference")
+        cols[f"{name}.std"] = export.Column(std, "m", f"{name}: std of the distance (ddof 0)")
+    export.write_parquet(ctx.out_dir / "data" / "runs.parquet", cols, meta)
+    return ["data/runs.parquet"]
+
+
+def record_sample(
+    exp: Experiment, scn: Paper003Scenario, seed: int, run: int, one: dict, out_dir
+) -> list[str]:
+    """Write ``recording.rrd`` and the Parquet time series ``data/run-NNNNNN.parquet`` of the
+    single sample from its block data (the batch's own numbers)."""
+    truth = truth_of(scn, scenario_reading(scn).geometry)
+    t = truth.t_s
+    t_fix = t[periodic_fix_ticks(scn)]
+
+    def z3(p: Array) -> Array:
+        return np.concatenate([p, np.zeros((len(p), 1))], axis=1)
+
+    files = []
+    if scn.report.recording:
+        rec = Recording(out_dir / "recording.rrd", exp.name, f"{exp.name}/seed{seed}/run{run}")
+        rec.track("leader", t, z3(truth.leader_m), (120, 120, 120))
+        rec.track("truth", t, z3(truth.follower_m), COLORS["truth"])
+        for k in METHODS:
+            rec.track(k.lower(), t, z3(one[f"track/{k}"]), REC_COLORS[k])
+        for k in FIXED:
+            ok = one[f"accepted/{k}"]
+            rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(one[f"fix/{k}"][ok]), REC_COLORS[k])
+            rec.scalars(f"hdop/{k.lower()}", t_fix[ok], one[f"hdop/{k}"][ok], REC_COLORS[k], k)
+        for k in METHODS:
+            rec.scalars(f"distance/{k.lower()}", t, one[f"distance/{k}"], REC_COLORS[k], k)
+        rec.blueprint("distance", "hdop")
+        rec.close()
+        files.append("recording.rrd")
+    if scn.report.run_data:
+        en = ("east", "north")
+        cols = {
+            "t": export.Column(t, "s", "time"),
+            "leader": export.Column(truth.leader_m, "m", "leader reference", en),
+            "reference": export.Column(truth.follower_m, "m", "follower reference", en),
+        }
+        for k in METHODS:
+            cols[k] = export.Column(one[f"track/{k}"], "m", f"{k} estimate", en)
+            cols[f"{k}.distance"] = export.Column(
+                one[f"distance/{k}"], "m", f"{k}: distance to the reference"
+            )
+        rel = f"data/run-{run:06d}.parquet"
+        meta = {"experiment": exp.name, "seed": str(seed), "run": str(run)}
+        export.write_parquet(out_dir / rel, cols, meta)
+        files.append(rel)
+    return files
