@@ -72,17 +72,10 @@ from bauv_sim.kinematic.seed004 import NominalPathConfig, Seed004Noise
 from bauv_sim.sensors.doa import DoaConfig, DoaSet
 from bauv_sim.sensors.multibeam import MultibeamConfig, MultibeamImage
 from bauv_sim.sensors.rig import RigTick, SensorRig
-from nav.bearings import (
-    PredictedShift,
-    SystemPrediction,
-    ekf_update,
-    predict,
-    upmf_update,
-    velocity,
-)
-from nav.cmnf import CmnfGains, cmnf_step
+from nav.bearings import PredictedShift, SystemPrediction, bank, velocity
+from nav.bearings.cmnf import CmnfGains
+from nav.bearings.local_control import ControlLimits
 from nav.guidance import GuidanceCommand
-from nav.local_control import ControlLimits
 from nav.navigator import Estimate
 from tasks.closed_loop import parts as P
 from tasks.closed_loop.experiment import MissionExperiment
@@ -99,7 +92,9 @@ if TYPE_CHECKING:
 
 Array = NDArray[np.float64]
 
-FILTERS = ("ekf", "upmf", "cmnf")
+FILTERS = tuple(name.lower() for name in bank.FILTERS)
+"""The filters of :mod:`nav.bearings.bank` as the scenario (``navigation.filter``) and the metrics
+name them."""
 SEED_SPEED_M_S = 2.0
 """Seed 004's nominal speed (section 6), m/s: the path and the beacons scale by V° / this."""
 SEED_START = np.array([0.0, 0.0, -10.0])
@@ -453,6 +448,8 @@ class BearingNavigation:
         self.n_steps = setting.path.n_steps
         self.beacons = setting.b
         self.s_eps = setting.fnoise.s_eps
+        self.filter = name.upper()  # the bank's spelling (nav.bearings.bank.FILTERS)
+        self.options = bank.BankOptions(self.s_eps, setting.upmf_form, gains, setting.correction)
         self.pred = SystemPrediction(self.dt, setting.fnoise.s_w)
         self.ctl = Controller(setting, 1)
         self.x_hat = np.asarray(setting.path.start_m, float)[None].copy()
@@ -491,25 +488,19 @@ class BearingNavigation:
             else:
                 shift = self.sonar(self.x_hat, self.u)
             self.shift = shift.displacement_m[0].copy()
-            if self.name == "cmnf":
-                alpha = self.x_hat + shift.displacement_m
-                _, self.x_hat = cmnf_step(
-                    self.gains, j, alpha, self.s.correction, y, present, self.beacons
-                )
-                self.P = self.gains.p_hat[j - 1][None].copy()
-            else:
-                x_t, p_t = predict(self.x_hat, self.P, shift)
-                update = ekf_update if self.name == "ekf" else upmf_update
-                self.x_hat, self.P = update(x_t, p_t, y, present, self.beacons, self.s_eps)
+            res = bank.step(
+                self.filter, j, self.x_hat, self.P, shift, y, present, self.beacons, self.options
+            )
+            self.x_hat, self.P = res.x_hat, res.p_hat
             self.j = j
             from nav.errors import NavError
 
             if not (np.isfinite(self.x_hat).all() and np.isfinite(self.P).all()):
-                raise NavError(f"{self.name.upper()} diverged: estimate not finite at step {j}")
+                raise NavError(f"{self.filter} diverged: estimate not finite at step {j}")
             off = float(np.linalg.norm(self.x_hat[0] - self.nominal[j]))
             if off > self.diverge_m:
                 raise NavError(
-                    f"{self.name.upper()} diverged at step {j}: estimate {off:.0f} m from the "
+                    f"{self.filter} diverged at step {j}: estimate {off:.0f} m from the "
                     f"nominal point (seed004.diverge_m = {self.diverge_m:g})"
                 )
             if j < self.n_steps:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nav.pcrb import pcrb
+from nav.bearings.pcrb import pcrb
 from tasks.core import style
 
 plt = style.plt

@@ -27,10 +27,10 @@ from bauv_sim.kinematic.seed004 import (
     Seed004World,
     TrainingNoise,
 )
-from nav.bearings import SystemPrediction, ekf_update, predict, upmf_update
-from nav.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains, cmnf_step, train
-from nav.local_control import ControlLimits, limited_control, optimal_control
-from nav.pcrb import bearing_information
+from nav.bearings import SystemPrediction, bank
+from nav.bearings.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains, train
+from nav.bearings.local_control import ControlLimits, limited_control, optimal_control
+from nav.bearings.pcrb import bearing_information
 
 if TYPE_CHECKING:
     from bauv_sim.seabed import SeabedConfig
@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 Array = NDArray[np.float64]
 
 FILTERS = ("CMNF", "UPMF", "EKF")
+"""The filters of :mod:`nav.bearings.bank` in the order of the columns of the paper's Table 1."""
 SHIFT_BIN_M = 0.05
 SHIFT_BINS = 2000
 
@@ -334,6 +335,7 @@ def fly(
         pred_err2=np.zeros((F, N + 1)),
     )
     keep = [i for i, r in enumerate(runs) if r < sample_runs]
+    options = bank.BankOptions(fn.s_eps, s.upmf_form, gains, s.correction)
     for fi, name in enumerate(filters):
         world = Seed004World(s.path, s.noise, b, draws)
         pred, world = prediction_of(s, seed, runs, world, "test")
@@ -361,17 +363,9 @@ def fly(
                 idx = np.minimum(np.linalg.norm(e, axis=1) / SHIFT_BIN_M, SHIFT_BINS - 1)
                 out.shift_hist[fi] += np.bincount(idx.astype(int), minlength=SHIFT_BINS)
             y, present = world.observe(k + 1, x)
-            if name == "CMNF":
-                alpha = x_hat + shift.displacement_m
-                x_t, x_hat = cmnf_step(gains, k + 1, alpha, s.correction, y, present, b)
-                var = np.broadcast_to(np.diag(gains.p_hat[k]), (n, 3))
-            else:
-                x_t, P_t = predict(x_hat, P, shift)
-                if name == "EKF":
-                    x_hat, P = ekf_update(x_t, P_t, y, present, b, fn.s_eps)
-                else:
-                    x_hat, P = upmf_update(x_t, P_t, y, present, b, fn.s_eps, form=s.upmf_form)
-                var = np.diagonal(P, axis1=1, axis2=2)
+            res = bank.step(name, k + 1, x_hat, P, shift, y, present, b, options)
+            x_t, x_hat, P = res.x_tilde, res.x_hat, res.p_hat
+            var = np.diagonal(P, axis1=1, axis2=2)
             bad = alive & ~(np.isfinite(x_hat).all(1) & np.isfinite(var).all(1))
             if name != "CMNF":
                 bad |= alive & ~np.isfinite(P).all((1, 2))

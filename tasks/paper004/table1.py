@@ -65,9 +65,9 @@ from bauv_sim.kinematic.seed004 import (
     check_beacons,
 )
 from bauv_sim.sensors.multibeam import MultibeamConfig
-from nav.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains
-from nav.local_control import ControlLimits
-from nav.pcrb import pcrb
+from nav.bearings.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains
+from nav.bearings.local_control import ControlLimits
+from nav.bearings.pcrb import pcrb
 from nav.seabed import SlopeBasis
 from tasks.core import store
 from tasks.core.files import atomic_write_bytes

@@ -31,9 +31,9 @@ from nav.bearings import (
     upmf_update,
     velocity,
 )
-from nav.cmnf import CmnfGains, cmnf_step, train
-from nav.local_control import ControlLimits, limited_control, optimal_control
-from nav.pcrb import bearing_information, pcrb
+from nav.bearings.cmnf import CmnfGains, cmnf_step, train
+from nav.bearings.local_control import ControlLimits, limited_control, optimal_control
+from nav.bearings.pcrb import bearing_information, pcrb
 
 B = np.array(SECTION6_BEACONS)
 S_EPS = math.tan(math.radians(0.5)) ** 2 * np.eye(2)
@@ -426,7 +426,7 @@ def test_cmnf_gains_are_eq22_worked_out_on_a_tiny_training_set():
     covariances matters: ``alpha`` and ``beta`` of other dimensions than the state with
     non-symmetric cross-covariances (F_k = cov(X, alpha) cov^+(alpha, alpha), f_k = E X - F_k E
     alpha, and section 5.2's stated covariances)."""
-    from nav.cmnf import DEFAULT_FLOOR, correction_gain, prediction_gain
+    from nav.bearings.cmnf import DEFAULT_FLOOR, correction_gain, prediction_gain
 
     rng = np.random.default_rng(3)
     n = 40
@@ -467,7 +467,7 @@ def test_cmnf_prediction_gain_recovers_a_linear_gaussian_model():
     """With ``X = A alpha + a + W`` (A not symmetric, W ~ N(0, Q) independent of alpha), the best
     linear prediction is ``A alpha + a`` with error covariance Q: eq. 22's F_k, f_k and stated
     P~_k on 1e5 samples recover A, a and Q within their sampling error."""
-    from nav.cmnf import DEFAULT_FLOOR, prediction_gain
+    from nav.bearings.cmnf import DEFAULT_FLOOR, prediction_gain
 
     rng = np.random.default_rng(4)
     n = 100_000
