@@ -98,7 +98,14 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_paper001.py",
     ),
     "nav/drns.py": ("tests/nav/test_drns.py", "tests/tasks/test_paper001.py"),
-    "nav/seabed.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/seabed/geometry.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/seabed/fit.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/seabed/shift.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/clib.py": (
+        "tests/nav/test_seabed_c.py",
+        "tests/nav/test_seabed.py",
+        "tests/bauv_sim/test_multibeam.py",
+    ),
     "nav/angles.py": ("tests/nav/test_angles.py", "tests/bauv_sim/test_frames.py"),
     # bauv_sim: the devices, the rig and the sea
     "bauv_sim/sensors/errors.py": ("tests/bauv_sim/test_sensors.py",),
@@ -851,7 +858,7 @@ def check_anchor(root: Path, m: Mutation) -> None:
 
 def copy_checkout(root: Path, dst: Path) -> Path:
     """Copy the checkout ``root`` (sources, tests, models, built ``*.so``) to ``dst``."""
-    if not any((root / "nav").glob("_seabed_shift*.so")):
+    if not any((root / "nav" / "seabed").glob("_seabed_shift*.so")):
         raise SystemExit("the C libraries are not built in the checkout (pip install -e .)")
     shutil.copytree(root, dst, ignore=_IGNORE, symlinks=True)
     return dst

@@ -32,6 +32,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from nav import dead_reckoning
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -93,7 +94,7 @@ def nominal_path(gamma: Array, theta: Array, speed: Array, x0: Array, dt: float)
     """
     u = np.stack([np.asarray(gamma), np.asarray(theta), np.asarray(speed)], axis=-1)
     steps = velocity(u) * dt
-    return np.concatenate([np.asarray(x0, float)[None], x0 + np.cumsum(steps, axis=0)])
+    return dead_reckoning.track(np.asarray(x0, float)[None], steps[None])[0]
 
 
 # ----------------------------------------------------------------------------------------------

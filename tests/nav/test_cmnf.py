@@ -18,8 +18,8 @@ from bauv_sim.kinematic.seed004 import (
 )
 from nav.bearings import SystemPrediction, bearings
 from nav.bearings.cmnf import CmnfGains, clip_bounds, cmnf_step, top_share, train
-from nav.errors import NavInputError
 from nav.bearings.local_control import optimal_control
+from nav.errors import NavInputError
 
 NEAR = np.array([[500.0, 100.0, 0.0], [500.0, -100.0, 0.0], [-100.0, 100.0, 0.0], [-5.0, -5.0, 0]])
 """paper-004/near-beacon's beacons: the fourth 7 m beside the start, 10 m above it."""
