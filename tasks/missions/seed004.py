@@ -9,18 +9,18 @@ are the seed's (section 6) scaled by the same factor about the path's start, moo
 ``seed004.beacon_depth_m`` below the surface (the seed's beacons are at the surface).
 
 Every ``seed004.dt_s`` (the DOA period, seed 004's 1 s) the chosen filter (``navigation.filter``:
-EKF, UPMF or CMNF of :mod:`nav.bearings` and :mod:`nav.cmnf`; ``"all"`` flies each in turn on the
-same run) predicts with the previous control ("by virtue of the system", eq. 1), takes the
-bearing tangents of that tick (eq. 17) and the locally optimal control with box limits
-(:func:`nav.local_control.limited_control`, eq. 5-7) is computed on its estimate. The control
-``u = (gamma, theta, V)`` (seed 004's angles: theta counter-clockwise from east, gamma up) goes to
-the existing autopilot as set-points held for the step: course ``pi/2 - theta`` (clockwise from
-north), speed ``V`` (through water) and, since the autopilot holds a depth, not a pitch, the depth
-set-point at which its depth loop settles at the vertical rate ``w = V sin(gamma)`` (up): that loop
-is a PD on the depth error, ``pitch = kp e - kd w`` with ``w = V pitch``, so it climbs at ``w`` with
-the set-point ``e = w (1 + V kd) / (V kp)`` above the measured depth (:func:`depth_setpoint`; 5.3
-s of climb at the default gains and 1 m/s). A set-point one step ahead (``w dt``) would be flown at
-a fifth of the commanded rate (measured: the vertical residual then adds up to 1.5 m in 160 s).
+EKF, UPMF or CMNF, one step of :mod:`nav.bearings.bank`; ``"all"`` flies each in turn on the same
+run) predicts with the previous control ("by virtue of the system", eq. 1), takes the bearing
+tangents of that tick (eq. 17) and the locally optimal control with box limits
+(:func:`nav.bearings.local_control.limited_control`, eq. 5-7) is computed on its estimate. The
+control ``u = (gamma, theta, V)`` (seed 004's angles: theta counter-clockwise from east, gamma up)
+goes to the existing autopilot as set-points held for the step: course ``pi/2 - theta`` (clockwise
+from north), speed ``V`` (through water) and, since the autopilot holds a depth, not a pitch, the
+depth set-point at which its depth loop settles at the vertical rate ``w = V sin(gamma)`` (up): that
+loop is a PD on the depth error, ``pitch = kp e - kd w`` with ``w = V pitch``, so it climbs at ``w``
+with the set-point ``e = w (1 + V kd) / (V kp)`` above the measured depth (:func:`depth_setpoint`;
+5.3 s of climb at the default gains and 1 m/s). A set-point one step ahead (``w dt``) would be flown
+at a fifth of the commanded rate (measured: the vertical residual then adds up to 1.5 m in 160 s).
 
 The CMNF's gains are fitted (CMNF in the loop, :func:`tasks.paper004.sim.train_gains`) on a
 kinematic surrogate of the same mission (:mod:`bauv_sim.kinematic.seed004` with the scaled path,

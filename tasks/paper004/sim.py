@@ -5,7 +5,7 @@ Each filter flies its own copy of every path (the control depends on the estimat
 draws. Per filter and step the block keeps: the number of paths that are still finite, the sums of
 ``||X°_k - X_k||^2`` (eq. 4), of the error ``X_k - X^_k`` and of its square per axis, of the CMNF's
 and the Kalman filters' stated error variance, of the Fisher information of the bearings at the
-true positions (for the PCRB, :mod:`nav.pcrb`), the count of absent bearing pairs, and the
+true positions (for the PCRB, :mod:`nav.bearings.pcrb`), the count of absent bearing pairs, and the
 sample paths of the first runs. A filter whose estimate or covariance stops being finite on a path
 is *diverged* there: the path leaves the sums from that step on and is counted.
 """
@@ -59,7 +59,7 @@ class LoopSetting:
         upmf_form: ``"unbiased"`` or ``"printed"`` (:func:`nav.bearings.upmf_update`).
         floor: the CMNF's singular-value floor.
         clip_sigmas: the CMNF's winsorisation of its basic correction, robust sigmas (None:
-            unclipped, the paper's filter; :func:`nav.cmnf.clip_bounds`).
+            unclipped, the paper's filter; :func:`nav.bearings.cmnf.clip_bounds`).
         train_paths: CMNF training paths.
         prediction: ``"system"`` (eq. 1, row 1 of Table 1), ``"seabed-one_attitude"`` /
             ``"seabed-turning"`` (eq. 15, row 2, over the seed's harmonic seabeds;
