@@ -374,5 +374,6 @@ def test_a_packed_struct_keeps_its_temporary_arrays_alive():
     del x
     gc.collect()
     assert alive() is not None
-    assert [args.points.data[i] for i in range(5)] == [0.0, 2.0, 4.0, 6.0, 8.0]
+    data = ctypes.cast(args.points.data, ctypes.POINTER(ctypes.c_double))
+    assert [data[i] for i in range(5)] == [0.0, 2.0, 4.0, 6.0, 8.0]
     assert args.valid.size == 0 and not args.valid.data  # None: a NULL buffer of size 0
