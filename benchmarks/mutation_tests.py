@@ -824,7 +824,38 @@ OWN_ROUND3: list[Mutation] = [
 """A third round, of issue 21's own new code (the USBL fold, the swarm's divergence, the CMNF's
 clipped correction, set_sea's carry), written after it had its tests."""
 
-MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2, *OWN_ROUND3]
+ISSUE22_SEED004 = [
+    Mutation(
+        "bearing-model-ignores-absent-pairs",
+        "own",
+        "correction",
+        "nav/bearings/model.py",
+        "use = observable(x, self.beacons_m) & self.present",
+        "use = observable(x, self.beacons_m)",
+        "the bearing EKF updates on pairs that were not measured",
+    ),
+    Mutation(
+        "bank-cmnf-covariance-of-the-previous-step",
+        "own",
+        "correction",
+        "nav/bearings/bank.py",
+        "gains.p_hat[j - 1], (len(x_new), 3, 3)",
+        "gains.p_hat[j - 2], (len(x_new), 3, 3)",
+        "the bank states the CMNF's covariance of the previous step for this one",
+    ),
+    Mutation(
+        "clib-layout-check-names-ignored",
+        "own",
+        "correction",
+        "nav/clib.py",
+        "if count != len(want) or c_layout != want or c_names != c_fields(struct):",
+        "if count != len(want) or c_layout != want:",
+        "the loader accepts a mirror whose fields are retyped or renamed at the same offsets",
+    ),
+]
+"""Issue 22's seed-004 part: the bearing measurement model, the filter bank, the C loader."""
+
+MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2, *OWN_ROUND3, *ISSUE22_SEED004]
 
 _IGNORE = shutil.ignore_patterns(
     ".git", ".venv", "venv", "__pycache__", ".pytest_cache", ".ruff_cache", "runs", "*.egg-info"

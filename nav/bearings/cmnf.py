@@ -16,6 +16,10 @@ values below an absolute floor as zero: with the locally optimal control, ``alph
 by virtue of the system) is the nominal point on every path, so cov(alpha, alpha) is rounding
 noise that a relative cut-off would amplify into huge gains (then ``F_k = 0`` and ``X~_k = E X_k``).
 
+The CMNF is its own algorithm, not a Kalman update (the documented exception to the one update of
+:mod:`nav.ekf`): its gains are regression coefficients of Monte Carlo moments, fitted offline, and
+no measurement model or innovation covariance enters a step.
+
 The CMNF states its own accuracy (section 5.2): ``cov(X - X~) = cov(X, X) - F cov(alpha, X)`` and
 ``cov(X - X^) = cov(X - X~) - H cov(beta, X - X~)``, kept per step in :class:`CmnfGains`.
 

@@ -126,6 +126,11 @@ def upmf_update(
 ) -> tuple[Array, Array]:
     """Update of the unbiased pseudo-measurement filter (seed 004, eq. 19-21).
 
+    Its own algorithm, not :func:`nav.ekf.update` with a measurement model (the documented
+    exception to the one Kalman update): the gain is built on the pseudo-measurements' ``Psi1``
+    and ``Psi2`` with a floored pseudo-inverse, and the covariance is eq. 21's ``(I - K Psi1)
+    P~``, not the Joseph form.
+
     ``K = P~ Psi1^T (Psi1 P~ Psi1^T + Psi2 S^eps Psi2^T)^+``, ``X^ = X~ + K (Y' - Psi1(Y) X~)``
     (the printed ``Psi1 X_k`` is a typo for the prediction, seed README), ``P^ = (I - K Psi1)
     P~``. Absent pairs get zero rows; singular values below ``floor`` count as zero.
