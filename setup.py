@@ -6,12 +6,15 @@
   layouts) and linked to that release's library, found in the ``mujoco`` package of the build
   environment.
 * The harmonic seabed's ray march (``bauv_sim/sensors/harmonic_rays.c``): a plain C library (no
-  Python API) that ``bauv_sim.sensors.multibeam`` loads with ``ctypes``. No fast-math and no FMA
-  contraction (its ranges are those of the numpy code it replaced, to rounding, on any machine),
-  no ``-march`` (the build runs on any x86_64).
-* The seabed shift's per-path arithmetic (``nav/seabed_shift.c``: Appendix A's slope fit and
-  eq. 15 of seed 004 with its covariance): a plain C library that ``nav.seabed`` loads with
-  ``ctypes``, compiled as the ray march.
+  Python API) that ``bauv_sim.sensors.multibeam`` loads with ``ctypes`` through ``nav.clib``. No
+  fast-math and no FMA contraction (its ranges are those of the numpy code it replaced, to
+  rounding, on any machine), no ``-march`` (the build runs on any x86_64).
+* The seabed shift's per-path arithmetic (``nav/seabed/seabed_shift.c``: Appendix A's slope fit
+  and eq. 15 of seed 004 with its covariance): a plain C library that ``nav.seabed`` loads with
+  ``ctypes`` through ``nav.clib``, compiled as the ray march.
+
+The two ctypes libraries include the shared header ``nav/clib.h`` (their entry points' argument
+structs, mirrored in ``nav/clib.py``, which checks the layout when it loads them).
 """
 
 from __future__ import annotations
@@ -47,12 +50,16 @@ setup(
         Extension(
             "bauv_sim.sensors._harmonic_rays",
             sources=["bauv_sim/sensors/harmonic_rays.c"],
+            include_dirs=["nav"],
+            depends=["nav/clib.h"],
             extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
             libraries=["m"],
         ),
         Extension(
-            "nav._seabed_shift",
-            sources=["nav/seabed_shift.c"],
+            "nav.seabed._seabed_shift",
+            sources=["nav/seabed/seabed_shift.c"],
+            include_dirs=["nav"],
+            depends=["nav/clib.h"],
             extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
             libraries=["m"],
         ),

@@ -32,8 +32,8 @@ from bauv_sim.kinematic.seed004 import (
     true_bearings,
 )
 from nav.bearings import SystemPrediction, pinv_floor, velocity
-from nav.cmnf import beta
-from nav.local_control import optimal_control
+from nav.bearings.cmnf import beta
+from nav.bearings.local_control import optimal_control
 from tasks.paper004.sim import LoopSetting, train_gains
 
 

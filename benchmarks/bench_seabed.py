@@ -17,7 +17,7 @@ the rays against a physics scene's heightfield, and a row-2 path-step.
   three), an absolute time beside the load, the same block with the numpy march patched in
   for ``HarmonicSeabed.ray_ranges`` (what the C march saves in the row), and with the numpy seabed
   shift patched in for :func:`nav.seabed.shift_estimate` (``tests/nav/seabed_reference.py``, the
-  implementation before the C one in ``nav/seabed_shift.c``: what that saves in the row).
+  implementation before the C one in ``nav/seabed/seabed_shift.c``: what that saves in the row).
 
 Usage: ``python benchmarks/bench_seabed.py [--paths 2000] [--steps 60] [--repeats 3]``
 """

@@ -82,13 +82,15 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "nav/usbl/tracks.py": ("tests/nav/test_track_ekf.py", "tests/tasks/test_paper000.py"),
     "nav/navigator.py": ("tests/nav/test_navigator.py", "tests/tasks/test_run_data.py"),
     "nav/dead_reckoning.py": ("tests/nav/test_dead_reckoning.py", "tests/nav/test_navigator.py"),
-    "nav/bearings.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
-    "nav/cmnf.py": (
+    "nav/bearings/model.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
+    "nav/bearings/filters.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
+    "nav/bearings/bank.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
+    "nav/bearings/cmnf.py": (
         "tests/nav/test_bearings.py",
         "tests/nav/test_cmnf.py",
         "tests/tasks/test_paper004.py",
     ),
-    "nav/pcrb.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
+    "nav/bearings/pcrb.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
     "nav/relative/motion.py": ("tests/nav/test_relative.py", "tests/tasks/test_paper003.py"),
     "nav/relative/adjustment.py": ("tests/nav/test_relative.py", "tests/tasks/test_paper003.py"),
     "nav/relative/ranging.py": ("tests/nav/test_relative.py", "tests/tasks/test_paper003.py"),
@@ -111,7 +113,14 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/nav/test_drns.py",
         "tests/tasks/test_paper001.py",
     ),
-    "nav/seabed.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/seabed/geometry.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/seabed/fit.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/seabed/shift.py": ("tests/nav/test_seabed.py", "tests/nav/test_seabed_c.py"),
+    "nav/clib.py": (
+        "tests/nav/test_seabed_c.py",
+        "tests/nav/test_seabed.py",
+        "tests/bauv_sim/test_multibeam.py",
+    ),
     "nav/angles.py": ("tests/nav/test_angles.py", "tests/bauv_sim/test_frames.py"),
     # bauv_sim: the devices, the rig and the sea
     "bauv_sim/sensors/errors.py": ("tests/bauv_sim/test_sensors.py",),
@@ -239,7 +248,7 @@ ISSUE21: list[Mutation] = [
         "upmf-bias-correction-removed",
         "issue21",
         "correction",
-        "nav/bearings.py",
+        "nav/bearings/filters.py",
         "        yp = yp - pseudo_noise_mean(x_tilde, h0, beacons, s_eps)\n",
         "",
         "the UPMF's unbiased form no longer takes eq. 20's noise mean off the pseudo-measurement",
@@ -248,7 +257,7 @@ ISSUE21: list[Mutation] = [
         "cmnf-prediction-gain-transposed",
         "issue21",
         "transpose",
-        "nav/cmnf.py",
+        "nav/bearings/cmnf.py",
         "    F = c_xa @ pinv_floor(c_aa, floor)\n",
         "    F = (c_xa @ pinv_floor(c_aa, floor)).T\n",
         "the CMNF's prediction gain F_k of eq. 22 transposed",
@@ -356,7 +365,7 @@ OWN: list[Mutation] = [
         "pseudo-noise-mean-elevation-term-dropped",
         "own",
         "correction",
-        "nav/bearings.py",
+        "nav/bearings/filters.py",
         "vl * dx * c1 - c * dz * vp * g2 / 2",
         "vl * dx * c1",
         "the UPMF's bias correction loses its elevation row's cos(phi) term",
@@ -412,7 +421,7 @@ OWN: list[Mutation] = [
         "cmnf-stated-prediction-covariance-transposed",
         "own",
         "transpose",
-        "nav/cmnf.py",
+        "nav/bearings/cmnf.py",
         "    p = c_xx - F @ c_xa.T\n",
         "    p = c_xx - F @ c_xa\n",
         "the CMNF's stated P~ uses cov(X, alpha) where section 5.2 has cov(alpha, X)",
@@ -421,7 +430,7 @@ OWN: list[Mutation] = [
         "cmnf-step-gain-transposed",
         "own",
         "transpose",
-        "nav/cmnf.py",
+        "nav/bearings/cmnf.py",
         "x_tilde = rows_times(alpha, gains.F[i]) + gains.f[i]",
         "x_tilde = rows_times(alpha, gains.F[i].T) + gains.f[i]",
         "the CMNF step applies the fitted prediction gain transposed",
@@ -569,7 +578,7 @@ OWN: list[Mutation] = [
         "pseudo-measurement-quadrant-flipped",
         "own",
         "sign",
-        "nav/bearings.py",
+        "nav/bearings/filters.py",
         "phi = np.arctan(y[..., 0]) + np.where(dx < 0, np.pi, 0.0)",
         "phi = np.arctan(y[..., 0]) + np.where(dx > 0, np.pi, 0.0)",
         "eq. 19's phi put in the opposite quadrant (the beacon's bearing + 180 deg)",
@@ -596,7 +605,7 @@ OWN: list[Mutation] = [
         "cmnf-correction-offset-sign",
         "own",
         "sign",
-        "nav/cmnf.py",
+        "nav/bearings/cmnf.py",
         "    h = -H @ mb\n",
         "    h = H @ mb\n",
         "eq. 22's h_k = +H_k E beta instead of -H_k E beta",
@@ -725,7 +734,7 @@ OWN_ROUND2: list[Mutation] = [
         "pcrb-prediction-transposed",
         "own",
         "transpose",
-        "nav/pcrb.py",
+        "nav/bearings/pcrb.py",
         "prior = q + f @ np.linalg.inv(J) @ f.T",
         "prior = q + f.T @ np.linalg.inv(J) @ f",
         "the PCRB's prediction F^T J^-1 F instead of F J^-1 F^T",
@@ -825,7 +834,7 @@ OWN_ROUND3: list[Mutation] = [
         "cmnf-step-clip-dropped",
         "own",
         "correction",
-        "nav/cmnf.py",
+        "nav/bearings/cmnf.py",
         "b = np.clip(b, gains.beta_lo[i], gains.beta_hi[i])",
         "b = b",
         "the CMNF applies gains fitted on the clipped correction to the unclipped one",
@@ -844,7 +853,38 @@ OWN_ROUND3: list[Mutation] = [
 """A third round, of issue 21's own new code (the USBL fold, the swarm's divergence, the CMNF's
 clipped correction, set_sea's carry), written after it had its tests."""
 
-MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2, *OWN_ROUND3]
+ISSUE22_SEED004 = [
+    Mutation(
+        "bearing-model-ignores-absent-pairs",
+        "own",
+        "correction",
+        "nav/bearings/model.py",
+        "use = observable(x, self.beacons_m) & self.present",
+        "use = observable(x, self.beacons_m)",
+        "the bearing EKF updates on pairs that were not measured",
+    ),
+    Mutation(
+        "bank-cmnf-covariance-of-the-previous-step",
+        "own",
+        "correction",
+        "nav/bearings/bank.py",
+        "gains.p_hat[j - 1], (len(x_new), 3, 3)",
+        "gains.p_hat[j - 2], (len(x_new), 3, 3)",
+        "the bank states the CMNF's covariance of the previous step for this one",
+    ),
+    Mutation(
+        "clib-layout-check-names-ignored",
+        "own",
+        "correction",
+        "nav/clib.py",
+        "if count != len(want) or c_layout != want or c_names != c_fields(struct):",
+        "if count != len(want) or c_layout != want:",
+        "the loader accepts a mirror whose fields are retyped or renamed at the same offsets",
+    ),
+]
+"""Issue 22's seed-004 part: the bearing measurement model, the filter bank, the C loader."""
+
+MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2, *OWN_ROUND3, *ISSUE22_SEED004]
 
 _IGNORE = shutil.ignore_patterns(
     ".git", ".venv", "venv", "__pycache__", ".pytest_cache", ".ruff_cache", "runs", "*.egg-info"
@@ -878,7 +918,7 @@ def check_anchor(root: Path, m: Mutation) -> None:
 
 def copy_checkout(root: Path, dst: Path) -> Path:
     """Copy the checkout ``root`` (sources, tests, models, built ``*.so``) to ``dst``."""
-    if not any((root / "nav").glob("_seabed_shift*.so")):
+    if not any((root / "nav" / "seabed").glob("_seabed_shift*.so")):
         raise SystemExit("the C libraries are not built in the checkout (pip install -e .)")
     shutil.copytree(root, dst, ignore=_IGNORE, symlinks=True)
     return dst

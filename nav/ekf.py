@@ -307,6 +307,36 @@ def update_one(
     return x_new, P_new[None], UpdateInfo(np.array([nis]), dof, np.array([True]), no)
 
 
+def update_with(
+    x: Array,
+    P: Array,
+    model: MeasurementModel,
+    z: Array,
+    present: NDArray[np.bool_] | None = None,
+    gate_probability: float | None = None,
+) -> tuple[Array, Array, UpdateInfo]:
+    """:func:`update` with a measurement model: the innovation ``model.residual(z, h(x))``, the
+    Jacobian ``model.H(x)``, the noise ``model.R()`` and the active components ``model.active(x)``
+    (eq. 19-23, Joseph form), batched.
+
+    Args:
+        x: prior state, shape (n, d).
+        P: prior covariance, shape (n, d, d).
+        model: the measurement's model.
+        z: measurements, shape (n, m); rows with ``present`` False may hold anything.
+        present: runs that have a measurement, shape (n,) (default all).
+        gate_probability: chi-square gate probability, or ``None``.
+
+    Returns:
+        ``(x, P, info)`` as :func:`update`.
+    """
+    hx = model.h(x)
+    pres = np.ones(len(x), dtype=bool) if present is None else np.asarray(present)
+    z_safe = np.where(pres[:, None], z, hx)
+    y = model.residual(z_safe, hx)
+    return update(x, P, y, model.H(x), model.R(), model.active(x), pres, gate_probability)
+
+
 @dataclass(frozen=True)
 class BatchEKF:
     """The EKF over n Monte Carlo runs at once (an :class:`Estimator`).
@@ -333,11 +363,7 @@ class BatchEKF:
     ) -> tuple[Array, Array, UpdateInfo]:
         """Eq. 19-23 with measurements ``z`` (n, m) of ``model``; rows with ``present`` False
         are skipped (their ``z`` may hold anything)."""
-        hx = model.h(x)
-        pres = np.ones(len(x), dtype=bool) if present is None else np.asarray(present)
-        z_safe = np.where(pres[:, None], z, hx)
-        y = model.residual(z_safe, hx)
-        return update(x, P, y, model.H(x), model.R(), model.active(x), pres, gate_probability)
+        return update_with(x, P, model, z, present, gate_probability)
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,9 @@
 // Curvature-bounded ray march against seed 004's harmonic seabed (eq. 24): the hot loop of
 // bauv_sim.sensors.multibeam.HarmonicSeabed.ray_ranges, one ray at a time.
 //
-// A plain C library without Python API, loaded with ctypes (bauv_sim/sensors/multibeam.py,
-// _march_library). Python normalises the directions, checks the input and hands the rays this
+// A plain C library without Python API, loaded with ctypes by nav.clib (bauv_sim/sensors/
+// multibeam.py, _march); its entry point takes the struct bauv_march_args of the shared header
+// nav/clib.h, whose layout the loader checks against its Python mirror. Python normalises the directions, checks the input and hands the rays this
 // march leaves unresolved to its first-order march (HarmonicSeabed._lipschitz_ranges). The march
 // checks the sizes of its buffers and the path indices itself before it reads any of them.
 //
@@ -45,6 +46,10 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "clib.h"
+
+BAUV_DEFINE_LAYOUT(bauv_march_args, BAUV_MARCH_ARGS)
+
 // psi and its derivative along the ray at the point (x, y, z), for one path's coefficients
 // (a, b, c, d: K each, m) and frequencies (wx, wy: K each, rad/m).
 static void psi_slope(double x, double y, double z, double ex, double ey, double ez, int64_t K,
@@ -71,7 +76,9 @@ static void psi_slope(double x, double y, double z, double ex, double ey, double
   *g_out = ez + ex * gx + ey * gy;
 }
 
-// The march over n rays.
+// The march over n rays (the fields of bauv_march_args: n, paths = P, harmonics = K, steps, a0,
+// px, py, max_range, tol, the inputs o .. cyy and the results range .. s, each buffer with its
+// size).
 //
 // Args (shapes; P paths, K harmonics, all arrays C-contiguous):
 //   n: number of rays.
@@ -100,7 +107,7 @@ static void psi_slope(double x, double y, double z, double ex, double ey, double
 //
 // Returns the number of unresolved rays, or -1 (a buffer shorter than n, P, K say), -2 (a path
 // index outside [0, P)), -3 (n < 0, P < 1, K < 1, steps < 0, or a size product overflowing).
-int64_t bauv_harmonic_march(int64_t n, int64_t P, const double* o, const double* e,
+static int64_t march(int64_t n, int64_t P, const double* o, const double* e,
                             const int64_t* path, int64_t K,
                             const double* a, const double* b, const double* c,
                             const double* d, const double* wx, const double* wy,
@@ -170,4 +177,16 @@ int64_t bauv_harmonic_march(int64_t n, int64_t P, const double* o, const double*
     }
   }
   return left;
+}
+
+int64_t bauv_harmonic_march(const bauv_march_args* g) {
+  if (!g) return -1;
+  const int64_t sizes[16] = {g->o.size,   g->e.size,     g->path.size, g->a.size,
+                             g->b.size,   g->c.size,     g->d.size,    g->wx.size,
+                             g->wy.size,  g->top.size,   g->cxx.size,  g->cyy.size,
+                             g->range.size, g->hit.size, g->unresolved.size, g->s.size};
+  return march(g->n, g->paths, g->o.data, g->e.data, g->path.data, g->harmonics, g->a.data,
+               g->b.data, g->c.data, g->d.data, g->wx.data, g->wy.data, g->top.data, g->cxx.data,
+               g->cyy.data, g->a0, g->px, g->py, g->max_range, g->tol, g->steps, g->range.data,
+               g->hit.data, g->unresolved.data, g->s.data, sizes, 16);
 }

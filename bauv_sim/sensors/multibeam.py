@@ -34,9 +34,7 @@ never NaN. Measured ranges are clipped at 0.
 
 from __future__ import annotations
 
-import ctypes
 import functools
-import importlib.machinery
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -57,6 +55,7 @@ from bauv_sim.sensors.online import (
     lever_arm_from_site,
     register_device,
 )
+from nav import clib
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -71,37 +70,16 @@ _MARCH_LIBRARY = "_harmonic_rays"
 module by ``pip install``, see ``setup.py``)."""
 
 
-def _march_library_path() -> Path:
-    """The built C library beside this module (a Python extension's file name, no Python API).
+@functools.cache
+def _march_library() -> Callable[[clib.MarchArgs], int]:
+    """``bauv_harmonic_march`` of the C library, bound through :mod:`nav.clib` with the layout of
+    its argument struct checked (loaded once per process, on first use).
 
     Raises:
-        ConfigError: if it was not built.
+        ConfigError: if the library is not built.
     """
-    here = Path(__file__).parent
-    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-        path = here / (_MARCH_LIBRARY + suffix)
-        if path.is_file():
-            return path
-    raise ConfigError(
-        f"the harmonic seabed's ray march {here / _MARCH_LIBRARY}*.so is not built: reinstall "
-        "the package (pip install -e .)"
-    )
-
-
-@functools.cache
-def _march_library() -> Callable[..., int]:
-    """``bauv_harmonic_march`` of the C library with its argument types (loaded once per
-    process, on first use)."""
-    march = ctypes.CDLL(str(_march_library_path())).bauv_harmonic_march
-    f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
-    i64 = np.ctypeslib.ndpointer(np.int64, flags="C_CONTIGUOUS")
-    f64_out = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS, WRITEABLE")
-    u8_out = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS, WRITEABLE")
-    n, x = ctypes.c_int64, ctypes.c_double
-    march.argtypes = [n, n, f64, f64, i64, n, *[f64] * 9, x, x, x, x, x, n]
-    march.argtypes += [f64_out, u8_out, u8_out, f64_out, i64, n]
-    march.restype = n
-    return march
+    lib = clib.load_library(Path(__file__).parent, _MARCH_LIBRARY, ConfigError)
+    return clib.entry_point(lib, "bauv_harmonic_march", clib.MarchArgs)
 
 
 _MARCH_STATUS = {
@@ -450,39 +428,33 @@ class HarmonicSeabed:
         hit = np.zeros(n, np.uint8)
         unresolved = np.zeros(n, np.uint8)
         s = np.zeros(n)
-        coef = [np.ascontiguousarray(getattr(self, c), dtype=float) for c in "abcd"]
-        arrays = [
-            np.ascontiguousarray(o, dtype=float),
-            np.ascontiguousarray(e, dtype=float),
-            np.ascontiguousarray(path, dtype=np.int64),
-            *coef,
-            np.ascontiguousarray(wx),
-            np.ascontiguousarray(wy),
-            np.ascontiguousarray(-self.a0_m + self.relief_bound()),
-            np.ascontiguousarray((wx**2 * np.hypot(self.a, self.b)).sum(-1)),
-            np.ascontiguousarray((wy**2 * np.hypot(self.c, self.d)).sum(-1)),
-        ]
-        # every buffer's length, so the march checks what it reads and writes (harmonic_rays.c)
-        sizes = np.array([a.size for a in arrays] + [r.size, hit.size, unresolved.size, s.size])
-        status = march(
-            n,
-            self.paths,
-            *arrays[:3],
-            self.a.shape[1],
-            *arrays[3:],
-            self.a0_m,
-            self.period_x_m,
-            self.period_y_m,
-            max_range_m,
-            tol_m,
-            CURVATURE_STEPS,
-            r,
-            hit,
-            unresolved,
-            s,
-            sizes,
-            sizes.size,
+        coef = {c: np.ascontiguousarray(getattr(self, c), dtype=float) for c in "abcd"}
+        args = clib.pack(
+            clib.MarchArgs,
+            n=n,
+            paths=self.paths,
+            harmonics=self.a.shape[1],
+            steps=CURVATURE_STEPS,
+            a0=self.a0_m,
+            px=self.period_x_m,
+            py=self.period_y_m,
+            max_range=max_range_m,
+            tol=tol_m,
+            o=np.ascontiguousarray(o, dtype=float),
+            e=np.ascontiguousarray(e, dtype=float),
+            path=np.ascontiguousarray(path, dtype=np.int64),
+            **coef,
+            wx=np.ascontiguousarray(wx),
+            wy=np.ascontiguousarray(wy),
+            top=np.ascontiguousarray(-self.a0_m + self.relief_bound()),
+            cxx=np.ascontiguousarray((wx**2 * np.hypot(self.a, self.b)).sum(-1)),
+            cyy=np.ascontiguousarray((wy**2 * np.hypot(self.c, self.d)).sum(-1)),
+            range=r,
+            hit=hit,
+            unresolved=unresolved,
+            s=s,
         )
+        status = march(args)
         if status < 0:
             raise ConfigError(
                 f"ray_ranges: the C march refused its arguments (status {status}: "

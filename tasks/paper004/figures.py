@@ -15,12 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from nav.pcrb import pcrb
+from nav.bearings.pcrb import pcrb
 from tasks.core import style
+from tasks.paper004.sim import FILTERS
 
 plt = style.plt
-
-FILTERS = ("CMNF", "UPMF", "EKF")
 
 
 @style.styled
@@ -98,15 +97,13 @@ def errors(
     return style.save(fig, out / f"error-{name}.png")
 
 
-def draw(out: Path, kind: str, scn, cs, tot, samples: dict) -> list[str]:
-    """Every figure of a batch (see the module docstring)."""
-    from tasks.paper004.table1 import setting
-
+def draw(out: Path, kind: str, scn, cs, settings, tot, samples: dict) -> list[str]:
+    """Every figure of a batch (see the module docstring); ``settings`` are the cases'
+    :class:`tasks.paper004.sim.LoopSetting`, in the order of ``cs``."""
     xn = scn.path.path()
     t = np.arange(len(xn)) * scn.path.dt_s
     files = nominal(out, xn, np.asarray(scn.beacons, dtype=float), t)
-    for c, s in zip(cs, tot, strict=True):
-        st = setting(scn, c)
+    for c, st, s in zip(cs, settings, tot, strict=True):
         if c.label in samples:
             files += sample_paths(out, c.label, xn, t, samples[c.label])
         files += errors(

@@ -5,7 +5,7 @@ Each filter flies its own copy of every path (the control depends on the estimat
 draws. Per filter and step the block keeps: the number of paths that are still finite, the sums of
 ``||X°_k - X_k||^2`` (eq. 4), of the error ``X_k - X^_k`` and of its square per axis, of the CMNF's
 and the Kalman filters' stated error variance, of the Fisher information of the bearings at the
-true positions (for the PCRB, :mod:`nav.pcrb`), the count of absent bearing pairs, and the
+true positions (for the PCRB, :mod:`nav.bearings.pcrb`), the count of absent bearing pairs, and the
 sample paths of the first runs. A filter whose estimate or covariance stops being finite on a path
 is *diverged* there: the path leaves the sums from that step on and is counted.
 """
@@ -27,10 +27,10 @@ from bauv_sim.kinematic.seed004 import (
     Seed004World,
     TrainingNoise,
 )
-from nav.bearings import SystemPrediction, ekf_update, predict, upmf_update
-from nav.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains, cmnf_step, train
-from nav.local_control import ControlLimits, limited_control, optimal_control
-from nav.pcrb import bearing_information
+from nav.bearings import SystemPrediction, bank
+from nav.bearings.cmnf import DEFAULT_CLIP_SIGMAS, CmnfGains, train
+from nav.bearings.local_control import ControlLimits, limited_control, optimal_control
+from nav.bearings.pcrb import bearing_information
 
 if TYPE_CHECKING:
     from bauv_sim.seabed import SeabedConfig
@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 Array = NDArray[np.float64]
 
 FILTERS = ("CMNF", "UPMF", "EKF")
+"""The filters of :mod:`nav.bearings.bank` in the order of the columns of the paper's Table 1."""
 SHIFT_BIN_M = 0.05
 SHIFT_BINS = 2000
 
@@ -58,7 +59,7 @@ class LoopSetting:
         upmf_form: ``"unbiased"`` or ``"printed"`` (:func:`nav.bearings.upmf_update`).
         floor: the CMNF's singular-value floor.
         clip_sigmas: the CMNF's winsorisation of its basic correction, robust sigmas (None:
-            unclipped, the paper's filter; :func:`nav.cmnf.clip_bounds`).
+            unclipped, the paper's filter; :func:`nav.bearings.cmnf.clip_bounds`).
         train_paths: CMNF training paths.
         prediction: ``"system"`` (eq. 1, row 1 of Table 1), ``"seabed-one_attitude"`` /
             ``"seabed-turning"`` (eq. 15, row 2, over the seed's harmonic seabeds;
@@ -334,6 +335,7 @@ def fly(
         pred_err2=np.zeros((F, N + 1)),
     )
     keep = [i for i, r in enumerate(runs) if r < sample_runs]
+    options = bank.BankOptions(fn.s_eps, s.upmf_form, gains, s.correction)
     for fi, name in enumerate(filters):
         world = Seed004World(s.path, s.noise, b, draws)
         pred, world = prediction_of(s, seed, runs, world, "test")
@@ -361,17 +363,9 @@ def fly(
                 idx = np.minimum(np.linalg.norm(e, axis=1) / SHIFT_BIN_M, SHIFT_BINS - 1)
                 out.shift_hist[fi] += np.bincount(idx.astype(int), minlength=SHIFT_BINS)
             y, present = world.observe(k + 1, x)
-            if name == "CMNF":
-                alpha = x_hat + shift.displacement_m
-                x_t, x_hat = cmnf_step(gains, k + 1, alpha, s.correction, y, present, b)
-                var = np.broadcast_to(np.diag(gains.p_hat[k]), (n, 3))
-            else:
-                x_t, P_t = predict(x_hat, P, shift)
-                if name == "EKF":
-                    x_hat, P = ekf_update(x_t, P_t, y, present, b, fn.s_eps)
-                else:
-                    x_hat, P = upmf_update(x_t, P_t, y, present, b, fn.s_eps, form=s.upmf_form)
-                var = np.diagonal(P, axis1=1, axis2=2)
+            res = bank.step(name, k + 1, x_hat, P, shift, y, present, b, options)
+            x_t, x_hat, P = res.x_tilde, res.x_hat, res.p_hat
+            var = np.diagonal(P, axis1=1, axis2=2)
             bad = alive & ~(np.isfinite(x_hat).all(1) & np.isfinite(var).all(1))
             if name != "CMNF":
                 bad |= alive & ~np.isfinite(P).all((1, 2))

@@ -16,6 +16,7 @@ from bauv_sim.sensors.multibeam import (
     beam_directions,
 )
 from bauv_sim.sensors.rig import SensorRig
+from nav import clib
 
 from . import multibeam_reference
 
@@ -389,73 +390,66 @@ def test_harmonic_seabed_refuses_inconsistent_or_non_finite_coefficients():
 
 
 def _march_args(bed, o, e, path):
-    """bauv_harmonic_march's arguments for rays (r, 3) of seabed ``bed``, as _curvature_march
-    passes them, with the outputs and the sizes array (the caller can then break either)."""
+    """bauv_harmonic_march's buffers for rays (r, 3) of seabed ``bed``, as _curvature_march
+    passes them (struct fields of nav.clib.MarchArgs), the inputs and the outputs apart (the
+    caller can then break either)."""
     wx, wy = bed._w()
-    arrays = [
-        np.ascontiguousarray(o, float),
-        np.ascontiguousarray(e, float),
-        np.ascontiguousarray(path, np.int64),
-        *[np.ascontiguousarray(getattr(bed, c)) for c in "abcd"],
-        wx,
-        wy,
-        -bed.a0_m + bed.relief_bound(),
-        (wx**2 * np.hypot(bed.a, bed.b)).sum(-1),
-        (wy**2 * np.hypot(bed.c, bed.d)).sum(-1),
-    ]
+    inputs = {
+        "o": np.ascontiguousarray(o, float),
+        "e": np.ascontiguousarray(e, float),
+        "path": np.ascontiguousarray(path, np.int64),
+        **{c: np.ascontiguousarray(getattr(bed, c)) for c in "abcd"},
+        "wx": wx,
+        "wy": wy,
+        "top": -bed.a0_m + bed.relief_bound(),
+        "cxx": (wx**2 * np.hypot(bed.a, bed.b)).sum(-1),
+        "cyy": (wy**2 * np.hypot(bed.c, bed.d)).sum(-1),
+    }
     n = len(path)
-    outs = [np.full(n, -7.0), np.zeros(n, np.uint8), np.zeros(n, np.uint8), np.full(n, -7.0)]
-    sizes = np.array([a.size for a in arrays] + [x.size for x in outs])
-    return arrays, outs, sizes
+    outs = {
+        "range": np.full(n, -7.0),
+        "hit": np.zeros(n, np.uint8),
+        "unresolved": np.zeros(n, np.uint8),
+        "s": np.full(n, -7.0),
+    }
+    return inputs, outs
 
 
-def _march(bed, n, P, arrays, outs, sizes):
+def _march(bed, n, P, inputs, outs):
     march = multibeam._march_library()
-    return march(
-        n,
-        P,
-        *arrays[:3],
-        bed.a.shape[1],
-        *arrays[3:],
-        bed.a0_m,
-        bed.period_x_m,
-        bed.period_y_m,
-        100.0,
-        1e-9,
-        60,
-        *outs,
-        sizes,
-        sizes.size,
-    )
+    scalars = {"harmonics": bed.a.shape[1], "steps": 60, "a0": bed.a0_m}
+    scalars |= {"px": bed.period_x_m, "py": bed.period_y_m, "max_range": 100.0, "tol": 1e-9}
+    return march(clib.pack(clib.MarchArgs, n=n, paths=P, **scalars, **inputs, **outs))
 
 
 def test_c_march_stays_inside_its_buffers_whatever_python_passes():
     """The march checks every buffer's length and every path index before it reads: a seabed
     whose coefficients were swapped for shorter ones behind the constructor's back, a path index
-    past the seabeds, a sizes array of the wrong length, or a path count beyond the arrays are
+    past the seabeds, an output shorter than the rays, or a path count beyond the arrays are
     refused with nothing written; consistent arguments give the ranges of ray_ranges."""
     bed = HarmonicSeabed.draw(2, (0, 1, 2))
     o = np.tile([0.0, 0.0, -10.0], (3, 1))
     e = np.tile([0.2, 0.1, -1.0], (3, 1)) / np.linalg.norm([0.2, 0.1, -1.0])
     path = np.arange(3)
-    arrays, outs, sizes = _march_args(bed, o, e, path)
-    assert _march(bed, 3, 3, arrays, outs, sizes) == 0
-    np.testing.assert_allclose(outs[0], bed.ray_ranges(o, e, 100.0)[0], rtol=1e-13)
-    for broken, status in (
-        (lambda a, s: a.__setitem__(2, np.array([0, 1, 3])), -2),  # path 3 of 3 seabeds
-        (lambda a, s: a.__setitem__(4, a[4][:1].copy()), -1),  # b of one path, a of three
-        (lambda a, s: a.__setitem__(7, a[7][:1].copy()), -1),  # w_l of one harmonic
+    inputs, outs = _march_args(bed, o, e, path)
+    assert _march(bed, 3, 3, inputs, outs) == 0
+    np.testing.assert_allclose(outs["range"], bed.ray_ranges(o, e, 100.0)[0], rtol=1e-13)
+    for field, value, status in (
+        ("path", np.array([0, 1, 3]), -2),  # path 3 of 3 seabeds
+        ("b", None, -1),  # b of one path, a of three
+        ("wx", None, -1),  # w_l of one harmonic
     ):
-        arrays, outs, sizes = _march_args(bed, o, e, path)
-        broken(arrays, sizes)
-        sizes = np.array([a.size for a in arrays] + [x.size for x in outs])
-        assert _march(bed, 3, 3, arrays, outs, sizes) == status
-        assert np.all(outs[0] == -7.0) and np.all(outs[3] == -7.0)  # nothing written
-    arrays, outs, sizes = _march_args(bed, o, e, path)
-    assert _march(bed, 3, 4, arrays, outs, sizes) == -1  # 4 paths claimed, arrays of 3
-    assert _march(bed, 3, 3, arrays, outs, sizes[:-1]) == -1  # a sizes array too short
-    assert _march(bed, 3, 0, arrays, outs, sizes) == -3
-    assert np.all(outs[0] == -7.0)
+        inputs, outs = _march_args(bed, o, e, path)
+        inputs[field] = inputs[field][:1].copy() if value is None else value
+        assert _march(bed, 3, 3, inputs, outs) == status
+        assert np.all(outs["range"] == -7.0) and np.all(outs["s"] == -7.0)  # nothing written
+    inputs, outs = _march_args(bed, o, e, path)
+    assert _march(bed, 3, 4, inputs, outs) == -1  # 4 paths claimed, arrays of 3
+    short = outs | {"s": np.full(2, -7.0)}
+    assert _march(bed, 3, 3, inputs, short) == -1  # an output shorter than the rays
+    assert np.all(short["range"] == -7.0)
+    assert _march(bed, 3, 0, inputs, outs) == -3
+    assert np.all(outs["range"] == -7.0)
     # through the class: coefficients swapped behind the constructor's back
     object.__setattr__(bed, "b", bed.b[:1])
     with pytest.raises(ConfigError, match=r"refused its arguments.*buffer shorter"):

@@ -1,6 +1,6 @@
 """The numpy implementation of :func:`nav.seabed.shift_estimate` and :func:`nav.seabed.fit_slopes`
-as it was before their per-path arithmetic moved to C (``nav/seabed_shift.c``): the reference the
-tests compare the C path with (``tests/nav/test_seabed_c.py``), and a variant of
+as it was before their per-path arithmetic moved to C (``nav/seabed/seabed_shift.c``): the
+reference the tests compare the C path with (``tests/nav/test_seabed_c.py``), and a variant of
 ``benchmarks/bench_seabed.py``.
 
 The functions are those of ``nav/seabed.py`` at the commit before the C library, unchanged but
@@ -25,8 +25,8 @@ from nav.seabed import (
     CovarianceKind,
     ShiftEstimate,
     SlopeBasis,
-    _check_images,
 )
+from nav.seabed.shift import _check_images
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -31,9 +31,10 @@ from nav.bearings import (
     upmf_update,
     velocity,
 )
-from nav.cmnf import CmnfGains, cmnf_step, train
-from nav.local_control import ControlLimits, limited_control, optimal_control
-from nav.pcrb import bearing_information, pcrb
+from nav.bearings.cmnf import CmnfGains, cmnf_step, train
+from nav.bearings.local_control import ControlLimits, limited_control, optimal_control
+from nav.bearings.pcrb import bearing_information, pcrb
+from nav.errors import NavInputError
 
 B = np.array(SECTION6_BEACONS)
 S_EPS = math.tan(math.radians(0.5)) ** 2 * np.eye(2)
@@ -426,7 +427,7 @@ def test_cmnf_gains_are_eq22_worked_out_on_a_tiny_training_set():
     covariances matters: ``alpha`` and ``beta`` of other dimensions than the state with
     non-symmetric cross-covariances (F_k = cov(X, alpha) cov^+(alpha, alpha), f_k = E X - F_k E
     alpha, and section 5.2's stated covariances)."""
-    from nav.cmnf import DEFAULT_FLOOR, correction_gain, prediction_gain
+    from nav.bearings.cmnf import DEFAULT_FLOOR, correction_gain, prediction_gain
 
     rng = np.random.default_rng(3)
     n = 40
@@ -467,7 +468,7 @@ def test_cmnf_prediction_gain_recovers_a_linear_gaussian_model():
     """With ``X = A alpha + a + W`` (A not symmetric, W ~ N(0, Q) independent of alpha), the best
     linear prediction is ``A alpha + a`` with error covariance Q: eq. 22's F_k, f_k and stated
     P~_k on 1e5 samples recover A, a and Q within their sampling error."""
-    from nav.cmnf import DEFAULT_FLOOR, prediction_gain
+    from nav.bearings.cmnf import DEFAULT_FLOOR, prediction_gain
 
     rng = np.random.default_rng(4)
     n = 100_000
@@ -505,3 +506,77 @@ def test_cmnf_step_is_eq22_with_the_fitted_gains():
         b = (y[i] - bearings(xt[None], B)[0][0]).ravel()
         np.testing.assert_allclose(x_tilde[i], xt, rtol=1e-12, atol=1e-9)
         np.testing.assert_allclose(x_hat[i], xt + H[1] @ b + gains.h[1], rtol=1e-12, atol=1e-9)
+
+
+def test_ekf_with_absent_pairs_is_filterpys_update_on_the_pairs_present():
+    """The bearing EKF is nav.ekf's update with the BearingTangents model: a path missing some
+    pairs (not measured, or beacon 2 straight above) gets filterpy's EKF update on the pairs it
+    has, and a path with none keeps its prediction."""
+    rng = np.random.default_rng(8)
+    above = B.copy()
+    above[1, :2] = [120.0, 30.0]  # path 1 is straight below beacon 2: that pair is unobservable
+    x_t = np.array([[100.0, 10.0, -20.0], [120.0, 30.0, -15.0], [60.0, -40.0, -25.0]])
+    P_t = np.stack([np.diag([2.0, 3.0, 1.5]), np.diag([1.0, 1.0, 2.0]), np.diag([4.0, 2.0, 1.0])])
+    P_t[0, 0, 1] = P_t[0, 1, 0] = 0.4
+    y = bearings(x_t + rng.normal(0, 0.7, (3, 3)), above)[0]
+    present = np.array([[True, False, True, True], [True, True, True, False], [False] * 4])
+    x_hat, P = ekf_update(x_t, P_t, y, present, above, S_EPS)
+    for i, use in enumerate([[0, 2, 3], [0, 2], []]):
+        if not use:
+            assert np.array_equal(x_hat[i], x_t[i]) and np.array_equal(P[i], P_t[i])
+            continue
+        f = ExtendedKalmanFilter(dim_x=3, dim_z=2 * len(use))
+        f.x, f.P, f.R = x_t[i].copy(), P_t[i].copy(), np.kron(np.eye(len(use)), S_EPS)
+        sub = above[use]
+        f.update(
+            y[i, use].reshape(-1),
+            HJacobian=lambda z, sub=sub: bearing_jacobian(z[None], sub).reshape(-1, 3),
+            Hx=lambda z, sub=sub: bearings(z[None], sub)[0].reshape(-1),
+        )
+        np.testing.assert_allclose(x_hat[i], f.x, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(P[i], f.P, rtol=1e-10, atol=1e-14)
+
+
+def test_the_filter_bank_step_is_each_filters_prediction_and_update():
+    """bank.step, the one step the table and the mission use: the EKF and the UPMF (either form)
+    are eq. 21's prediction and their update, the CMNF is eq. 22 on alpha = X^ + shift with its
+    stated covariance of the step; a misspelt filter, a UPMF form or the CMNF without gains is a
+    NavInputError."""
+    from nav.bearings import bank
+
+    rng = np.random.default_rng(21)
+    x_hat = _points(5, seed=4)
+    P = np.broadcast_to(np.diag([1.0, 2.0, 0.5]), (5, 3, 3)).copy()
+    shift = PredictedShift(rng.normal(0, 2.0, (5, 3)), np.diag([0.3, 0.2, 0.1]))
+    y = bearings(x_hat + rng.normal(0, 1.0, (5, 3)), B)[0]
+    present = rng.random((5, 4)) > 0.2
+    gains = CmnfGains(
+        F=rng.normal(size=(3, 3, 3)),
+        f=rng.normal(size=(3, 3)),
+        H=rng.normal(size=(3, 3, 8)),
+        h=rng.normal(size=(3, 3)),
+        p_tilde=np.zeros((3, 3, 3)),
+        p_hat=np.stack([np.diag([1.0, 2.0, 3.0]) * (k + 1) for k in range(3)]),
+    )
+    x_t, P_t = x_hat + shift.displacement_m, P + shift.covariance_m2
+    for form in ("unbiased", "printed"):
+        opts = bank.BankOptions(S_EPS, upmf_form=form, gains=gains)
+        for name, update in (("EKF", ekf_update), ("UPMF", upmf_update)):
+            got = bank.step(name, 2, x_hat, P, shift, y, present, B, opts)
+            kw = {"form": form} if name == "UPMF" else {}
+            want = update(x_t, P_t, y, present, B, S_EPS, **kw)
+            assert np.array_equal(got.x_tilde, x_t)
+            assert np.array_equal(got.x_hat, want[0]) and np.array_equal(got.p_hat, want[1])
+        got = bank.step("CMNF", 2, x_hat, P, shift, y, present, B, opts)
+        want = cmnf_step(gains, 2, x_hat + shift.displacement_m, "residual", y, present, B)
+        assert np.array_equal(got.x_tilde, want[0]) and np.array_equal(got.x_hat, want[1])
+        assert np.array_equal(got.p_hat, np.broadcast_to(gains.p_hat[1], (5, 3, 3)))
+    assert bank.FILTERS == ("EKF", "UPMF", "CMNF")
+    opts = bank.BankOptions(S_EPS)
+    for name, o, match in (
+        ("ekf", opts, "filter 'ekf': must be one of EKF, UPMF, CMNF"),
+        ("CMNF", opts, "filter 'CMNF': needs fitted gains"),
+        ("UPMF", bank.BankOptions(S_EPS, upmf_form="eq21"), "upmf_form = 'eq21'"),
+    ):
+        with pytest.raises(NavInputError, match=match):
+            bank.step(name, 1, x_hat, P, shift, y, present, B, o)

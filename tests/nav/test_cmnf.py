@@ -17,9 +17,9 @@ from bauv_sim.kinematic.seed004 import (
     TrainingNoise,
 )
 from nav.bearings import SystemPrediction, bearings
-from nav.cmnf import CmnfGains, clip_bounds, cmnf_step, top_share, train
+from nav.bearings.cmnf import CmnfGains, clip_bounds, cmnf_step, top_share, train
+from nav.bearings.local_control import optimal_control
 from nav.errors import NavInputError
-from nav.local_control import optimal_control
 
 NEAR = np.array([[500.0, 100.0, 0.0], [500.0, -100.0, 0.0], [-100.0, 100.0, 0.0], [-5.0, -5.0, 0]])
 """paper-004/near-beacon's beacons: the fourth 7 m beside the start, 10 m above it."""

@@ -309,7 +309,7 @@ def test_seabed_track_is_eq16_and_exact_on_the_valley():
 def test_slope_fit_least_squares_is_the_pseudo_inverse_solution_also_when_rank_deficient():
     # Appendix A's fit goes through the Gram matrix where it is well conditioned and through the
     # SVD elsewhere: both must give numpy's pinv solution (minimum norm when rank-deficient)
-    from nav.seabed import _least_squares
+    from nav.seabed.fit import _least_squares
 
     rng = np.random.default_rng(5)
     a = rng.normal(size=(3, 40, 6))

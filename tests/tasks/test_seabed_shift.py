@@ -1,9 +1,15 @@
-"""The seed 004 shift-error script: its nominal path and control against eq. 3 and eq. 6 worked
-out here, a small measurement, and its refusal of bad input."""
+"""``paper-004/seabed-shift``: its nominal path and control against eq. 3 and eq. 6 worked out
+here, a small measurement, the registered experiment end to end (blocks pooled as one batch),
+and its refusal of bad input."""
+
+import json
+import subprocess
+import sys
 
 import numpy as np
 
-from tasks import seabed_shift as ss
+from tasks.core.runner import run
+from tasks.paper004 import seabed_shift as ss
 
 
 def test_nominal_path_is_eq3_of_section_6():
@@ -39,10 +45,51 @@ def test_a_small_measurement_reports_both_readings():
     assert np.array_equal(again["turning"].error_m, res["turning"].error_m)
 
 
-def test_bad_arguments_exit_2_with_one_line(capsys):
-    assert ss.main(["--paths", "0"]) == 2
-    err = capsys.readouterr()
-    assert err.out == "" and err.err.count("\n") == 1 and "--paths = 0" in err.err
+def test_bad_arguments_exit_2_with_one_line(tmp_path):
+    out = tmp_path / "out"
+    for args, pattern in (
+        (["--set", "steps=0"], "steps = 0"),
+        (["--set", "estimate_sigma_m=nan"], "estimate_sigma_m = nan"),
+        (["--set", "delta_e=cubic"], "delta_e"),
+        (["--runs", "0"], "runs = 0"),
+    ):
+        res = subprocess.run(
+            [sys.executable, "-m", "tasks.core.cli", "run", "paper-004/seabed-shift"]
+            + ["--out", str(out), *args],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+        )
+        assert res.returncode == 2, res.stderr
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
+        assert not out.exists()
+
+
+def test_the_registered_experiment_pools_its_blocks_as_one_batch(tmp_path):
+    """Blocks of 2 paths pooled by the report give the summary of one measurement over all the
+    paths."""
+    steps = 40
+    out, _ = run(
+        "paper-004/seabed-shift",
+        n_runs=5,
+        seed=2,
+        out_dir=tmp_path / "run",
+        overrides=[f"steps={steps}", "block_size=2"],
+        progress=False,
+    )
+    m = json.loads((out / "metrics.json").read_text())
+    want = ss.measure_shift_error(paths=5, seed=2, steps=steps)
+    assert m["experiment"] == "paper-004/seabed-shift" and m["n_runs"] == 5
+    for r, e in want.items():
+        s = e.summary()
+        got = m["readings"][r]
+        assert got["samples"] == s["samples"] == 5 * steps
+        assert got["produced"] == s["produced"] > 0.9 * 5 * steps
+        np.testing.assert_allclose(got["median_m"], s["median_m"], rtol=1e-12)
+        np.testing.assert_allclose(got["rms_m"], s["rms_m"], rtol=1e-12)
+    text = (out / "tables.md").read_text()
+    assert "one_attitude" in text and "turning" in text and "nan" not in text.lower()
 
 
 def test_a_path_draws_the_same_numbers_whatever_the_batch():

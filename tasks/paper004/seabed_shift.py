@@ -1,8 +1,9 @@
-"""The seabed-sensing shift estimate's own error on seed 004's setting (section 6).
+"""``paper-004/seabed-shift``: the seabed-sensing shift estimate's own error on seed 004's
+setting (section 6).
 
 Seed 004 predicts with ``X-tilde_{k+1} = X-hat_k + dX-hat_{k+1}`` (Table 1, second row), the shift
 coming from two acoustic images (:func:`nav.seabed.shift_estimate`, eq. 8-15 with Appendix A).
-This script measures that shift's error ``dX-hat_{k+1} - (X_{k+1} - X_k)`` alone, for both
+This experiment measures that shift's error ``dX-hat_{k+1} - (X_{k+1} - X_k)`` alone, for both
 readings of the beam attitude between two images (:data:`nav.seabed.BeamAttitude`), on the same
 paths, seabeds and range noise:
 
@@ -18,25 +19,35 @@ paths, seabeds and range noise:
 * "one_attitude": the images at ``X_k`` and ``X_{k+1}`` both aimed from ``u_k``; "turning": the
   second one aimed from ``u_{k+1}`` (eq. 10).
 
-Run: ``python -m tasks.seabed_shift --paths 500 --seed 1`` (prints the table; ``--json`` for
-machine-readable output, ``--delta-e exact`` for the exact beam change of the turning reading,
-``--estimate-sigma-m`` for a control on a noisy position).
+Run: ``bauv run paper-004/seabed-shift --runs 500 --seed 1`` (one run is one path and its seabed;
+``--set delta_e=exact`` for the exact beam change of the turning reading, ``--set
+estimate_sigma_m=...`` for a control on a noisy position, ``--set steps=...``). Every path draws
+from its own streams, so a batch's numbers do not depend on its blocks or workers.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel, Field
 
 from bauv_sim import rng as rng_mod
+from bauv_sim.config import Config
 from bauv_sim.sensors.multibeam import HarmonicSeabed, Multibeam, MultibeamConfig
+from nav import dead_reckoning
 from nav.seabed import BeamGeometry, SlopeBasis, shift_estimate
+from tasks.core.registry import (
+    Experiment,
+    MemoryTerm,
+    ReportContext,
+    ReportSummary,
+    block_by_work,
+    register,
+)
+from tasks.core.report import Table, write_metrics, write_tables
 
 Array = NDArray[np.float64]
 
@@ -59,9 +70,7 @@ def nominal_path(steps: int = 300, dt_s: float = 1.0) -> tuple[Array, Array]:
     v = 2.0 * np.column_stack(
         [np.cos(gamma) * np.cos(theta), np.cos(gamma) * np.sin(theta), np.sin(gamma)]
     )
-    x = np.empty((steps + 1, 3))
-    x[0] = (0.0, 0.0, -10.0)
-    x[1:] = x[0] + np.cumsum(v[:-1] * dt_s, axis=0)
+    x = dead_reckoning.track(np.array([[0.0, 0.0, -10.0]]), (v[:-1] * dt_s)[None])[0]
     return x, v
 
 
@@ -126,7 +135,7 @@ class ShiftErrors:
 
 
 def measure_shift_error(
-    paths: int = 500,
+    paths: int | tuple[int, ...] = 500,
     seed: int = 1,
     steps: int = 300,
     estimate_sigma_m: float = 0.0,
@@ -137,7 +146,8 @@ def measure_shift_error(
     """The shift estimate's error on seed 004's setting for both readings (module docstring).
 
     Args:
-        paths: sample paths P (one seabed each).
+        paths: sample paths P (one seabed each), or the run indices of the paths (a block of a
+            batch: each path draws from its own streams).
         seed: batch seed (streams ``("seabed004", ...)`` and the sonar's per run).
         steps: N.
         estimate_sigma_m: noise of the position the control uses, m (0: full information).
@@ -149,7 +159,8 @@ def measure_shift_error(
         Reading -> :class:`ShiftErrors`.
     """
     cfg = sonar or MultibeamConfig()
-    runs = tuple(range(paths))
+    runs = tuple(range(paths)) if isinstance(paths, int) else tuple(paths)
+    paths = len(runs)
     geometry = BeamGeometry(cfg.elevations_rad(), cfg.azimuths_rad())
     seabed = HarmonicSeabed.draw(seed, runs)
     gens = rng_mod.generators(seed, runs, "seabed004", "motion")
@@ -219,56 +230,163 @@ def measure_shift_error(
     return {r: ShiftErrors(*out[r]) for r in READINGS}
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Print the shift error table (module docstring)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--paths", type=int, default=500)
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--steps", type=int, default=300)
-    ap.add_argument("--estimate-sigma-m", type=float, default=0.0)
-    ap.add_argument("--delta-e", choices=("linear", "exact"), default="linear")
-    ap.add_argument("--json", action="store_true")
-    a = ap.parse_args(argv)
-    checks = (
-        ("--paths", a.paths, a.paths >= 1, "an integer >= 1"),
-        ("--steps", a.steps, a.steps >= 1, "an integer >= 1"),
-        ("--seed", a.seed, a.seed >= 0, "an integer >= 0"),
-        (
-            "--estimate-sigma-m",
-            a.estimate_sigma_m,
-            bool(np.isfinite(a.estimate_sigma_m) and a.estimate_sigma_m >= 0),
-            "a finite number >= 0",
-        ),
+# ---------------------------------------------------------------------------------------------
+# The registered experiment
+
+
+class SeabedShiftScenario(Config):
+    """The setting of the shift-error measurement (defaults: seed 004, section 6)."""
+
+    steps: int = Field(300, ge=1, le=100_000, description="steps N per path (seed 004: 300)")
+    estimate_sigma_m: float = Field(
+        0.0,
+        ge=0,
+        description="noise of the position the control uses, m (0: full information)",
     )
-    for name, value, ok, allowed in checks:
-        if not ok:
-            print(f"{name} = {value}: must be {allowed}", file=sys.stderr)
-            return 2
-    res = measure_shift_error(a.paths, a.seed, a.steps, a.estimate_sigma_m, delta_e=a.delta_e)
-    table = {r: e.summary() for r, e in res.items()}
-    if a.json:
-        print(json.dumps(table, indent=2))
-        return 0
-    print(
-        f"seed 004 shift error, {a.paths} paths x {a.steps} steps, seed {a.seed}, "
-        f"control position noise {a.estimate_sigma_m:g} m, turning de {a.delta_e}"
+    delta_e: Literal["linear", "exact"] = Field(
+        "linear", description="the turning reading's beam change: eq. 10 or the exact one"
     )
-    print(
-        "reading       | median m | p90 m | bias x, y, z m        | rms x, y, z m         | "
-        "stated rms m | rank < 3 | beams"
+    multibeam: MultibeamConfig = Field(
+        default_factory=MultibeamConfig, description="the sonar (seed 004's 8 x 8 beams)"
     )
-    for r, s in table.items():
-        if s.get("no_data"):
-            print(f"{r:13s} | no shift produced")
-            continue
-        b, q = s["bias_m"], s["rms_m"]
-        print(
-            f"{r:13s} | {s['median_m']:8.3f} | {s['p90_m']:5.2f} | "
-            f"{b[0]:6.3f} {b[1]:6.3f} {b[2]:6.3f}  | {q[0]:6.3f} {q[1]:6.3f} {q[2]:6.3f}  | "
-            f"{s['stated_rms_m']:12.3f} | {s['rank_deficient']:8d} | {s['mean_beams']:.1f}"
+    block_size: int | None = Field(
+        None,
+        ge=1,
+        le=100_000,
+        description="paths per block (default: as many as make 150,000 path-steps)",
+    )
+
+
+class ReadingErrors(BaseModel):
+    """One reading's shift error over the batch (:meth:`ShiftErrors.summary`)."""
+
+    samples: int = Field(description="path-steps")
+    produced: int = Field(description="path-steps with a shift")
+    median_m: float | None = Field(None, description="median error norm, m")
+    p90_m: float | None = Field(None, description="90th percentile of the error norm, m")
+    bias_m: list[float] | None = Field(None, description="mean error (x, y, z), m")
+    rms_m: list[float] | None = Field(None, description="RMS error (x, y, z), m")
+    stated_rms_m: float | None = Field(
+        None, description="root of the mean trace of the stated covariance (rank 3 shifts), m"
+    )
+    rank_deficient: int | None = Field(None, description="produced shifts of rank < 3")
+    mean_beams: float | None = Field(None, description="beams with an echo in both images")
+
+
+class SeabedShiftMetrics(BaseModel):
+    """``metrics.json`` of ``paper-004/seabed-shift``."""
+
+    schema_version: Literal[1] = 1
+    experiment: str
+    n_runs: int
+    seed: int
+    steps: int
+    estimate_sigma_m: float
+    delta_e: str
+    readings: dict[str, ReadingErrors]
+
+
+@dataclass(frozen=True)
+class SeabedShiftExperiment(Experiment):
+    """The shift estimate's error alone, both readings of the beam attitude (module docstring).
+
+    A block is a batch of paths (:func:`measure_shift_error`); its result is the per-step errors
+    of every path as plain arrays, pooled by the report.
+    """
+
+    scenario_type = SeabedShiftScenario
+    metrics_type = SeabedShiftMetrics
+
+    def block_size(self, scenario: SeabedShiftScenario) -> int:
+        return block_by_work(scenario.block_size, scenario.steps, 150_000)
+
+    def memory(self, scenario: SeabedShiftScenario, n_runs: int) -> list[MemoryTerm]:
+        # per reading and path-step: error (3 floats), ok, stated variance, rank, beams
+        per = 2 * scenario.steps * (3 * 8 + 1 + 8 + 8 + 8)
+        return [
+            MemoryTerm(
+                per * n_runs,
+                False,
+                f"runs = {n_runs} paths x steps = {scenario.steps} (the pooled errors)",
+            )
+        ]
+
+    def run_block(
+        self, scenario: SeabedShiftScenario, seed: int, runs: tuple[int, ...]
+    ) -> dict[str, dict[str, np.ndarray]]:
+        res = measure_shift_error(
+            runs,
+            seed,
+            scenario.steps,
+            scenario.estimate_sigma_m,
+            sonar=scenario.multibeam,
+            delta_e=scenario.delta_e,
         )
-    return 0
+        return {r: e.__dict__.copy() for r, e in res.items()}
+
+    def report(self, ctx: ReportContext) -> ReportSummary:
+        scn: SeabedShiftScenario = ctx.scenario  # type: ignore[assignment]
+        parts: dict[str, list[dict[str, np.ndarray]]] = {r: [] for r in READINGS}
+        for block in ctx.blocks:
+            for r in READINGS:
+                parts[r].append(block[r])
+        errors = {
+            r: ShiftErrors(**{k: np.concatenate([b[k] for b in parts[r]]) for k in parts[r][0]})
+            for r in READINGS
+        }
+        summaries = {r: ReadingErrors(**e.summary()) for r, e in errors.items()}
+        metrics = SeabedShiftMetrics(
+            experiment=self.name,
+            n_runs=ctx.n_runs,
+            seed=ctx.seed,
+            steps=scn.steps,
+            estimate_sigma_m=scn.estimate_sigma_m,
+            delta_e=scn.delta_e,
+            readings=summaries,
+        )
+        files = [write_metrics(ctx.out_dir, metrics)]
+        table = shift_table(metrics)
+        files += write_tables(ctx.out_dir, [table], heading=f"{self.name}: {self.summary}")
+        text = table.to_text() + f"wrote {len(files)} files to {ctx.out_dir}\n"
+        return ReportSummary(text, tuple(files))
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def shift_table(m: SeabedShiftMetrics) -> Table:
+    """The shift error per reading, as a table."""
+    rows = []
+    for r, s in m.readings.items():
+        if not s.produced:
+            rows.append([r, *[None] * 10])
+            continue
+        b, q = s.bias_m or [None] * 3, s.rms_m or [None] * 3
+        rows.append([r, s.median_m, s.p90_m, *b, *q, s.stated_rms_m, s.rank_deficient])
+    return Table(
+        f"Seabed shift error, {m.n_runs} paths x {m.steps} steps, seed {m.seed}, control "
+        f"position noise {m.estimate_sigma_m:g} m, turning de {m.delta_e}",
+        [
+            "reading",
+            "median (m)",
+            "p90 (m)",
+            "bias x (m)",
+            "bias y (m)",
+            "bias z (m)",
+            "rms x (m)",
+            "rms y (m)",
+            "rms z (m)",
+            "stated rms (m)",
+            "rank < 3",
+        ],
+        rows,
+        digits=3,
+        slug="seabed-shift",
+    )
+
+
+register(
+    SeabedShiftExperiment(
+        name="paper-004/seabed-shift",
+        summary="seed 004 section 4: the seabed-sensing shift's own error (eq. 8-15, Appendix A) "
+        "for both readings of the beam attitude, on section 6's path and seabeds",
+        default_runs=500,
+    )
+)

@@ -1,9 +1,11 @@
 // Per-path arithmetic of the seabed shift (seed 004, eq. 12-15 and Appendix A): the hot loops of
 // nav.seabed.fit_slopes and nav.seabed.shift_estimate, one path at a time.
 //
-// A plain C library without Python API, loaded with ctypes (nav/seabed.py, _shift_library).
-// Both entry points check the sizes of their buffers (passed beside them) and the basis before
-// they read anything, whatever the caller passes. Python checks the input, computes the beam vectors e and their change de (eq. 8, 10), and keeps
+// A plain C library without Python API, loaded with ctypes by nav.clib (nav/seabed/kernel.py).
+// Both entry points take their struct of the shared header nav/clib.h (bauv_seabed_fit_args,
+// bauv_seabed_shift_args: every buffer with its size), whose layout the loader checks against
+// its Python mirror, and check the sizes of their buffers and the basis before they read
+// anything, whatever the caller passes. Python checks the input, computes the beam vectors e and their change de (eq. 8, 10), and keeps
 // the rare branches in numpy: Appendix A's fit where its scaled Gram matrix may have a condition
 // number above nav.seabed.FIT_C_CONDITION = 1e4 (bauv_seabed_fit flags those paths, about 5 per
 // cent of seed 004's) and the SVD of eq. 15 for rcond < 1e-8.
@@ -54,7 +56,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define FIT_MAX 64  // most basis functions of the fit (nav/seabed.py checks)
+#include "clib.h"
+
+BAUV_DEFINE_LAYOUT(bauv_seabed_fit_args, BAUV_SEABED_FIT_ARGS)
+BAUV_DEFINE_LAYOUT(bauv_seabed_shift_args, BAUV_SEABED_SHIFT_ARGS)
+
+#define FIT_MAX 64  // most basis functions of the fit (nav/seabed/fit.py checks)
 
 static const double PI = 3.14159265358979323846;  // numpy.pi
 
@@ -117,7 +124,8 @@ static void jacobi_eigh(int n, double* a, double* w, double* v) {
   }
 }
 
-// Appendix A's fit, per path.
+// Appendix A's fit, per path (bauv_seabed_fit_args: paths = P, feet = m, kind, harmonics = K, px,
+// py, max_condition, points, valid, grad, fit_ok, to_numpy; each buffer with its size).
 //
 // Args (P paths, m feet, all arrays C-contiguous):
 //   P, m: paths and feet per path.
@@ -144,7 +152,7 @@ static void jacobi_eigh(int n, double* a, double* w, double* v) {
 // Returns the number of paths flagged to_numpy, or -1 (out of memory), -2 (a basis of more than
 // FIT_MAX functions, K < 1 or an unknown kind), -3 (a buffer shorter than P and m say, P < 0,
 // m < 0, or a size product overflowing).
-int64_t bauv_seabed_fit(int64_t P, int64_t m, const double* points, const uint8_t* valid,
+static int64_t seabed_fit(int64_t P, int64_t m, const double* points, const uint8_t* valid,
                         int64_t kind, int64_t K, double px, double py, double max_condition,
                         double* grad, uint8_t* fit_ok, uint8_t* to_numpy, const int64_t* sizes,
                         int64_t n_sizes) {
@@ -296,7 +304,10 @@ int64_t bauv_seabed_fit(int64_t P, int64_t m, const double* points, const uint8_
   return flagged;
 }
 
-// Eq. 12-15 with the stated covariance, per path.
+// Eq. 12-15 with the stated covariance, per path (bauv_seabed_shift_args: paths = P, beams = m,
+// residual, sigma, fallback, rcond, singular_floor, grad, e, de, l0 = L0, l1 = L1, use, fit_ok,
+// cmd, shift, cov, used = beams, rank, ok, rms; each buffer with its size, de and cmd may be
+// NULL with size 0).
 //
 // Args (P paths, m beams, all arrays C-contiguous):
 //   grad: grad psi at the feet of image k (P, m, 3) (rows of masked beams are ignored).
@@ -319,7 +330,7 @@ int64_t bauv_seabed_fit(int64_t P, int64_t m, const double* points, const uint8_
 //
 // Returns 0, or -3 (a buffer shorter than P and m say, P < 0, m < 0, or a size product
 // overflowing).
-int64_t bauv_seabed_shift(int64_t P, int64_t m, const double* grad, const double* e,
+static int64_t seabed_shift(int64_t P, int64_t m, const double* grad, const double* e,
                           const double* de, const double* L0, const double* L1,
                           const uint8_t* use, const uint8_t* fit_ok, int64_t residual,
                           double sigma, double fallback, double rcond, double singular_floor,
@@ -449,4 +460,24 @@ int64_t bauv_seabed_shift(int64_t P, int64_t m, const double* grad, const double
     }
   }
   return 0;
+}
+
+int64_t bauv_seabed_fit(const bauv_seabed_fit_args* g) {
+  if (!g) return -3;
+  const int64_t sizes[5] = {g->points.size, g->valid.size, g->grad.size, g->fit_ok.size,
+                            g->to_numpy.size};
+  return seabed_fit(g->paths, g->feet, g->points.data, g->valid.data, g->kind, g->harmonics, g->px,
+                    g->py, g->max_condition, g->grad.data, g->fit_ok.data, g->to_numpy.data,
+                    sizes, 5);
+}
+
+int64_t bauv_seabed_shift(const bauv_seabed_shift_args* g) {
+  if (!g) return -3;
+  const int64_t sizes[14] = {g->grad.size, g->e.size,    g->de.size,   g->l0.size,   g->l1.size,
+                             g->use.size,  g->fit_ok.size, g->cmd.size, g->shift.size,
+                             g->cov.size,  g->used.size, g->rank.size, g->ok.size,   g->rms.size};
+  return seabed_shift(g->paths, g->beams, g->grad.data, g->e.data, g->de.data, g->l0.data,
+                      g->l1.data, g->use.data, g->fit_ok.data, g->residual, g->sigma, g->fallback,
+                      g->rcond, g->singular_floor, g->cmd.data, g->shift.data, g->cov.data,
+                      g->used.data, g->rank.data, g->ok.data, g->rms.data, sizes, 14);
 }
