@@ -80,7 +80,8 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "nav/metrics.py": ("tests/nav/test_metrics.py", "tests/tasks/test_paper000.py"),
     "nav/accuracy.py": ("tests/nav/test_accuracy.py", "tests/tasks/test_paper000.py"),
     "nav/track_ekf.py": ("tests/nav/test_track_ekf.py", "tests/tasks/test_paper000.py"),
-    "nav/navigator.py": ("tests/nav/test_navigator.py", "tests/tasks/test_run_data.py"),
+    "nav/navigator/online.py": ("tests/nav/test_navigator.py", "tests/tasks/test_run_data.py"),
+    "nav/navigator/follower.py": ("tests/tasks/test_swarm.py", "tests/tasks/test_run_data.py"),
     "nav/dead_reckoning.py": ("tests/nav/test_dead_reckoning.py", "tests/nav/test_navigator.py"),
     "nav/bearings.py": ("tests/nav/test_bearings.py", "tests/tasks/test_paper004.py"),
     "nav/cmnf.py": (
@@ -365,8 +366,8 @@ OWN: list[Mutation] = [
         "own",
         "correction",
         "tasks/closed_loop/navigation.py",
-        "info = nav.update(model, m.value, m.t_valid_s)",
-        "info = nav.update(model, m.value, t)",
+        "info = nav.fuse(Measurement(m.value, model, m.t_valid_s))",
+        "info = nav.fuse(Measurement(m.value, model, t_s))",
         "a late USBL fix applied at its arrival instead of its time of validity",
     ),
     Mutation(

@@ -81,7 +81,6 @@ from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.errors import ConfigError
 from bauv_sim.frames import (
     R_from_roll_pitch_heading,
-    course_of_scalar,
     unit_vector_scalar,
     wrap_2pi_scalar,
 )
@@ -102,10 +101,10 @@ from bauv_sim.sensors.online import Broadcast, lever_arm_from_site
 from bauv_sim.sensors.rig import RigTick, SensorRig
 from nav.guidance import GuidanceCommand
 from nav.metrics import first_exceedance
-from nav.navigator import Estimate
-from nav.relative import FollowerNavigator, GaOptions, hdop
+from nav.navigator import BroadcastRangeNavigator, FollowerOptions, FollowerReport
+from nav.relative import GaOptions
 from tasks.closed_loop.experiment import MissionExperiment
-from tasks.closed_loop.navigation import EkfNavigation, FixRecord, NavOutput
+from tasks.closed_loop.navigation import EkfNavigation, FixRecord, NavOutput, report_of
 from tasks.closed_loop.parts import MissionParts, VehicleParts
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.scenario import (
@@ -131,6 +130,8 @@ REFUSALS = ("ok", "dr", "no range", "range below minimum", "gate", "no fix", "no
 """Codes of the modem fix table's ``refusal`` column (index = code); ``"degenerate"`` (a slant
 range shorter than the depth difference) is the last one."""
 REFUSAL_CODES = {r: i for i, r in enumerate((*REFUSALS, "degenerate"))}
+DEPTH_SIGMA_M = 0.05
+"""Standard deviation of a follower's stated depth (its pressure depth), m."""
 
 
 def racetrack(
@@ -452,8 +453,9 @@ class LeaderNavigation:
 
 
 class FollowerNavigation:
-    """A follower's navigation part: compass + log DR and the leader's ranges through
-    :class:`nav.relative.FollowerNavigator` (see the module docstring).
+    """A follower's navigation part: the rig's compass, log, pressure and modem records fed to
+    :class:`nav.navigator.BroadcastRangeNavigator` (seed 003's methods on ranges to the leader's
+    broadcast position; see the module docstring).
 
     Args:
         cfg: the followers' navigation settings.
@@ -466,11 +468,9 @@ class FollowerNavigation:
             period ago as the start of the DR segment), s.
         tick_s: control tick, s.
 
-    The output's ``extra``: ``leader`` (the latest :class:`~bauv_sim.sensors.online.Broadcast`),
-    ``leader_est`` (the leader's position now, dead-reckoned from it, (2,) m), ``leader_course``
-    (its stated course, rad), ``hdop`` (eq. 7-8 for the current geometry), ``since_fix`` (s since
-    the last accepted range), ``fix_event`` (a range was accepted at this tick) and ``current``
-    (its current estimate, (2,) m/s).
+    The output's ``report`` is a :class:`nav.navigator.FollowerReport` (the leader's latest
+    message and its position now, its course, the HDOP, the time since the last accepted range,
+    whether one was accepted at this tick, the current dead-reckoned with).
 
     Beyond the paper (``cfg.current = "leader"``): the follower cannot measure the current, and
     the paper's DR (eq. 1) has none. An unmodelled cross current (0.2 m/s: 1 m between two
@@ -500,150 +500,83 @@ class FollowerNavigation:
         sigma_c = cfg.sigma_course_deg
         if method == "ekf" and cfg.ekf_sigma_course_deg is not None:
             sigma_c = cfg.ekf_sigma_course_deg
-        self.nav = FollowerNavigator(
-            method,  # type: ignore[arg-type]
-            x0[:2],
-            math.radians(sigma_c),
-            cfg.sigma_speed_m_s,
-            GaOptions(
+        options = FollowerOptions(
+            method=method,  # type: ignore[arg-type]
+            sigma_course_rad=math.radians(sigma_c),
+            sigma_speed_m_s=cfg.sigma_speed_m_s,
+            ga=GaOptions(
                 jacobian=cfg.jacobian,
                 restart=cfg.restart,
                 sigma_range_m=cfg.sigma_range_m,
                 min_range_m=cfg.min_range_m,
             ),
-            initial_cov=cfg.initial_sigma_m**2 * np.eye(2),
+            initial_sigma_m=cfg.initial_sigma_m,
             gate_probability=cfg.gate_probability,
+            use_leader_covariance=cfg.use_leader_covariance,
+            use_leader_current=cfg.current == "leader",
+            dr_warning_s=cfg.dr_warning_s,
+            depth_sigma_m=DEPTH_SIGMA_M,
         )
         self.arm = np.asarray(transducer_body_m, dtype=float)
-        self.dr_pure = np.asarray(x0[:2], dtype=float).copy()
-        self.current = np.zeros(2)
-        self.leader = plan
-        self.leader_course = course_of_scalar(*plan.velocity_world_m_s)
-        self.t_prev = 0.0
-        self.speed = 0.0
-        self.depth = -float(x0[2])
-        self.last_fix_s = 0.0
-        self.gaps: list[tuple[float, float]] = []
-        self.counts: collections.Counter[str] = collections.Counter()
-        self.fix_hdops: list[float] = []
-        self._hist: collections.deque[Array] = collections.deque(
-            maxlen=max(1, round(period_s / tick_s)) + 1
-        )
+        self.nav = BroadcastRangeNavigator(options, x0, plan, max(1, round(period_s / tick_s)))
 
     def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
         t = tick.t_s
         heading = tick.value("compass")
         log_speed = tick.value("log")
-        if log_speed is not None:
-            self.speed = log_speed  # a blind log: the last speed it gave
-        depth = tick.value("pressure")
-        if depth is not None:
-            self.depth = depth
         nav = self.nav
-        if not initial:
-            dt = t - self.t_prev
-            e, n = unit_vector_scalar(heading)
-            self.dr_pure = self.dr_pure + dt * self.speed * np.array([e, n])
-            ve, vn = self.speed * e + self.current[0], self.speed * n + self.current[1]
-            nav.advance(course_of_scalar(ve, vn), math.hypot(ve, vn), dt)
-        self.t_prev = t
+        nav.advance(t, heading, log_speed, tick.value("pressure"), initial)
         fixes, accepted_now = [], False
         for m in tick.arrived:
             if m.device == "modem":
                 rec = self._range(t, m)
                 fixes.append(rec)
                 accepted_now |= rec.accepted
-        if accepted_now:
-            self._close_gap(t)
-            self.last_fix_s = t
-        p = nav.position
-        b = self.leader
-        leader_now = b.position_world_m[:2] + b.velocity_world_m_s * (t - b.t_s)
-        self._hist.append(p)
-        start = self._hist[0]
-        h = float(hdop(start[None], p[None], leader_now[None])[0])
-        cov = nav.covariance
-        P = np.zeros((3, 3))
-        P[:2, :2] = cov
-        P[2, 2] = 0.05**2
-        x = np.array([p[0], p[1], -self.depth])
+        est, report = nav.end_tick(t, accepted_now)
         return NavOutput(
             t_s=t,
-            estimate=Estimate(t, x, P),
-            dr_position_m=np.array([*self.dr_pure, -self.depth]),
+            estimate=est,
+            dr_position_m=nav.dr_position,
             current_m_s=None,
             heading_rad=heading,
-            speed_m_s=self.speed,
+            speed_m_s=nav.speed,
             speed_from_log=log_speed is not None,
-            odometry_speed_m_s=self.speed,
-            depth_m=self.depth,
+            odometry_speed_m_s=nav.speed,
+            depth_m=nav.depth,
             ins=tick.held["ins"],
             fixes=tuple(fixes),
             gps_fix=False,
-            extra={
-                "leader": b,
-                "leader_est": leader_now,
-                "leader_course": self.leader_course,
-                "hdop": min(h, 100.0) if math.isfinite(h) else 100.0,
-                "since_fix": t - self.last_fix_s,
-                "fix_event": accepted_now,
-                "current": self.current.copy(),
-            },
+            report=report,
         )
 
     def _range(self, t: float, m) -> FixRecord:
         """Apply one modem message (see the module docstring for the geometry)."""
-        b: Broadcast = m.payload
-        self.leader = b
-        if self.method != "dr" and self.cfg.current == "leader" and b.current_world_m_s is not None:
-            self.current = np.asarray(b.current_world_m_s, dtype=float).copy()
-        v = b.velocity_world_m_s
-        if math.hypot(v[0], v[1]) > 0.05:
-            self.leader_course = course_of_scalar(v[0], v[1])
         roll, pitch, heading = m.attitude_rad
         arm = R_from_roll_pitch_heading(roll, pitch, heading) @ self.arm
-        centre = b.transducer_world_m[:2] + v * (t - m.t_valid_s) - arm[:2]
-        r = float(m.value[0])
-        dz = float(b.transducer_world_m[2]) - (-self.depth + arm[2])
-        cov = b.covariance_m2 if self.cfg.use_leader_covariance else None
-        if r * r <= dz * dz:
-            accepted, reason, h, crit, horiz = False, "degenerate", 0.0, 0.0, 0.0
-        else:
-            horiz = math.sqrt(r * r - dz * dz)
-            out = self.nav.fix(centre, horiz, cov)
-            accepted, reason, h, crit = out.accepted, out.reason, out.hdop, out.criterion
-        self.counts["accepted" if accepted else reason] += 1
-        if accepted:
-            self.fix_hdops.append(h if math.isfinite(h) else 100.0)
-        p = self.nav.position
+        res = self.nav.range_fix(t, m.t_valid_s, float(m.value[0]), m.payload, arm)
+        h, crit, centre = res.hdop, res.criterion, res.centre_m
         z = np.array(
             [
-                r,
-                horiz,
+                res.range_m,
+                res.horizontal_m,
                 centre[0],
                 centre[1],
                 min(h, 100.0) if math.isfinite(h) else 100.0,
                 crit if math.isfinite(crit) else 0.0,
-                float(REFUSAL_CODES.get(reason, len(REFUSALS))),
+                float(REFUSAL_CODES.get(res.reason, len(REFUSALS))),
             ]
         )
-        return FixRecord("modem", m.t_valid_s, t, z, accepted, np.array([p[0], p[1], -self.depth]))
-
-    def _close_gap(self, t: float) -> None:
-        if t - self.last_fix_s >= self.cfg.dr_warning_s:
-            self.gaps.append((self.last_fix_s, t))
+        return FixRecord("modem", m.t_valid_s, t, z, res.accepted, res.position_m)
 
     def outcome(self) -> dict[str, Any]:
         """Fix counts by outcome, the mean HDOP of accepted fixes, and the intervals without an
         accepted range longer than ``dr_warning_s`` (the last one still open at the end)."""
-        gaps = list(self.gaps)
-        if self.method != "dr" and self.t_prev - self.last_fix_s >= self.cfg.dr_warning_s:
-            gaps.append((self.last_fix_s, self.t_prev))
+        nav = self.nav
         return {
             "method": self.method,
-            "fix_counts": dict(self.counts),
-            "mean_fix_hdop": float(np.mean(self.fix_hdops)) if self.fix_hdops else 0.0,
-            "dr_gaps_s": [list(g) for g in gaps] if self.method != "dr" else [],
+            "fix_counts": dict(nav.counts),
+            "mean_fix_hdop": nav.mean_fix_hdop,
+            "dr_gaps_s": [list(g) for g in nav.dr_gaps_s()],
         }
 
 
@@ -679,10 +612,10 @@ class StationGuidance:
 
     def step(self, t_s: float, nav: NavOutput) -> GuidanceCommand:
         c = self.cfg
-        b: Broadcast = nav.extra["leader"]
-        course_l = nav.extra["leader_course"]
-        speed_l = float(np.hypot(*b.velocity_world_m_s))
-        s = self.station_point(nav.extra["leader_est"], course_l)
+        rep = report_of(nav, FollowerReport)
+        course_l = rep.leader_course
+        speed_l = float(np.hypot(*rep.leader.velocity_world_m_s))
+        s = self.station_point(rep.leader_est, course_l)
         e = s - nav.estimate.x[:2]
         corr = c.gain_per_s * e
         norm = float(np.hypot(*corr))
