@@ -10,6 +10,7 @@ from nav.errors import NavError as NavError
 _EXPORTS: dict[str, tuple[str, str]] = {
     "BatchEKF": ("nav.ekf", "BatchEKF"),
     "BeamGeometry": ("nav.seabed", "BeamGeometry"),
+    "BearingMeasurement": ("nav.models", "BearingMeasurement"),
     "BroadcastRangeNavigator": ("nav.navigator", "BroadcastRangeNavigator"),
     "CmnfGains": ("nav.cmnf", "CmnfGains"),
     "ControlLimits": ("nav.local_control", "ControlLimits"),
@@ -38,6 +39,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "SeriesSum": ("nav.metrics", "SeriesSum"),
     "ShiftEstimate": ("nav.seabed", "ShiftEstimate"),
     "SingleRunEKF": ("nav.ekf", "SingleRunEKF"),
+    "SlantRangeMeasurement": ("nav.models", "SlantRangeMeasurement"),
     "SlopeBasis": ("nav.seabed", "SlopeBasis"),
     "SystemPrediction": ("nav.bearings", "SystemPrediction"),
     "UpdateInfo": ("nav.ekf", "UpdateInfo"),

@@ -1,4 +1,5 @@
-"""The online navigator: late measurements land at their time of validity."""
+"""The online navigator: late measurements land at their time of validity; a measurement
+carries its model, and any mix of them is fused."""
 
 import math
 
@@ -9,13 +10,15 @@ from nav.dead_reckoning import dead_reckon
 from nav.ekf import BatchEKF, SingleRunEKF
 from nav.errors import NavInputError
 from nav.models import (
+    BearingMeasurement,
     CourseSpeedDepthMotion,
     CurrentAwareMotion,
     DepthMeasurement,
     HorizontalPositionMeasurement,
+    SlantRangeMeasurement,
     UsblMeasurement,
 )
-from nav.navigator import Navigator, OnlineNavigator
+from nav.navigator import Measurement, Navigator, OnlineNavigator
 
 MOTION = CourseSpeedDepthMotion(math.radians(3), 0.05, 0.02)
 USBL = UsblMeasurement(np.array([50.0, 80.0, -30.0]), 0.2, math.radians(1), math.radians(1))
@@ -239,3 +242,113 @@ def test_navigator_is_consistent_on_a_matched_world():
     assert lo < nees_end.mean() < hi, (nees_end.mean(), lo, hi)
     lo, hi = _band(3, N_RUNS)
     assert lo < nees_prior.mean() < hi, (nees_prior.mean(), lo, hi)
+
+
+# -- measurements with their models -----------------------------------------------------------
+
+
+def _numeric_jacobian(model, x, eps=1e-6):
+    J = np.zeros((model.h(x).shape[-1], x.shape[-1]))
+    for i in range(x.shape[-1]):
+        dx = np.zeros_like(x)
+        dx[0, i] = eps
+        J[:, i] = model.residual(model.h(x + dx), model.h(x - dx))[0] / (2 * eps)
+    return J
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        SlantRangeMeasurement(np.array([30.0, -20.0, -2.0]), 0.5, np.array([0.3, -0.1, 0.2])),
+        BearingMeasurement(np.array([-40.0, 25.0, -50.0]), 0.01),
+        BearingMeasurement(np.array([2.0, -30.0]), 0.01),  # bearing near south: the wrap
+    ],
+    ids=["slant range", "bearing", "bearing south"],
+)
+def test_new_measurement_models_have_their_analytic_jacobians(model):
+    x = np.array([[3.0, 4.0, -7.0, 0.1, -0.2]])  # with a current appended: zero columns
+    J = model.H(x)[0]
+    assert J.shape == (1, 5)
+    assert np.allclose(J, _numeric_jacobian(model, x), atol=1e-7)
+    assert np.all(J[:, 3:] == 0.0)
+    assert model.active(x).all()
+
+
+def test_slant_range_and_bearing_predict_the_geometry():
+    p = np.array([13.0, 4.0, -1.0])
+    x = np.array([[1.0, -1.0, -5.0]])
+    arm = np.array([0.0, 0.0, 1.0])
+    # |(1, -1, -4) - (13, 4, -1)| = |(-12, -5, -3)|
+    assert SlantRangeMeasurement(p, 1.0, arm).h(x)[0, 0] == pytest.approx(math.sqrt(178.0))
+    # a beacon due east is at 90 deg, due south-west at 225 deg
+    assert BearingMeasurement(np.array([11.0, -1.0]), 0.1).h(x)[0, 0] == pytest.approx(math.pi / 2)
+    b = BearingMeasurement(np.array([-9.0, -11.0]), 0.1)
+    assert b.h(x)[0, 0] == pytest.approx(math.radians(225))
+    # a measured bearing just past north against a prediction just before it: a small residual
+    assert b.residual(np.array([[0.01]]), np.array([[2 * math.pi - 0.01]]))[0, 0] == (
+        pytest.approx(0.02)
+    )
+    # on the beacon: no direction, the bearing is left out
+    assert not BearingMeasurement(np.array([1.2, -1.0]), 0.1).active(x).any()
+
+
+def test_a_broadcast_position_covariance_bounds_its_projection():
+    C = np.array([[4.0, 1.0], [1.0, 2.0]])
+    m = SlantRangeMeasurement(np.zeros(3), 0.5, position_covariance_m2=C)
+    lam = np.linalg.eigvalsh(C)[-1]
+    assert m.R()[0, 0] == pytest.approx(0.25 + lam)
+    for a in np.linspace(0, 2 * np.pi, 37):
+        u = np.array([math.sin(a), math.cos(a)])
+        assert 0.25 + u @ C @ u <= m.R()[0, 0] + 1e-12
+    iso = SlantRangeMeasurement(np.zeros(3), 0.5, position_covariance_m2=9.0 * np.eye(3))
+    assert iso.R()[0, 0] == pytest.approx(9.25)  # exact for an isotropic covariance
+    assert SlantRangeMeasurement(np.zeros(3), 0.5).R()[0, 0] == pytest.approx(0.25)
+
+
+def test_fuse_is_the_update_with_the_measurements_own_model():
+    a, b = _nav(gate_probability=0.99), _nav(gate_probability=0.99)
+    z = np.array([120.0, math.radians(200), math.radians(-12)])
+    for k in range(1, 30):
+        for nav in (a, b):
+            nav.predict(0.1 * k, *_inputs(k))
+        if k == 20:
+            ia = a.update(USBL, z, 1.55)
+            ib = b.fuse(Measurement(z, USBL, 1.55))
+            assert ia.nis[0] == ib.nis[0]
+    assert np.array_equal(a.estimate.x, b.estimate.x)
+    assert np.array_equal(a.estimate.P, b.estimate.P)
+
+
+def test_any_mix_of_measurements_is_fused_and_finds_the_vehicle():
+    """A vehicle 30 m from where its navigator believes it is, seen by ranges to two known
+    positions, a bearing to a beacon, depth and one GPS fix: the estimate goes to the truth,
+    which dead reckoning (the same inputs) never does."""
+    truth = np.array([20.0, -10.0, -5.0])
+    nav = Navigator(0.0, truth + [30.0, 0.0, 0.0], np.diag([900.0, 900.0, 1.0]), MOTION)
+    rng = np.random.default_rng(3)
+    ends = [np.array([200.0, 150.0, -2.0]), np.array([-150.0, 180.0, -10.0])]
+    beacon = np.array([-120.0, -160.0, -40.0])
+    for k in range(1, 121):
+        t = 0.5 * k
+        nav.predict(t, 0.0, 0.0)  # hovering: the truth stays put
+        meas = [
+            Measurement(
+                np.array([-truth[2] + 0.05 * rng.standard_normal()]), DepthMeasurement(0.05)
+            )
+        ]
+        for p in ends:
+            r = np.linalg.norm(truth - p) + 0.3 * rng.standard_normal()
+            meas.append(Measurement(np.array([r]), SlantRangeMeasurement(p, 0.3), t - 0.2))
+        bearing = math.atan2(beacon[0] - truth[0], beacon[1] - truth[1]) % (2 * math.pi)
+        bearing += 0.01 * rng.standard_normal()
+        meas.append(Measurement(np.array([bearing]), BearingMeasurement(beacon, 0.01)))
+        if k == 60:
+            meas.append(Measurement(truth[:2] + 2.0, HorizontalPositionMeasurement(3.0)))
+        for m in meas:
+            assert nav.fuse(m).applied[0]
+    err = np.linalg.norm(nav.estimate.x - truth)
+    assert err < 1.0, err
+    assert np.linalg.norm(nav.dr_position - truth) == pytest.approx(30.0)
+    # the stated covariance covers the error (3 sigma)
+    d = nav.estimate.x - truth
+    assert d @ np.linalg.solve(nav.estimate.P, d) < 14.2  # chi-square(3) at 0.997
