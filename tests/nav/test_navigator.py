@@ -2,6 +2,7 @@
 carries its model, and any mix of them is fused."""
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -18,7 +19,14 @@ from nav.models import (
     SlantRangeMeasurement,
     UsblMeasurement,
 )
-from nav.navigator import Measurement, Navigator, OnlineNavigator
+from nav.navigator import (
+    BroadcastRangeNavigator,
+    FollowerOptions,
+    Measurement,
+    Navigator,
+    OnlineNavigator,
+)
+from nav.relative import GaOptions
 
 MOTION = CourseSpeedDepthMotion(math.radians(3), 0.05, 0.02)
 USBL = UsblMeasurement(np.array([50.0, 80.0, -30.0]), 0.2, math.radians(1), math.radians(1))
@@ -352,3 +360,81 @@ def test_any_mix_of_measurements_is_fused_and_finds_the_vehicle():
     # the stated covariance covers the error (3 sigma)
     d = nav.estimate.x - truth
     assert d @ np.linalg.solve(nav.estimate.P, d) < 14.2  # chi-square(3) at 0.997
+
+
+# -- the follower on ranges to a broadcast position (seed 003) --------------------------------
+
+
+@dataclass(frozen=True)
+class _Leader:
+    t_s: float
+    position_world_m: np.ndarray
+    transducer_world_m: np.ndarray
+    velocity_world_m_s: np.ndarray
+    covariance_m2: np.ndarray | None = None
+    current_world_m_s: np.ndarray | None = None
+
+
+def _follower(method="ekf", **kw):
+    opts = FollowerOptions(method, math.radians(2.0), 0.3, GaOptions(sigma_range_m=0.1), **kw)
+    plan = _Leader(0.0, np.zeros(3), np.zeros(3), np.array([0.0, 1.0]))
+    return BroadcastRangeNavigator(opts, np.array([10.0, 0.0, -3.0]), plan, history_ticks=5)
+
+
+def test_follower_dead_reckons_through_water_and_over_ground_with_the_leaders_current():
+    f = _follower("ekf")
+    f.advance(0.0, 0.0, 1.0, 3.0, initial=True)
+    cur = np.array([0.2, 0.0])
+    at = np.array([0.0, 0.0, -3.0])  # the leader 10 m west at the same depth
+    lead = _Leader(0.0, at, at, np.array([0.0, 1.0]), None, cur)
+    res = f.range_fix(0.0, 0.0, 10.0, lead, np.zeros(3))  # brings the current
+    assert res.accepted and np.array_equal(res.position_m, [10.0, 0.0, -3.0])  # no innovation
+    for k in range(1, 11):  # 10 s north at 1 m/s through water
+        f.advance(float(k), 0.0, 1.0, 3.0)
+    # the pure DR is through water; the method's estimate drifts with the current too
+    assert np.allclose(f.dr_position, [10.0, 10.0, -3.0], atol=1e-12)
+    est, rep = f.end_tick(10.0, False)
+    assert np.allclose(est.x, [12.0, 10.0, -3.0], atol=1e-9)  # carried east by the current
+    assert np.array_equal(rep.current, cur)
+    # "dr" ignores the messages, current included
+    d = _follower("dr")
+    d.advance(0.0, 0.0, 1.0, 3.0, initial=True)
+    res = d.range_fix(0.0, 0.0, 10.0, lead, np.zeros(3))
+    assert (res.accepted, res.reason) == (False, "dr")
+    d.advance(1.0, 0.0, 1.0, None)
+    assert np.array_equal(d.end_tick(1.0, False)[1].current, np.zeros(2))
+
+
+def test_follower_range_geometry_and_report():
+    f = _follower("ekf", depth_sigma_m=0.1, dr_warning_s=5.0)
+    f.advance(0.0, 0.0, 0.0, 3.0, initial=True)
+    # the leader's transducer 4 m above the follower's, 12 m west of the follower's reference
+    # point; the follower's own transducer 1 m ahead (north) of its reference point
+    trans = np.array([-2.0, 0.0, 1.0])
+    lead = _Leader(4.5, np.array([-2.0, 0.0, 0.5]), trans, np.array([0.0, 1.0]), 0.04 * np.eye(2))
+    arm = np.array([0.0, 1.0, 0.0])
+    t, t_valid = 5.0, 4.5
+    centre = trans[:2] + np.array([0.0, 1.0]) * (t - t_valid) - arm[:2]  # (-2, -0.5)
+    dz = 1.0 - (-3.0)
+    true_ref = np.array([10.0, -0.5])  # 12 m east of the centre: a horizontal range of 12 m
+    slant = math.hypot(12.0, dz)
+    for k in range(1, 6):
+        f.advance(float(k), 0.0, 0.0, 3.0)
+    res = f.range_fix(t, t_valid, slant, lead, arm)
+    assert res.accepted and res.reason == "ok"
+    assert res.horizontal_m == pytest.approx(12.0)
+    assert np.allclose(res.centre_m, centre)
+    # the estimate (10, 0) moves towards the circle: east-west is observed, not north
+    assert abs(res.position_m[0] - true_ref[0]) < 0.05
+    est, rep = f.end_tick(t, True)
+    assert est.P[2, 2] == pytest.approx(0.01)
+    assert est.x[2] == -3.0
+    assert rep.fix_event and rep.since_fix == 0.0
+    assert np.allclose(rep.leader_est, [-2.0, 0.5])  # moved on 0.5 s at 1 m/s north
+    assert rep.leader_course == pytest.approx(0.0)
+    assert f.dr_gaps_s() == [(0.0, 5.0)]  # 5 s without a range before it: a gap (>= 5 s)
+    assert f.counts["accepted"] == 1
+    # a slant range shorter than the depth difference has no horizontal solution
+    bad = f.range_fix(t, t_valid, 3.0, lead, arm)
+    assert (bad.accepted, bad.reason, bad.horizontal_m) == (False, "degenerate", 0.0)
+    assert f.counts["degenerate"] == 1
