@@ -15,7 +15,7 @@ the current's blocks) and gives the same numbers (tested).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
@@ -427,6 +427,117 @@ class DepthMeasurement:
     def active(self, x: Array) -> NDArray[np.bool_]:
         """Shape (n, 1)."""
         return np.ones((*np.shape(x)[:-1], 1), dtype=bool)
+
+
+@dataclass(frozen=True)
+class SlantRangeMeasurement:
+    """The slant range from the vehicle's transducer to a known or broadcast position (a fixed
+    beacon, or another vehicle's modem transducer as it states it): ``h(x) = |x + a - p|``,
+    with ``a`` the transducer's lever arm in the world frame and ``p`` the other end.
+
+    ``H = (x + a - p)^T / |x + a - p|`` on the position (zero columns for appended state
+    components). A broadcast position carries its own error: with its covariance ``C_p`` the
+    noise is ``R = sigma^2 + lambda_max(C_p)``, the largest variance of ``C_p`` in any direction,
+    which bounds its projection ``u^T C_p u`` on the line of sight ``u`` from above (``R`` cannot
+    depend on the state in :class:`nav.ekf.MeasurementModel`; the bound errs on the cautious
+    side, and is exact for an isotropic ``C_p``). A horizontal covariance (2, 2) is taken with
+    no vertical error. The range is inactive where the ends coincide (no direction).
+
+    Attributes:
+        position_world_m: the other end ``p``, shape (3,), m, world.
+        sigma_m: the range's standard deviation, m.
+        arm_world_m: the vehicle's transducer relative to its reference point, in the world frame
+            (the body lever arm rotated by the vehicle's attitude), shape (3,), m.
+        position_covariance_m2: covariance of ``p``, shape (3, 3) or (2, 2) (horizontal), m^2,
+            or ``None`` for a known position.
+    """
+
+    position_world_m: Array
+    sigma_m: float
+    arm_world_m: Array = field(default_factory=lambda: np.zeros(3))
+    position_covariance_m2: Array | None = None
+
+    def _d(self, x: Array) -> tuple[Array, Array]:
+        d = np.asarray(x, dtype=float)[..., :3] + self.arm_world_m - self.position_world_m
+        return d, np.sqrt(np.sum(d * d, axis=-1))
+
+    def h(self, x: Array) -> Array:
+        """Predicted range, shape (n, 1), m."""
+        return self._d(x)[1][..., None]
+
+    def H(self, x: Array) -> Array:
+        """Jacobian, shape (n, 1, d)."""
+        d, r = self._d(x)
+        H = np.zeros((*np.shape(x)[:-1], 1, np.shape(x)[-1]))
+        safe = np.where(r > 0, r, 1.0)
+        H[..., 0, :3] = d / safe[..., None]
+        return H
+
+    def R(self) -> Array:
+        """Noise, shape (1, 1), m^2 (the class docstring)."""
+        var = self.sigma_m**2
+        if self.position_covariance_m2 is not None:
+            var += float(np.linalg.eigvalsh(np.asarray(self.position_covariance_m2))[-1])
+        return np.array([[var]])
+
+    def residual(self, z: Array, hx: Array) -> Array:
+        """``z - h(x)``."""
+        return np.asarray(z, dtype=float) - hx
+
+    def active(self, x: Array) -> NDArray[np.bool_]:
+        """Whether the range has a direction, shape (n, 1)."""
+        return (self._d(x)[1] > 1e-9)[..., None]
+
+
+@dataclass(frozen=True)
+class BearingMeasurement:
+    """The horizontal bearing from the vehicle to a beacon at a known position, clockwise from
+    north (the measured relative bearing plus the vehicle's heading): ``h(x) = atan2(b_e - e,
+    b_n - n)``.
+
+    ``H = (-(b_n - n), b_e - e) / l^2`` on (east, north), with ``l`` the horizontal distance;
+    the residual is wrapped to [-pi, pi). Closer than ``min_horizontal_m`` the bearing carries no
+    usable linear information and its Jacobian diverges as 1/l: it is left out (:meth:`active`).
+
+    Attributes:
+        beacon_world_m: the beacon, shape (3,) or (2,), m, world.
+        sigma_rad: the bearing's standard deviation, rad.
+        min_horizontal_m: horizontal distance below which the bearing is not used, m.
+    """
+
+    beacon_world_m: Array
+    sigma_rad: float
+    min_horizontal_m: float = 1.0
+
+    def _d(self, x: Array) -> tuple[Array, Array]:
+        d = np.asarray(self.beacon_world_m, dtype=float)[:2] - np.asarray(x, dtype=float)[..., :2]
+        return d, d[..., 0] ** 2 + d[..., 1] ** 2
+
+    def h(self, x: Array) -> Array:
+        """Predicted bearing, shape (n, 1), rad in [0, 2 pi)."""
+        return course_of(self._d(x)[0])[..., None]
+
+    def H(self, x: Array) -> Array:
+        """Jacobian, shape (n, 1, d); zero where inactive."""
+        d, l2 = self._d(x)
+        far = l2 >= self.min_horizontal_m**2
+        safe = np.where(far, l2, 1.0)
+        H = np.zeros((*np.shape(x)[:-1], 1, np.shape(x)[-1]))
+        H[..., 0, 0] = np.where(far, -d[..., 1] / safe, 0.0)
+        H[..., 0, 1] = np.where(far, d[..., 0] / safe, 0.0)
+        return H
+
+    def R(self) -> Array:
+        """Noise, shape (1, 1), rad^2."""
+        return np.array([[self.sigma_rad**2]])
+
+    def residual(self, z: Array, hx: Array) -> Array:
+        """``z - h(x)`` wrapped to [-pi, pi)."""
+        return wrap_pi(np.asarray(z, dtype=float) - hx)
+
+    def active(self, x: Array) -> NDArray[np.bool_]:
+        """Whether the beacon is far enough for a bearing, shape (n, 1)."""
+        return (self._d(x)[1] >= self.min_horizontal_m**2)[..., None]
 
 
 @dataclass(frozen=True)

@@ -6,28 +6,39 @@ optionally with the water current in its state, and a dead-reckoning track) fed 
 1. the speed is the log's (through water) when it has one, else the odometry's;
 2. predict with the compass heading and that speed (not on the initial tick);
 3. update with the pressure depth when it was sampled this tick;
-4. apply every fix that reached the vehicle this tick, in arrival order, at its time of validity:
-   USBL (range, azimuth, elevation; the transponder's lever arm rotated by the vehicle's own
-   measured attitude at that time moves the effective transceiver) and GPS (the antenna's lever
-   arm removed from the fix), each through the navigator's chi-square gate.
+4. apply every fix that reached the vehicle this tick, in arrival order, at its time of validity,
+   each through the navigator's chi-square gate.
+
+Step 4 is the adaptation of devices to measurements: a :class:`FixAdapter` per device turns the
+rig's record into a :class:`nav.navigator.Measurement` (value, time of validity and its
+measurement model from :mod:`nav.models`), lets the navigator fuse it and keeps a
+:class:`FixRecord`. The standard adapters are :class:`UsblFixes` (range, azimuth, elevation; the
+transponder's lever arm rotated by the vehicle's own measured attitude at that time moves the
+effective transceiver) and :class:`GpsFixes` (the antenna's lever arm removed from the fix); a
+mission adds its own devices' adapters (``adapters``) without touching the navigator, which never
+asks which device a measurement came from.
 
 Each tick returns a :class:`NavOutput`; each fix is kept as a :class:`FixRecord` for the run data.
 A mission can wrap this part (seed 001's DRNS beside the EKF, :mod:`tasks.missions.correction`) or
-replace it with any object that has :meth:`step` and :meth:`outcome`.
+replace it with any object that has :meth:`step` and :meth:`outcome`; what a wrapping part adds
+is a typed report (a frozen dataclass of the mission's) in :attr:`NavOutput.report`, read back
+with :func:`report_of`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim.frames import R_from_roll_pitch_heading
 from bauv_sim.sensors.online import Broadcast
+from bauv_sim.sensors.online import Measurement as Record
 from bauv_sim.sensors.rig import RigTick
 from nav.errors import NavInputError
 from nav.models import (
@@ -36,7 +47,7 @@ from nav.models import (
     HorizontalPositionMeasurement,
     UsblMeasurement,
 )
-from nav.navigator import Estimate, Navigator
+from nav.navigator import Estimate, Measurement, Navigator, OnlineNavigator
 from tasks.closed_loop.scenario import NavigationConfig
 
 Array = NDArray[np.float64]
@@ -57,6 +68,9 @@ class FixRecord:
             world (USBL inverted; GPS: the antenna's fix, up = 0).
         nis: the update's normalised innovation squared ``y^T S^-1 y`` (what the gate tests),
             NaN when the navigator refused the fix before computing it (or did not apply GPS).
+        reference_m: a horizontal fix of the vehicle's reference point (east, north), shape
+            (2,), m, that guidance is told of (GPS: the antenna's fix less its lever arm), or
+            ``None``.
     """
 
     device: str
@@ -66,6 +80,7 @@ class FixRecord:
     accepted: bool
     position_m: Array
     nis: float = float("nan")
+    reference_m: Array | None = None
 
 
 @dataclass(frozen=True)
@@ -87,7 +102,9 @@ class NavOutput:
         gps_fix: whether a GPS fix reached the vehicle this tick.
         gps_reference_m: that fix with the antenna's lever arm removed (the reference point's
             east, north), shape (2,), m, or ``None``.
-        extra: what a wrapping part adds (e.g. seed 001's corrected position).
+        report: what a wrapping part adds, typed: a frozen dataclass of the part's (e.g.
+            :class:`nav.navigator.FollowerReport`, seed 001's corrected position), read back
+            with :func:`report_of`; ``None`` for the standard part.
         broadcast: what the vehicle sends about itself over the acoustic modem (its position,
             velocity and covariance as its navigator states them), or ``None``; the world hands
             it to the other vehicles' rigs (:class:`~bauv_sim.sensors.online.Peer`).
@@ -106,8 +123,97 @@ class NavOutput:
     fixes: tuple[FixRecord, ...]
     gps_fix: bool
     gps_reference_m: Array | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
+    report: object | None = None
     broadcast: Broadcast | None = None
+
+
+R = TypeVar("R")
+
+
+def report_of(nav: NavOutput, kind: type[R]) -> R:
+    """The navigation output's report, checked to be of the type a reader expects.
+
+    Args:
+        nav: the navigation output.
+        kind: the report's type.
+
+    Raises:
+        TypeError: if the part that produced ``nav`` reports something else (a mission wired
+            a guidance part to the wrong navigation part).
+    """
+    rep = nav.report
+    if not isinstance(rep, kind):
+        raise TypeError(
+            f"navigation report is {type(rep).__name__}, not the {kind.__name__} expected"
+        )
+    return rep
+
+
+class FixAdapter(Protocol):
+    """Turns one device's records into measurements for the navigator (module docstring)."""
+
+    def apply(self, nav: OnlineNavigator, m: Record, t_s: float) -> FixRecord:
+        """Fuse the record ``m`` that reached the vehicle at ``t_s`` (s) and say how it went."""
+        ...
+
+
+@dataclass(frozen=True)
+class UsblFixes:
+    """USBL fixes: range, azimuth and elevation from the transceiver to the vehicle's
+    transponder (:class:`nav.models.UsblMeasurement`), applied at their time of validity.
+
+    Attributes:
+        model: the measurement model with the transceiver's true position.
+        transponder_body_m: the transponder's lever arm, shape (3,), m, body FLU; rotated by the
+            attitude measured at the time of validity, it moves the effective transceiver.
+    """
+
+    model: UsblMeasurement
+    transponder_body_m: Array
+
+    def apply(self, nav: OnlineNavigator, m: Record, t_s: float) -> FixRecord:
+        roll, pitch, h = m.attitude_rad
+        R = R_from_roll_pitch_heading(roll, pitch, h)
+        model = dataclasses.replace(
+            self.model,
+            transceiver_world_m=self.model.transceiver_world_m - R @ self.transponder_body_m,
+        )
+        nis = float("nan")
+        try:
+            info = nav.fuse(Measurement(m.value, model, m.t_valid_s))
+            accepted, nis = not bool(info.rejected[0]), float(info.nis[0])
+        except NavInputError:
+            accepted = False
+        return FixRecord("usbl", m.t_valid_s, t_s, m.value, accepted, model.invert(m.value), nis)
+
+
+@dataclass(frozen=True)
+class GpsFixes:
+    """GPS fixes of the antenna (east, north) at the surface, the antenna's lever arm removed
+    (:class:`nav.models.HorizontalPositionMeasurement`), applied now; always recorded and told
+    to guidance, applied only with ``apply_to_estimate``.
+
+    Attributes:
+        model: the measurement model.
+        antenna_body_m: the antenna's lever arm, shape (3,), m, body FLU.
+        apply_to_estimate: whether the navigator fuses them.
+    """
+
+    model: HorizontalPositionMeasurement
+    antenna_body_m: Array
+    apply_to_estimate: bool = True
+
+    def apply(self, nav: OnlineNavigator, m: Record, t_s: float) -> FixRecord:
+        z = m.value
+        roll, pitch, h = m.attitude_rad
+        arm_world = R_from_roll_pitch_heading(roll, pitch, h) @ self.antenna_body_m
+        z_ref = z - arm_world[:2]
+        accepted, nis = True, float("nan")
+        if self.apply_to_estimate:
+            info = nav.fuse(Measurement(z_ref, self.model))
+            accepted, nis = not bool(info.rejected[0]), float(info.nis[0])
+        position = np.array([z[0], z[1], 0.0])
+        return FixRecord("gps", m.t_valid_s, t_s, z, accepted, position, nis, z_ref)
 
 
 class EkfNavigation:
@@ -120,6 +226,8 @@ class EkfNavigation:
         lever_arms_body_m: the rig's lever arms by device (``usbl``, ``gps``), body FLU, m.
         use_gps: apply GPS fixes (they are still recorded and reported to guidance). A vehicle
             without USBL has no USBL device in its rig.
+        adapters: the mission's own devices' adapters, by device name in the rig (added to,
+            or replacing, the standard ``usbl`` and ``gps``).
     """
 
     def __init__(
@@ -129,6 +237,7 @@ class EkfNavigation:
         transceiver_world_m: Array,
         lever_arms_body_m: dict[str, tuple[float, float, float]],
         use_gps: bool = True,
+        adapters: Mapping[str, FixAdapter] | None = None,
     ):
         n = cfg
         self.use_gps = use_gps
@@ -147,6 +256,11 @@ class EkfNavigation:
         zero = (0.0, 0.0, 0.0)
         self.transponder_arm = np.asarray(lever_arms_body_m.get("usbl", zero), dtype=float)
         self.antenna_arm = np.asarray(lever_arms_body_m.get("gps", zero), dtype=float)
+        self.adapters: dict[str, FixAdapter] = {
+            "usbl": UsblFixes(self.usbl_model, self.transponder_arm),
+            "gps": GpsFixes(self.gps_model, self.antenna_arm, use_gps),
+            **(adapters or {}),
+        }
         self.nav = Navigator(
             0.0,
             x0,
@@ -176,39 +290,17 @@ class EkfNavigation:
         if not initial:
             nav.predict(t, heading, speed, 0.0)
         if "pressure" in tick.sampled:
-            nav.update(self.depth_model, np.array([depth]))
+            nav.fuse(Measurement(np.array([depth]), self.depth_model))
         new: list[FixRecord] = []
         gps_ref = None
         for m in tick.arrived:
-            if m.device == "usbl":
-                roll, pitch, h = m.attitude_rad
-                R = R_from_roll_pitch_heading(roll, pitch, h)
-                model = dataclasses.replace(
-                    self.usbl_model,
-                    transceiver_world_m=self.transceiver_world_m - R @ self.transponder_arm,
-                )
-                nis = float("nan")
-                try:
-                    info = nav.update(model, m.value, m.t_valid_s)
-                    accepted, nis = not bool(info.rejected[0]), float(info.nis[0])
-                except NavInputError:
-                    accepted = False
-                new.append(
-                    FixRecord("usbl", m.t_valid_s, t, m.value, accepted, model.invert(m.value), nis)
-                )
-            elif m.device == "gps":
-                z = m.value
-                roll, pitch, h = m.attitude_rad
-                arm_world = R_from_roll_pitch_heading(roll, pitch, h) @ self.antenna_arm
-                z_ref = z - arm_world[:2]
-                accepted, nis = True, float("nan")
-                if self.use_gps:
-                    info = nav.update(self.gps_model, z_ref)
-                    accepted, nis = not bool(info.rejected[0]), float(info.nis[0])
-                new.append(
-                    FixRecord("gps", m.t_valid_s, t, z, accepted, np.array([z[0], z[1], 0.0]), nis)
-                )
-                gps_ref = z_ref
+            adapter = self.adapters.get(m.device)
+            if adapter is None:
+                continue
+            rec = adapter.apply(nav, m, t)
+            new.append(rec)
+            if rec.reference_m is not None:
+                gps_ref = rec.reference_m
         cur = nav.current_estimate
         return NavOutput(
             t_s=t,

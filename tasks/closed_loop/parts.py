@@ -186,9 +186,9 @@ class VehicleParts:
         guidance: its guidance part.
         autopilot: its autopilot gains.
         speed_table: its speed calibration (pilot feed-forward).
-        extra_columns: per-tick columns a mission adds from the navigation output's ``extra``:
-            column name -> (key in ``NavOutput.extra``, unit, description, components,
-            nullable).
+        extra_columns: per-tick columns a mission adds from the navigation output's typed
+            report (:attr:`~tasks.closed_loop.navigation.NavOutput.report`): column name ->
+            (field of the report, unit, description, components, nullable).
     """
 
     name: str

@@ -377,8 +377,8 @@ class MissionWorld(control.Task):
             "usbl_event": any(f.device == "usbl" for f in nav.fixes),
             "gps_event": nav.gps_fix,
         }
-        for col, (key, *_) in v.extra_columns.items():
-            row[col] = nav.extra[key]
+        for col, (field_name, *_) in v.extra_columns.items():
+            row[col] = getattr(nav.report, field_name)
         log.add(row)
 
     # -- policy and result ---------------------------------------------------------------------

@@ -43,11 +43,11 @@ from bauv_sim.frames import (
     wrap_pi_scalar,
 )
 from bauv_sim.sensors.rig import RigTick
-from nav.correction import CurrentResponse, compensated_course
+from nav.correction import CorrectionEstimate, CurrentResponse, compensated_course
 from nav.drns import CorrectedDeadReckoning
 from nav.guidance import GuidanceCommand, WaypointGuidance, direct_course
 from tasks.closed_loop.experiment import MissionExperiment
-from tasks.closed_loop.navigation import EkfNavigation, NavOutput
+from tasks.closed_loop.navigation import EkfNavigation, NavOutput, report_of
 from tasks.closed_loop.parts import MissionParts, WaypointSteering
 from tasks.closed_loop.report import circle, export_runs, record_mission
 from tasks.closed_loop.result import MissionRun, VehicleRun
@@ -132,6 +132,28 @@ def run_scenario(scn: CorrectionScenario, seed: int, run: int) -> CorrectionScen
     return load_config(CorrectionScenario, data)
 
 
+@dataclass(frozen=True)
+class CorrectionReport:
+    """What seed 001's DRNS reports at a tick (:class:`CorrectionNavigation`).
+
+    Attributes:
+        dr_uncorrected: the DRNS track without correction (east, north), shape (2,), m.
+        dr_corrected: the DRNS track, corrected after leg 2, shape (2,), m.
+        dr_baseline: the DRNS track, baseline-corrected, shape (2,), m.
+        cp_current: the correction's current estimate for the measured heading (east, north),
+            shape (2,), m/s, NaN before leg 2.
+        n_legs: legs the DRNS has closed with GPS fixes.
+        correction: the correction procedure's estimate, or ``None`` before leg 2.
+    """
+
+    dr_uncorrected: NDArray[np.float64]
+    dr_corrected: NDArray[np.float64]
+    dr_baseline: NDArray[np.float64]
+    cp_current: NDArray[np.float64]
+    n_legs: int
+    correction: CorrectionEstimate | None
+
+
 class CorrectionNavigation:
     """Seed 001's DRNS (:class:`nav.drns.CorrectedDeadReckoning`) beside the standard EKF part:
     it dead-reckons on the compass heading and the odometry speed at every tick, takes every GPS
@@ -142,9 +164,7 @@ class CorrectionNavigation:
         cfg: the correction experiment.
         courses: the three legs' courses, rad.
 
-    The navigation output's ``extra`` holds ``dr_uncorrected``, ``dr_corrected``,
-    ``dr_baseline`` (east, north, m), ``cp_current`` (the correction's current estimate for the
-    measured heading, m/s, NaN before leg 2), ``n_legs`` and ``correction`` (the estimate).
+    The navigation output's ``report`` is a :class:`CorrectionReport`.
     """
 
     def __init__(self, ekf: EkfNavigation, cfg: CorrectionConfig, courses: tuple[float, ...]):
@@ -171,15 +191,15 @@ class CorrectionNavigation:
             if est is not None
             else np.full(2, np.nan)
         )
-        extra = {
-            "dr_uncorrected": d.uncorrected.copy(),
-            "dr_corrected": d.corrected.copy(),
-            "dr_baseline": d.baseline.copy(),
-            "cp_current": cur,
-            "n_legs": len(d.legs),
-            "correction": est,
-        }
-        return dataclasses.replace(out, extra=extra)
+        report = CorrectionReport(
+            dr_uncorrected=d.uncorrected.copy(),
+            dr_corrected=d.corrected.copy(),
+            dr_baseline=d.baseline.copy(),
+            cp_current=cur,
+            n_legs=len(d.legs),
+            correction=est,
+        )
+        return dataclasses.replace(out, report=report)
 
     def outcome(self) -> dict[str, Any]:
         """When leg 3 started, the CP's error message, and its current estimate on the first
@@ -239,7 +259,8 @@ class LegGuidance(WaypointSteering):
         if nav.gps_fix:
             self.guidance.gps_fix()
         self._nav = nav
-        return self.guidance.step(t_s, np.array([*nav.extra["dr_corrected"], -nav.depth_m]))
+        rep = report_of(nav, CorrectionReport)
+        return self.guidance.step(t_s, np.array([*rep.dr_corrected, -nav.depth_m]))
 
     def _course_law(self, position, wp) -> float:
         nav = self._nav
@@ -263,7 +284,7 @@ class LegGuidance(WaypointSteering):
         if leg < 2:
             return c  # CP legs: hold the leg's course
         nu = direct_course(position, wp)
-        est = nav.extra["correction"]
+        est = report_of(nav, CorrectionReport).correction
         if self.course_law == "compensated" and est is not None:
             sol = compensated_course(np.array([nu]), np.array([nav.odometry_speed_m_s]), est)
             if bool(sol.feasible[0]):

@@ -1,6 +1,8 @@
-"""The online navigator: late measurements land at their time of validity."""
+"""The online navigator: late measurements land at their time of validity; a measurement
+carries its model, and any mix of them is fused."""
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -9,13 +11,22 @@ from nav.dead_reckoning import dead_reckon
 from nav.ekf import BatchEKF, SingleRunEKF
 from nav.errors import NavInputError
 from nav.models import (
+    BearingMeasurement,
     CourseSpeedDepthMotion,
     CurrentAwareMotion,
     DepthMeasurement,
     HorizontalPositionMeasurement,
+    SlantRangeMeasurement,
     UsblMeasurement,
 )
-from nav.navigator import Navigator, OnlineNavigator
+from nav.navigator import (
+    BroadcastRangeNavigator,
+    FollowerOptions,
+    Measurement,
+    Navigator,
+    OnlineNavigator,
+)
+from nav.relative import GaOptions
 
 MOTION = CourseSpeedDepthMotion(math.radians(3), 0.05, 0.02)
 USBL = UsblMeasurement(np.array([50.0, 80.0, -30.0]), 0.2, math.radians(1), math.radians(1))
@@ -239,3 +250,191 @@ def test_navigator_is_consistent_on_a_matched_world():
     assert lo < nees_end.mean() < hi, (nees_end.mean(), lo, hi)
     lo, hi = _band(3, N_RUNS)
     assert lo < nees_prior.mean() < hi, (nees_prior.mean(), lo, hi)
+
+
+# -- measurements with their models -----------------------------------------------------------
+
+
+def _numeric_jacobian(model, x, eps=1e-6):
+    J = np.zeros((model.h(x).shape[-1], x.shape[-1]))
+    for i in range(x.shape[-1]):
+        dx = np.zeros_like(x)
+        dx[0, i] = eps
+        J[:, i] = model.residual(model.h(x + dx), model.h(x - dx))[0] / (2 * eps)
+    return J
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        SlantRangeMeasurement(np.array([30.0, -20.0, -2.0]), 0.5, np.array([0.3, -0.1, 0.2])),
+        BearingMeasurement(np.array([-40.0, 25.0, -50.0]), 0.01),
+        BearingMeasurement(np.array([2.0, -30.0]), 0.01),  # bearing near south: the wrap
+    ],
+    ids=["slant range", "bearing", "bearing south"],
+)
+def test_new_measurement_models_have_their_analytic_jacobians(model):
+    x = np.array([[3.0, 4.0, -7.0, 0.1, -0.2]])  # with a current appended: zero columns
+    J = model.H(x)[0]
+    assert J.shape == (1, 5)
+    assert np.allclose(J, _numeric_jacobian(model, x), atol=1e-7)
+    assert np.all(J[:, 3:] == 0.0)
+    assert model.active(x).all()
+
+
+def test_slant_range_and_bearing_predict_the_geometry():
+    p = np.array([13.0, 4.0, -1.0])
+    x = np.array([[1.0, -1.0, -5.0]])
+    arm = np.array([0.0, 0.0, 1.0])
+    # |(1, -1, -4) - (13, 4, -1)| = |(-12, -5, -3)|
+    assert SlantRangeMeasurement(p, 1.0, arm).h(x)[0, 0] == pytest.approx(math.sqrt(178.0))
+    # a beacon due east is at 90 deg, due south-west at 225 deg
+    assert BearingMeasurement(np.array([11.0, -1.0]), 0.1).h(x)[0, 0] == pytest.approx(math.pi / 2)
+    b = BearingMeasurement(np.array([-9.0, -11.0]), 0.1)
+    assert b.h(x)[0, 0] == pytest.approx(math.radians(225))
+    # a measured bearing just past north against a prediction just before it: a small residual
+    assert b.residual(np.array([[0.01]]), np.array([[2 * math.pi - 0.01]]))[0, 0] == (
+        pytest.approx(0.02)
+    )
+    # on the beacon: no direction, the bearing is left out
+    assert not BearingMeasurement(np.array([1.2, -1.0]), 0.1).active(x).any()
+
+
+def test_a_broadcast_position_covariance_bounds_its_projection():
+    C = np.array([[4.0, 1.0], [1.0, 2.0]])
+    m = SlantRangeMeasurement(np.zeros(3), 0.5, position_covariance_m2=C)
+    lam = np.linalg.eigvalsh(C)[-1]
+    assert m.R()[0, 0] == pytest.approx(0.25 + lam)
+    for a in np.linspace(0, 2 * np.pi, 37):
+        u = np.array([math.sin(a), math.cos(a)])
+        assert 0.25 + u @ C @ u <= m.R()[0, 0] + 1e-12
+    iso = SlantRangeMeasurement(np.zeros(3), 0.5, position_covariance_m2=9.0 * np.eye(3))
+    assert iso.R()[0, 0] == pytest.approx(9.25)  # exact for an isotropic covariance
+    assert SlantRangeMeasurement(np.zeros(3), 0.5).R()[0, 0] == pytest.approx(0.25)
+
+
+def test_fuse_is_the_update_with_the_measurements_own_model():
+    a, b = _nav(gate_probability=0.99), _nav(gate_probability=0.99)
+    z = np.array([120.0, math.radians(200), math.radians(-12)])
+    for k in range(1, 30):
+        for nav in (a, b):
+            nav.predict(0.1 * k, *_inputs(k))
+        if k == 20:
+            ia = a.update(USBL, z, 1.55)
+            ib = b.fuse(Measurement(z, USBL, 1.55))
+            assert ia.nis[0] == ib.nis[0]
+    assert np.array_equal(a.estimate.x, b.estimate.x)
+    assert np.array_equal(a.estimate.P, b.estimate.P)
+
+
+def test_any_mix_of_measurements_is_fused_and_finds_the_vehicle():
+    """A vehicle 30 m from where its navigator believes it is, seen by ranges to two known
+    positions, a bearing to a beacon, depth and one GPS fix: the estimate goes to the truth,
+    which dead reckoning (the same inputs) never does."""
+    truth = np.array([20.0, -10.0, -5.0])
+    nav = Navigator(0.0, truth + [30.0, 0.0, 0.0], np.diag([900.0, 900.0, 1.0]), MOTION)
+    rng = np.random.default_rng(3)
+    ends = [np.array([200.0, 150.0, -2.0]), np.array([-150.0, 180.0, -10.0])]
+    beacon = np.array([-120.0, -160.0, -40.0])
+    for k in range(1, 121):
+        t = 0.5 * k
+        nav.predict(t, 0.0, 0.0)  # hovering: the truth stays put
+        meas = [
+            Measurement(
+                np.array([-truth[2] + 0.05 * rng.standard_normal()]), DepthMeasurement(0.05)
+            )
+        ]
+        for p in ends:
+            r = np.linalg.norm(truth - p) + 0.3 * rng.standard_normal()
+            meas.append(Measurement(np.array([r]), SlantRangeMeasurement(p, 0.3), t - 0.2))
+        bearing = math.atan2(beacon[0] - truth[0], beacon[1] - truth[1]) % (2 * math.pi)
+        bearing += 0.01 * rng.standard_normal()
+        meas.append(Measurement(np.array([bearing]), BearingMeasurement(beacon, 0.01)))
+        if k == 60:
+            meas.append(Measurement(truth[:2] + 2.0, HorizontalPositionMeasurement(3.0)))
+        for m in meas:
+            assert nav.fuse(m).applied[0]
+    err = np.linalg.norm(nav.estimate.x - truth)
+    assert err < 1.0, err
+    assert np.linalg.norm(nav.dr_position - truth) == pytest.approx(30.0)
+    # the stated covariance covers the error (3 sigma)
+    d = nav.estimate.x - truth
+    assert d @ np.linalg.solve(nav.estimate.P, d) < 14.2  # chi-square(3) at 0.997
+
+
+# -- the follower on ranges to a broadcast position (seed 003) --------------------------------
+
+
+@dataclass(frozen=True)
+class _Leader:
+    t_s: float
+    position_world_m: np.ndarray
+    transducer_world_m: np.ndarray
+    velocity_world_m_s: np.ndarray
+    covariance_m2: np.ndarray | None = None
+    current_world_m_s: np.ndarray | None = None
+
+
+def _follower(method="ekf", **kw):
+    opts = FollowerOptions(method, math.radians(2.0), 0.3, GaOptions(sigma_range_m=0.1), **kw)
+    plan = _Leader(0.0, np.zeros(3), np.zeros(3), np.array([0.0, 1.0]))
+    return BroadcastRangeNavigator(opts, np.array([10.0, 0.0, -3.0]), plan, history_ticks=5)
+
+
+def test_follower_dead_reckons_through_water_and_over_ground_with_the_leaders_current():
+    f = _follower("ekf")
+    f.advance(0.0, 0.0, 1.0, 3.0, initial=True)
+    cur = np.array([0.2, 0.0])
+    at = np.array([0.0, 0.0, -3.0])  # the leader 10 m west at the same depth
+    lead = _Leader(0.0, at, at, np.array([0.0, 1.0]), None, cur)
+    res = f.range_fix(0.0, 0.0, 10.0, lead, np.zeros(3))  # brings the current
+    assert res.accepted and np.array_equal(res.position_m, [10.0, 0.0, -3.0])  # no innovation
+    for k in range(1, 11):  # 10 s north at 1 m/s through water
+        f.advance(float(k), 0.0, 1.0, 3.0)
+    # the pure DR is through water; the method's estimate drifts with the current too
+    assert np.allclose(f.dr_position, [10.0, 10.0, -3.0], atol=1e-12)
+    est, rep = f.end_tick(10.0, False)
+    assert np.allclose(est.x, [12.0, 10.0, -3.0], atol=1e-9)  # carried east by the current
+    assert np.array_equal(rep.current, cur)
+    # "dr" ignores the messages, current included
+    d = _follower("dr")
+    d.advance(0.0, 0.0, 1.0, 3.0, initial=True)
+    res = d.range_fix(0.0, 0.0, 10.0, lead, np.zeros(3))
+    assert (res.accepted, res.reason) == (False, "dr")
+    d.advance(1.0, 0.0, 1.0, None)
+    assert np.array_equal(d.end_tick(1.0, False)[1].current, np.zeros(2))
+
+
+def test_follower_range_geometry_and_report():
+    f = _follower("ekf", depth_sigma_m=0.1, dr_warning_s=5.0)
+    f.advance(0.0, 0.0, 0.0, 3.0, initial=True)
+    # the leader's transducer 4 m above the follower's, 12 m west of the follower's reference
+    # point; the follower's own transducer 1 m ahead (north) of its reference point
+    trans = np.array([-2.0, 0.0, 1.0])
+    lead = _Leader(4.5, np.array([-2.0, 0.0, 0.5]), trans, np.array([0.0, 1.0]), 0.04 * np.eye(2))
+    arm = np.array([0.0, 1.0, 0.0])
+    t, t_valid = 5.0, 4.5
+    centre = trans[:2] + np.array([0.0, 1.0]) * (t - t_valid) - arm[:2]  # (-2, -0.5)
+    dz = 1.0 - (-3.0)
+    true_ref = np.array([10.0, -0.5])  # 12 m east of the centre: a horizontal range of 12 m
+    slant = math.hypot(12.0, dz)
+    for k in range(1, 6):
+        f.advance(float(k), 0.0, 0.0, 3.0)
+    res = f.range_fix(t, t_valid, slant, lead, arm)
+    assert res.accepted and res.reason == "ok"
+    assert res.horizontal_m == pytest.approx(12.0)
+    assert np.allclose(res.centre_m, centre)
+    # the estimate (10, 0) moves towards the circle: east-west is observed, not north
+    assert abs(res.position_m[0] - true_ref[0]) < 0.05
+    est, rep = f.end_tick(t, True)
+    assert est.P[2, 2] == pytest.approx(0.01)
+    assert est.x[2] == -3.0
+    assert rep.fix_event and rep.since_fix == 0.0
+    assert np.allclose(rep.leader_est, [-2.0, 0.5])  # moved on 0.5 s at 1 m/s north
+    assert rep.leader_course == pytest.approx(0.0)
+    assert f.dr_gaps_s() == [(0.0, 5.0)]  # 5 s without a range before it: a gap (>= 5 s)
+    assert f.counts["accepted"] == 1
+    # a slant range shorter than the depth difference has no horizontal solution
+    bad = f.range_fix(t, t_valid, 3.0, lead, arm)
+    assert (bad.accepted, bad.reason, bad.horizontal_m) == (False, "degenerate", 0.0)
+    assert f.counts["degenerate"] == 1

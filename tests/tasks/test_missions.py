@@ -3,6 +3,7 @@ style of dm_control's ``suite_test.py``), sensors in the physics loop, recording
 robustness and failure reporting, and missions composed in a test (two vehicles; a guidance law of
 the test's own)."""
 
+import dataclasses
 import json
 import math
 import subprocess
@@ -497,3 +498,24 @@ def test_gps_table_holds_the_antennas_east_and_north():
     pos = gps["position"].values
     assert np.array_equal(pos[:, :2], np.column_stack([gps["east"].values, gps["north"].values]))
     assert np.all(pos[:, 2] == 0.0)
+
+
+def test_a_navigation_report_is_read_back_by_type_not_by_key():
+    """A guidance part reads the typed report of the navigation part it is wired to; wired to
+    another one, it fails with one line naming both types (not a KeyError deep inside)."""
+    from nav.navigator import Estimate, FollowerReport
+    from tasks.closed_loop.navigation import NavOutput, report_of
+    from tasks.missions.correction import CorrectionReport
+
+    en = np.zeros(2)
+    rep = CorrectionReport(en, en + 1.0, en, en, 2, None)
+    out = NavOutput(
+        0.0, Estimate(0.0, np.zeros(3), np.eye(3)), np.zeros(3), None, 0.0, 1.0, True, 1.0,
+        3.0, np.zeros(5), (), False, report=rep,
+    )  # fmt: skip
+    assert report_of(out, CorrectionReport) is rep
+    assert np.array_equal(report_of(out, CorrectionReport).dr_corrected, [1.0, 1.0])
+    with pytest.raises(TypeError, match="CorrectionReport, not the FollowerReport expected"):
+        report_of(out, FollowerReport)
+    with pytest.raises(TypeError, match="NoneType"):
+        report_of(dataclasses.replace(out, report=None), CorrectionReport)

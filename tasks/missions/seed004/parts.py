@@ -24,7 +24,7 @@ from nav.bearings.cmnf import CmnfGains
 from nav.guidance import GuidanceCommand
 from nav.navigator import Estimate
 from tasks.closed_loop import parts as P
-from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance
+from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance, report_of
 from tasks.closed_loop.world import place_vehicle, scenario_sea, single_vehicle_scene, streams
 from tasks.missions.seed004.scenario import Seed004Scenario, beacon_specs, surrogate
 
@@ -147,6 +147,21 @@ class SonarShift:
         return PredictedShift(est.shift_m - arm, est.covariance_m2)
 
 
+@dataclass(frozen=True)
+class BearingReport:
+    """What :class:`BearingNavigation` reports at a tick: ``control`` (gamma, theta, V),
+    ``depth_cmd`` (m), ``filter_step`` (j, -1 between steps), ``done`` (the last step is
+    over), ``shift`` (the predicted displacement, (3,) m) and ``shift_beams`` (beams the seabed
+    shift used; 0: none)."""
+
+    control: Array
+    depth_cmd: float
+    filter_step: float
+    done: bool
+    shift: Array
+    shift_beams: float
+
+
 class BearingNavigation:
     """A seed-004 filter on the DOA bearings beside the standard part (heading, depth, speed and
     DR for the autopilot and the log), plus the locally optimal control on its estimate.
@@ -156,7 +171,7 @@ class BearingNavigation:
     bearing set of that tick (absent pairs left out; no set: prediction only), then ``u_j`` from
     the estimate (eq. 7 with the box). An estimate that is not finite, or farther than
     ``diverge_m`` from the nominal point, stops the flight with a named divergence
-    (:class:`nav.errors.NavError`). ``extra`` holds ``control`` (gamma, theta, V), ``depth_cmd``
+    (:class:`nav.errors.NavError`). ``report`` holds ``control`` (gamma, theta, V), ``depth_cmd``
     (m), ``filter_step`` (j, -1 between steps), ``shift`` (the predicted displacement, m) and
     ``shift_beams`` (beams the seabed shift used; 0: none).
 
@@ -249,18 +264,16 @@ class BearingNavigation:
             if j < self.n_steps:
                 self.u = self.ctl(j, self.x_hat)
             self.depth_cmd = depth_setpoint(out.depth_m, self.u[0], self.ap)
-        extra = {
-            "control": self.u[0].copy(),
-            "depth_cmd": self.depth_cmd,
-            "filter_step": float(j if at_step and not initial and j == self.j else -1),
-            "done": self.j >= self.n_steps,
-            "shift": self.shift.copy(),
-            "shift_beams": float(self.sonar.last_beams if self.sonar is not None else 0),
-        }
-        if initial:
-            extra["filter_step"] = 0.0
+        report = BearingReport(
+            control=self.u[0].copy(),
+            depth_cmd=self.depth_cmd,
+            filter_step=0.0 if initial else float(j if at_step and j == self.j else -1),
+            done=self.j >= self.n_steps,
+            shift=self.shift.copy(),
+            shift_beams=float(self.sonar.last_beams if self.sonar is not None else 0),
+        )
         est = Estimate(tick.t_s, self.x_hat[0].copy(), self.P[0].copy())
-        return dataclasses.replace(out, estimate=est, extra=extra)
+        return dataclasses.replace(out, estimate=est, report=report)
 
     def outcome(self) -> dict[str, Any]:
         return {"absent_pairs": self.absent_total, "missing_sets": self.missing_sets}
@@ -304,11 +317,12 @@ class ControlGuidance:
         return self.finished
 
     def step(self, t_s: float, nav: NavOutput) -> GuidanceCommand:
-        _, theta, v = (float(a) for a in nav.extra["control"])
-        self.finished = bool(nav.extra["done"])
+        rep = report_of(nav, BearingReport)
+        _, theta, v = (float(a) for a in rep.control)
+        self.finished = bool(rep.done)
         course = (math.pi / 2 - theta) % (2 * math.pi)
         mode = "done" if self.finished else "transit"
-        return GuidanceCommand(course, nav.extra["depth_cmd"], v, mode, 0)
+        return GuidanceCommand(course, rep.depth_cmd, v, mode, 0)
 
     def waypoints(self) -> list[tuple[float, float, float]]:
         return []

@@ -25,6 +25,14 @@ The dead-reckoning track (:class:`nav.dead_reckoning.DeadReckoning`) uses the sa
 without the current and is never corrected (``reset_dr`` restarts it, e.g. at a GPS fix when a
 mission wants DR-with-resets).
 
+**Measurements carry their model.** A :class:`Measurement` is a value, its time of validity and
+its measurement model (:mod:`nav.models`: ``h``, ``H``, ``R``, ``residual``, ``active``), as a
+Stone Soup detection carries its measurement model: :meth:`OnlineNavigator.fuse` applies any of
+them (USBL or GPS fixes, depth, ranges to a known or broadcast position, bearings to beacons)
+through the one update of :mod:`nav.ekf`, with no dispatch on what the device was. Which device
+gives which measurement is the business of the code that reads the devices (the mission's
+adapter), not of the navigator.
+
 **Estimator.** :class:`OnlineNavigator` does the history, the late fixes, the gate, the lock-out
 and the DR for any :class:`nav.ekf.Estimator` it is given (with the estimator's motion model);
 :class:`Navigator` builds today's configuration in one call: seed 000's motion model, with the
@@ -60,6 +68,24 @@ class Estimate:
     t_s: float
     x: Array
     P: Array
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """A measurement with its model: what :meth:`OnlineNavigator.fuse` applies.
+
+    Attributes:
+        value: the measured value, shape (m,), in the units of ``model.h`` (e.g. USBL: range m,
+            azimuth rad, elevation rad; depth: m).
+        model: its measurement model (:class:`nav.ekf.MeasurementModel`, from :mod:`nav.models`):
+            the predicted value ``h``, its Jacobian ``H``, the noise ``R``, the ``residual``
+            (angles wrapped) and which components are ``active``.
+        t_valid_s: its time of validity, s (``None``: now, the navigator's current time).
+    """
+
+    value: Array
+    model: MeasurementModel
+    t_valid_s: float | None = None
 
 
 @dataclass
@@ -181,6 +207,22 @@ class OnlineNavigator:
         self._dr.reset(np.asarray(x, dtype=float).reshape(3))
 
     # -- measurement update -------------------------------------------------------------------
+
+    def fuse(self, measurement: Measurement) -> UpdateInfo:
+        """Apply a measurement with its own model at its time of validity (:meth:`update`).
+
+        Args:
+            measurement: value, model and time of validity.
+
+        Returns:
+            The update diagnostics (NIS, gate decision).
+
+        Raises:
+            NavInputError: if the measurement is older than the kept history, in the future or
+                not finite.
+            FilterDivergedError: if the re-predicted estimate is not finite.
+        """
+        return self.update(measurement.model, measurement.value, measurement.t_valid_s)
 
     def update(
         self, model: MeasurementModel, z: Array, t_valid_s: float | None = None

@@ -1,0 +1,31 @@
+"""The online navigator of one vehicle, and the navigators built from it.
+
+* :mod:`nav.navigator.online`: :class:`OnlineNavigator` (any estimator, late measurements at
+  their time of validity, gate and lock-out, DR beside it), :class:`Navigator` (seed 000's EKF in
+  one call) and :class:`Measurement` (a value with its measurement model: what the navigator
+  fuses);
+* :mod:`nav.navigator.follower`: :class:`BroadcastRangeNavigator`, a follower navigating on ranges
+  to another vehicle's broadcast position with seed 003's GA fixes or the range EKF
+  (:mod:`nav.relative`), and its typed :class:`FollowerReport`.
+"""
+
+from nav.navigator.follower import (
+    BroadcastRangeNavigator,
+    FollowerOptions,
+    FollowerReport,
+    LeaderState,
+    RangeFixResult,
+)
+from nav.navigator.online import Estimate, Measurement, Navigator, OnlineNavigator
+
+__all__ = [
+    "BroadcastRangeNavigator",
+    "Estimate",
+    "FollowerOptions",
+    "FollowerReport",
+    "LeaderState",
+    "Measurement",
+    "Navigator",
+    "OnlineNavigator",
+    "RangeFixResult",
+]
