@@ -561,6 +561,13 @@ def test_paper004_block(name):
     same(roundtrip(block).value, block)
 
 
+def test_paper004_seabed_shift_block():
+    block = _block("paper-004/seabed-shift", (0, 1), "steps=3")
+    assert set(block) == {"one_attitude", "turning"}
+    assert block["turning"]["error_m"].shape == (2, 3, 3) and block["turning"]["ok"].dtype == bool
+    same(roundtrip(block).value, block)
+
+
 def test_accuracy_block():
     assert _block("paper-000/accuracy", (0,)) is None
     assert roundtrip(None).value is None
@@ -608,6 +615,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "SwarmExperiment",
         "SquareExperiment",
         "Paper004Experiment",
+        "SeabedShiftExperiment",
         "Seed004Experiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
