@@ -129,7 +129,7 @@ def test_paper_values_lookup():
 
 
 def test_fit_objective_prefers_the_default_hull_response():
-    """The default rho_s was fitted to the paper's Tables 1 and 3 (nav.correction.CurrentResponse);
+    """The default rho_s was fitted to the paper's Tables 1 and 3 (nav.surfacing.CurrentResponse);
     on a seed outside the fit it still beats a hull without angle dependence."""
     fitted = paper001.paper_fit_objective(scenario(*COARSE, "report.figures=false"), (7,))
     flat = paper001.paper_fit_objective(
