@@ -1,7 +1,7 @@
 """CMNF training at the paper's scale (seed 004: 1e5 paths x 300 steps, the CMNF in the loop), the
 batched training against a per-path loop on a subset, and the training's peak memory.
 
-The batched variant is :func:`tasks.paper004.sim.train_gains` (:func:`nav.cmnf.train` on
+The batched variant is :func:`tasks.paper004.sim.train_gains` (:func:`nav.bearings.cmnf.train` on
 :mod:`bauv_sim.kinematic.seed004`: one step at a time over all paths, moments from the current
 step only). The per-path loop does the same algorithm path by path: each step it controls,
 advances, predicts and observes every path alone (the project's functions on one-row arrays) and

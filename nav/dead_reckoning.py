@@ -3,7 +3,7 @@ seed 001 eq. 30-33), the one implementation every DR track uses.
 
 The displacement of a step comes from a motion model (seed 000: course, speed and depth change,
 :meth:`nav.models.CourseSpeedDepthMotion.increment`) or from a velocity times the step (seed 001's
-corrected velocity, :func:`nav.correction.dr_velocity`). Two forms:
+corrected velocity, :func:`nav.surfacing.drns.dr_velocity`). Two forms:
 
 * :func:`track`, batched over runs and steps: the start plus the cumulative sum of the
   displacements (``F = I``, so no time loop), also used for the covariance (eq. 9-10: ``P0`` plus

@@ -132,7 +132,8 @@ class CourseSpeedDepthMotion:
         return inc, Q
 
     def increment_and_packed_Q(self, u: Array, dt_s: float) -> tuple[Array, Array]:
-        """:meth:`increment_and_Q` of n runs' T steps laid out for :func:`nav.track_ekf.ekf_tracks`.
+        """:meth:`increment_and_Q` of n runs' T steps laid out for
+        :func:`nav.usbl.tracks.ekf_tracks`.
 
         Args:
             u: ``(C, S, dz)`` of each step, shape (n, T, 3).
@@ -140,7 +141,7 @@ class CourseSpeedDepthMotion:
 
         Returns:
             ``(displacement (T, 3, n) m, Q packed (T, 6, n) m^2)``: time-major structure of
-            arrays; Q's upper triangle in the order of :data:`nav.track_ekf.SYM`. The same
+            arrays; Q's upper triangle in the order of :data:`nav.ekf.SYM3`. The same
             numbers as :meth:`increment_and_Q` (tested), with fewer temporaries.
         """
         n, T, _ = u.shape
@@ -586,7 +587,8 @@ class CurrentAwareMotion:
         return Q
 
     def increment_and_packed_Q(self, u: Array, dt_s: float) -> tuple[Array, Array]:
-        """:meth:`increment_and_Q` of n runs' T steps laid out for :func:`nav.track_ekf.ekf_tracks`.
+        """:meth:`increment_and_Q` of n runs' T steps laid out for
+        :func:`nav.usbl.tracks.ekf_tracks`.
 
         Args:
             u: ``(C, S, dz)`` of each step, shape (n, T, 3).
@@ -594,7 +596,7 @@ class CurrentAwareMotion:
 
         Returns:
             ``(displacement (T, n, 3) m, Q packed (T, 6, n) m^2)``: time-major; Q's upper
-            triangle in the order of :data:`nav.track_ekf.SYM`, the same numbers as
+            triangle in the order of :data:`nav.ekf.SYM3`, the same numbers as
             :meth:`increment_and_Q` (tested).
         """
         c, s, dz = (np.ascontiguousarray(u[..., i].T) for i in range(3))  # (T, n) each

@@ -170,7 +170,9 @@ def dr_sites(path: Path) -> list[str]:
                 sites.append(f"{_rel(path)}:{node.lineno}: cumsum")
         if isinstance(node, ast.AugAssign) and isinstance(node.op, ast.Add):
             t = node.target
-            tname = t.id if isinstance(t, ast.Name) else getattr(getattr(t, "value", None), "id", "")
+            tname = (
+                t.id if isinstance(t, ast.Name) else getattr(getattr(t, "value", None), "id", "")
+            )
             if pos.match(tname or "") and {"dt", "dt_s", "step_s"} & _names_in(node.value):
                 sites.append(f"{_rel(path)}:{node.lineno}: {tname} += ... dt")
     return sites

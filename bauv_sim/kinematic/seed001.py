@@ -39,7 +39,7 @@ the current's (metres). A coarser ``step_s`` therefore changes the statistics on
 Each leg starts at a GPS fix (the previous leg's true end) and lasts ``T = L / |Va|`` (the time the
 uncorrected DR of eq. 30-31 needs for the leg length ``L``); the way-point is at ``L`` on the direct
 course ``nu_j`` from the fix. Dead reckoning and the correction procedures are navigation
-(:mod:`nav.correction`); this module produces truth and the mission geometry only.
+(:mod:`nav.surfacing`); this module produces truth and the mission geometry only.
 
 References:
     Praczyk T., Correction of navigational information supplied to biomimetic AUV (seed 001),
@@ -108,7 +108,7 @@ class Seed001WorldConfig(Config):
         (1.0, 0.2, 0.15),
         min_length=1,
         description="rho_s(gamma) = sum_k a_k cos(k gamma), the hull response of eq. 29 "
-        "(see nav.correction.CurrentResponse for the default)",
+        "(see nav.surfacing.CurrentResponse for the default)",
     )
     random_speed_max_m_s: float = Field(0.3, ge=0, description="r_max: largest |Vr|, m/s")
     step_s: float = Field(0.001, gt=0, description="t: the step at which Vr is drawn, s")
@@ -151,7 +151,7 @@ def _ratio(value: float, unit: float, what: str, unit_name: str) -> int:
 def rho_s(gamma_rad: ArrayLike, cos_coeffs: Sequence[float]) -> Array:
     """The hull response ``rho_s(gamma) = sum_k a_k cos(k gamma)`` (eq. 29), any shape.
 
-    The same series as :meth:`nav.correction.CurrentResponse.rho_s`, repeated here because this
+    The same series as :meth:`nav.surfacing.CurrentResponse.rho_s`, repeated here because this
     is the world's truth and that the navigation's model of it (the world shares only
     :mod:`nav.angles` with the navigation package); a test checks they agree.
     """

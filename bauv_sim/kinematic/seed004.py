@@ -7,7 +7,7 @@ counter-clockwise, gamma up from the horizontal; x, y, z up, m). The nominal pat
 ``X_{k+1} = X_k + V(u_k) dt + W_k`` with ``W_k ~ N(0, S^W)``, ``S^W = I`` m^2, from ``X_0 ~
 N(X°_0, S_0)``, ``S_0 = I`` m^2 (the seed's reading notes: the start is spread around the
 nominal start, the filters start at ``m_0 = X°_0``). The control ``u_k`` is given by the caller
-(the task closes the loop with an estimator and :mod:`nav.local_control`).
+(the task closes the loop with an estimator and :mod:`nav.bearings.local_control`).
 
 Measurements: the bearing tangents of eq. 17 to each beacon, ``tan phi = (Y_B - Y)/(X_B - X) +
 eps^phi`` and ``tan lambda = (Z_B - Z)/rho + eps^lambda`` (phi the full bearing, so ``cos phi /
@@ -251,7 +251,7 @@ class TrainingNoise:
 
 
 class Seed004World:
-    """Truth and bearings of a batch of paths (implements :class:`nav.cmnf.TrainingWorld`).
+    """Truth and bearings of a batch of paths (implements :class:`nav.bearings.cmnf.TrainingWorld`).
 
     Args:
         path: the nominal path.

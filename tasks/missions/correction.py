@@ -2,7 +2,7 @@
 
 The BAUV of seed 001 has a compass and odometry only (no log, no USBL). It starts from a GPS fix,
 swims leg 1 holding course alpha_1, surfaces for GPS fixes, swims leg 2 on alpha_2, surfaces
-again; the DRNS (:mod:`nav.drns`) turns the two legs' errors into estimates of the vehicle's
+again; the DRNS (:mod:`nav.surfacing`) turns the two legs' errors into estimates of the vehicle's
 systematic velocity error and of the current (CP2 by default: alpha_1 = 45 deg, alpha_2 = 225 deg;
 CP1: two random courses at least ``cp1_min_separation_deg`` apart and from opposite), and leg 3
 (a random course) is dead-reckoned with and without the correction. Each run flies the mission
@@ -43,9 +43,13 @@ from bauv_sim.frames import (
     wrap_pi_scalar,
 )
 from bauv_sim.sensors.rig import RigTick
-from nav.correction import CorrectionEstimate, CurrentResponse, compensated_course
-from nav.drns import CorrectedDeadReckoning
 from nav.guidance import GuidanceCommand, WaypointGuidance, direct_course
+from nav.surfacing import (
+    CorrectedDeadReckoning,
+    CorrectionEstimate,
+    CurrentResponse,
+    compensated_course,
+)
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput, report_of
 from tasks.closed_loop.parts import MissionParts, WaypointSteering
@@ -155,7 +159,7 @@ class CorrectionReport:
 
 
 class CorrectionNavigation:
-    """Seed 001's DRNS (:class:`nav.drns.CorrectedDeadReckoning`) beside the standard EKF part:
+    """Seed 001's DRNS (:class:`nav.surfacing.CorrectedDeadReckoning`) beside the standard EKF part:
     it dead-reckons on the compass heading and the odometry speed at every tick, takes every GPS
     fix (lever arm removed) and, after leg 2, corrects with the chosen procedure.
 

@@ -4,7 +4,7 @@ with the paper's values beside, the filter's consistency, and the figures and re
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Literal
+from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,8 +21,16 @@ from tasks.paper000.recording import record_passage
 from tasks.paper000.run import METHODS, Paper000Block
 from tasks.paper000.scenario import Paper000Scenario
 
-if TYPE_CHECKING:
-    from tasks.paper000.passage import StraightPassageExperiment
+
+class PassageTest(Protocol):
+    """What the report reads of the experiment (:class:`tasks.paper000.passage.
+    StraightPassageExperiment`): its name, summary, test and the fields off the paper's setting."""
+
+    name: str
+    summary: str
+    test: str
+
+    def off_paper_fields(self, scenario: Paper000Scenario) -> list[str]: ...
 
 
 # Metrics file
@@ -204,7 +212,7 @@ def _merge_blocks(ctx: ReportContext) -> Paper000Block:
     )
 
 
-def report_paper000(exp: StraightPassageExperiment, ctx: ReportContext) -> ReportSummary:
+def report_paper000(exp: PassageTest, ctx: ReportContext) -> ReportSummary:
     """Tables, figures, metrics and the recording of a seed 000 test."""
     scn: Paper000Scenario = ctx.scenario  # type: ignore[assignment]
     lo, hi = nees_band(3, ctx.n_runs, scn.report.consistency_probability)

@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from tasks.paper001.replica import MissionBlock, Paper001Scenario
+    from tasks.paper001.run import MissionBlock
+    from tasks.paper001.scenario import Paper001Scenario
 
 
 def replica_figures(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario) -> list[str]:

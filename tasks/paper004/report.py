@@ -92,7 +92,7 @@ class CaseResult(BaseModel):
     cmnf_clipped_values: int | None = Field(
         None,
         description="values of the CMNF's basic correction clipped in training, over all steps "
-        "and features (filters.clip_sigmas; nav.cmnf.clip_bounds)",
+        "and features (filters.clip_sigmas; nav.bearings.cmnf.clip_bounds)",
     )
     cmnf_top_share: float | None = Field(
         None,

@@ -53,8 +53,9 @@ class FilterConfig(Config):
         ge=0,
         le=1e6,
         description="CMNF: clip its basic correction at median +- this many robust sigmas of "
-        "the training paths, per step and feature (nav.cmnf.clip_bounds); 0: unclipped, the "
-        "paper's filter, whose gains near a beacon a few paths with extreme tangents set",
+        "the training paths, per step and feature (nav.bearings.cmnf.clip_bounds); 0: "
+        "unclipped, the paper's filter, whose gains near a beacon a few paths with extreme "
+        "tangents set",
     )
     train_paths: int = Field(
         100_000, ge=10, le=1_000_000, description="CMNF training paths (the paper: 1e5)"

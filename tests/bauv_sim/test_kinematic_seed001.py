@@ -9,7 +9,7 @@ import pytest
 from bauv_sim import rng as rng_mod
 from bauv_sim.config import ConfigError, validate
 from bauv_sim.kinematic import seed001 as kin
-from nav import correction as corr
+from nav import surfacing as corr
 
 
 def unit(c):

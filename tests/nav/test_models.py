@@ -5,13 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from nav.accuracy import dr_step_covariance
 from nav.models import (
     CourseSpeedDepthMotion,
     DepthMeasurement,
     HorizontalPositionMeasurement,
     UsblMeasurement,
 )
+from nav.usbl.accuracy import dr_step_covariance
 
 RNG = np.random.default_rng(2024)
 TX = np.array([12.0, -7.0, -6.0])

@@ -108,7 +108,8 @@ def test_each_papers_method_runs_from_nav_alone():
     # seed 003's GA2: the point of the range circle worked out above
     assert out["ga2_valid"]
     assert abs(out["ga2"][0]) < 1e-6 and abs(out["ga2"][1] - 110.0) < 1e-6, out["ga2"]
-    # seed 004's UPMF step: the truth, from a prediction 7 m off (as printed) and at the truth (unbiased)
+    # seed 004's UPMF step: the truth, from a prediction 7 m off (as printed) and at the truth
+    # (unbiased)
     for key in ("upmf", "upmf_unbiased"):
-        for got, want in zip(out[key], (10.0, 20.0, -30.0)):
+        for got, want in zip(out[key], (10.0, 20.0, -30.0), strict=True):
             assert abs(got - want) < 1e-6, (key, out[key])

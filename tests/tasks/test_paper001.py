@@ -14,13 +14,17 @@ import pytest
 from bauv_sim.config import load_config
 from tasks.core import registry
 from tasks.core.runner import run
+from tasks.paper001 import paper as p001_paper
 from tasks.paper001 import replica as paper001
+from tasks.paper001 import report as p001_report
+from tasks.paper001 import run as p001_run
+from tasks.paper001 import scenario as p001_scenario
 
 COARSE = ["world.step_s=0.02"]
 
 
 def scenario(*overrides):
-    return load_config(paper001.Paper001Scenario, {}, (), list(overrides))
+    return load_config(p001_scenario.Paper001Scenario, {}, (), list(overrides))
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +48,7 @@ def test_registered_with_the_papers_parameters():
 
 def test_acceptance_2_ordering_and_improvement(replica):
     m = json.loads((replica / "metrics.json").read_text())
-    paper001.Paper001Metrics.model_validate(m)
+    p001_report.Paper001Metrics.model_validate(m)
     assert m["n_missions"] == 30 and len(m["cells"]) == 8
     for c in m["cells"]:
         e = [c[k]["mean_end_error_m"] for k in ("nocp", "cp1", "cp2")]
@@ -93,16 +97,16 @@ def test_run_folder_is_complete(replica):
 
 def test_results_do_not_depend_on_block_grouping():
     sc = scenario(*COARSE, "report.figure_missions=3")
-    whole = paper001.simulate_block(sc, 4, (0, 1, 2))
-    parts = paper001.merge_blocks(
-        [paper001.simulate_block(sc, 4, (0,)), paper001.simulate_block(sc, 4, (1, 2))]
+    whole = p001_run.simulate_block(sc, 4, (0, 1, 2))
+    parts = p001_run.merge_blocks(
+        [p001_run.simulate_block(sc, 4, (0,)), p001_run.simulate_block(sc, 4, (1, 2))]
     )
     assert whole.data.keys() == parts.data.keys()
     for k in whole.data:
         assert np.array_equal(whole.data[k], parts.data[k]), k
     assert len(whole.tracks) == len(parts.tracks) == 6
     # a different seed is a different experiment
-    other = paper001.simulate_block(sc, 5, (0,))
+    other = p001_run.simulate_block(sc, 5, (0,))
     assert not np.array_equal(other.data["courses_deg"][0], whole.data["courses_deg"][0])
 
 
@@ -110,8 +114,8 @@ def test_coarse_step_keeps_the_statistics():
     """Paired missions at t = 0.001 s and 0.02 s: courses and current are identical, only Vr
     differs (0.04 vs 0.18 m per axis over a leg): cell means move by a fraction of a metre."""
     runs = (0, 1, 2)
-    fine = paper001.simulate_block(scenario("report.figures=false"), 9, runs)
-    coarse = paper001.simulate_block(scenario(*COARSE, "report.figures=false"), 9, runs)
+    fine = p001_run.simulate_block(scenario("report.figures=false"), 9, runs)
+    coarse = p001_run.simulate_block(scenario(*COARSE, "report.figures=false"), 9, runs)
     assert np.array_equal(fine.data["courses_deg"], coarse.data["courses_deg"])
     for kind in ("nocp", "cp", "baseline"):
         d = fine.data[f"end_error_{kind}_m"] - coarse.data[f"end_error_{kind}_m"]
@@ -122,17 +126,17 @@ def test_coarse_step_keeps_the_statistics():
 
 
 def test_paper_values_lookup():
-    assert paper001.paper_value("table1", "cp2", 5.0, 0.3, 0.1) == 0.93
-    assert paper001.paper_value("table3", "nocp", 20.0, 0.3, 0.5) == 16.52
-    assert paper001.paper_value("table2", "cp1", 10.0, 0.3, 0.5) is None
-    assert paper001.paper_value("table1", "cp1", 5.0, 0.2, 0.5) is None
+    assert p001_paper.paper_value("table1", "cp2", 5.0, 0.3, 0.1) == 0.93
+    assert p001_paper.paper_value("table3", "nocp", 20.0, 0.3, 0.5) == 16.52
+    assert p001_paper.paper_value("table2", "cp1", 10.0, 0.3, 0.5) is None
+    assert p001_paper.paper_value("table1", "cp1", 5.0, 0.2, 0.5) is None
 
 
 def test_fit_objective_prefers_the_default_hull_response():
     """The default rho_s was fitted to the paper's Tables 1 and 3 (nav.surfacing.CurrentResponse);
     on a seed outside the fit it still beats a hull without angle dependence."""
-    fitted = paper001.paper_fit_objective(scenario(*COARSE, "report.figures=false"), (7,))
-    flat = paper001.paper_fit_objective(
+    fitted = p001_report.paper_fit_objective(scenario(*COARSE, "report.figures=false"), (7,))
+    flat = p001_report.paper_fit_objective(
         scenario(*COARSE, "report.figures=false", "world.rho_s_cos_coeffs=[1.0]"), (7,)
     )
     assert fitted < 0.45 < flat
