@@ -887,7 +887,48 @@ ISSUE22_SEED004 = [
 ]
 """Issue 22's seed-004 part: the bearing measurement model, the filter bank, the C loader."""
 
-MUTATIONS: list[Mutation] = [*ISSUE21, *OWN, *OWN_ROUND2, *OWN_ROUND3, *ISSUE22_SEED004]
+ISSUE22_CORE = [
+    Mutation(
+        "slant-range-jacobian-sign",
+        "own",
+        "sign",
+        "nav/models.py",
+        "        H[..., 0, :3] = d / safe[..., None]\n",
+        "        H[..., 0, :3] = -d / safe[..., None]\n",
+        "the range to a broadcast position pulls the estimate away from the range circle",
+        tests=("tests/nav/test_navigator.py",),
+    ),
+    Mutation(
+        "dr-displacement-between-reversed",
+        "own",
+        "sign",
+        "nav/dead_reckoning.py",
+        "return self.position_m[rows, k] - self.position_m[rows, j]",
+        "return self.position_m[rows, j] - self.position_m[rows, k]",
+        "the dead-reckoned displacement since a fix taken backwards",
+        tests=("tests/nav/test_relative.py",),
+    ),
+    Mutation(
+        "packed3-joseph-krk-dropped",
+        "own",
+        "correction",
+        "nav/ekf.py",
+        "v = v + K[i][0] * r[0] * K[j][0] + K[i][1] * r[1] * K[j][1] + K[i][2] * r[2] * K[j][2]",
+        "v = v + 0.0",
+        "the fast path of the one update without the K R K^T of the Joseph form",
+    ),
+]
+"""Issue 22's core interfaces: the slant-range measurement, the one DR's displacement between
+samples, the one update's fast path."""
+
+MUTATIONS: list[Mutation] = [
+    *ISSUE21,
+    *OWN,
+    *OWN_ROUND2,
+    *OWN_ROUND3,
+    *ISSUE22_SEED004,
+    *ISSUE22_CORE,
+]
 
 _IGNORE = shutil.ignore_patterns(
     ".git", ".venv", "venv", "__pycache__", ".pytest_cache", ".ruff_cache", "runs", "*.egg-info"
