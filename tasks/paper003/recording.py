@@ -19,13 +19,6 @@ from tasks.paper003.scenario import (
 
 Array = NDArray[np.float64]
 
-REC_COLORS = {
-    "DR": COLORS["dr"],
-    "GA1": (44, 160, 44),
-    "GA2": (148, 103, 189),
-    "EKF": COLORS["ekf"],
-}
-
 
 def write_run_data(
     exp: Experiment, ctx: ReportContext, scn: Paper003Scenario, per_run: Array
@@ -62,13 +55,13 @@ def record_sample(
         rec.track("leader", t, z3(truth.leader_m), (120, 120, 120))
         rec.track("truth", t, z3(truth.follower_m), COLORS["truth"])
         for k in METHODS:
-            rec.track(k.lower(), t, z3(one[f"track/{k}"]), REC_COLORS[k])
+            rec.track(k.lower(), t, z3(one[f"track/{k}"]), COLORS[k])
         for k in FIXED:
             ok = one[f"accepted/{k}"]
-            rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(one[f"fix/{k}"][ok]), REC_COLORS[k])
-            rec.scalars(f"hdop/{k.lower()}", t_fix[ok], one[f"hdop/{k}"][ok], REC_COLORS[k], k)
+            rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(one[f"fix/{k}"][ok]), COLORS[k])
+            rec.scalars(f"hdop/{k.lower()}", t_fix[ok], one[f"hdop/{k}"][ok], COLORS[k], k)
         for k in METHODS:
-            rec.scalars(f"distance/{k.lower()}", t, one[f"distance/{k}"], REC_COLORS[k], k)
+            rec.scalars(f"distance/{k.lower()}", t, one[f"distance/{k}"], COLORS[k], k)
         rec.blueprint("distance", "hdop")
         rec.close()
         files.append("recording.rrd")

@@ -153,3 +153,37 @@ def test_passage_recording_splits_fixes_and_logs_rejections(tmp_path):
     assert sum("no USBL fix" in e[2] for e in events) == (~ok).sum()
     closest = [e for e in events if "closest approach" in e[2]]
     assert closest and closest[0][0] == pytest.approx(scn.passage.closest_approach_time_s)
+
+
+def _static_colour(path, entity, component):
+    """The static colour of an entity in a recording, as (r, g, b)."""
+    import rerun.chunk as rc
+
+    for chunk in rc.RrdReader(str(path)).stream().to_chunks():
+        if chunk.entity_path == "/" + entity and chunk.is_static:
+            rb = chunk.to_record_batch()
+            if component in rb.schema.names:
+                rgba = int(rb.column(component).to_pylist()[0][0])
+                return (rgba >> 24) & 255, (rgba >> 16) & 255, (rgba >> 8) & 255
+    raise KeyError(f"{entity}:{component} not in {path}")
+
+
+def test_paper003_recording_draws_each_method_in_its_figure_colour(tmp_path):
+    # one style table (issue 22): the hex of the figures is the colour in rerun
+    from tasks.core import style
+    from tasks.core.runner import run
+
+    out, _ = run(
+        "paper-003/test-1",
+        n_runs=1,
+        seed=0,
+        out_dir=tmp_path / "run",
+        progress=False,
+        overrides=["report.figures=false"],
+    )
+    rec = out / "recording.rrd"
+    for method in ("DR", "GA1", "GA2", "EKF"):
+        want = style.rgb(method)
+        k = method.lower()
+        assert _static_colour(rec, f"world/{k}/path", "LineStrips3D:colors") == want, method
+        assert _static_colour(rec, f"distance/{k}", "SeriesLines:colors") == want, method
