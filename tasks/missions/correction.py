@@ -674,7 +674,8 @@ def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, ou
     """The recordings of the recorded run's compensated flight: the mission recording, and a
     second one with the DR tracks and the estimated current beside the true one."""
 
-    from tasks.core.recording import COLORS, Recording
+    from tasks.core import style
+    from tasks.core.recording import Recording
 
     path = record_mission(name, scn, flight, out)
     a = flight.lead
@@ -684,13 +685,13 @@ def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, ou
     t = a["t"]
     z = a["truth_pos"][:, 2:3]
     # the figure's looks (tasks.core.style): DR without CP, DR after the procedure, GPS
-    cp = COLORS[scn.correction.procedure.upper()]
-    rec.track("truth", t, a["truth_pos"], COLORS["truth"])
-    rec.track("dr_uncorrected", t, np.column_stack([a["dr_uncorrected"], z]), COLORS["DR"])
+    cp = style.rgb(scn.correction.procedure.upper())
+    rec.track("truth", t, a["truth_pos"], style.rgb("truth"))
+    rec.track("dr_uncorrected", t, np.column_stack([a["dr_uncorrected"], z]), style.rgb("DR"))
     rec.track("dr_corrected", t, np.column_stack([a["dr_corrected"], z]), cp)
     gps = a.fixes.get("gps")
     if gps:
-        rec.fixes("gps", gps["t_valid"].values, gps["position"].values, COLORS["GPS"])
+        rec.fixes("gps", gps["t_valid"].values, gps["position"].values, style.rgb("GPS"))
     every = max(1, round(1.0 / float(t[1] - t[0])))
     origins = a["truth_pos"][::every] + [0.0, 0.0, 2.0]
     # the current at the vehicle and the correction's estimate of it (x20 to be visible)
@@ -704,7 +705,7 @@ def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, ou
         20.0 * np.nan_to_num(a["cp_current"][::every]),
         (31, 119, 180),
     )
-    for key, color in [("uncorrected", COLORS["DR"]), ("corrected", cp)]:
+    for key, color in [("uncorrected", style.rgb("DR")), ("corrected", cp)]:
         rec.scalars(
             f"errors/dr_{key}",
             t,

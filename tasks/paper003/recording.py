@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tasks.core import export
-from tasks.core.recording import COLORS, Recording
+from tasks.core import export, style
+from tasks.core.recording import Recording
 from tasks.core.registry import Experiment, ReportContext
 from tasks.paper003.run import FIXED, METHODS
 from tasks.paper003.scenario import (
@@ -53,15 +53,15 @@ def record_sample(
     if scn.report.recording:
         rec = Recording(out_dir / "recording.rrd", exp.name, f"{exp.name}/seed{seed}/run{run}")
         rec.track("leader", t, z3(truth.leader_m), (120, 120, 120))
-        rec.track("truth", t, z3(truth.follower_m), COLORS["truth"])
+        rec.track("truth", t, z3(truth.follower_m), style.rgb("truth"))
         for k in METHODS:
-            rec.track(k.lower(), t, z3(one[f"track/{k}"]), COLORS[k])
+            rec.track(k.lower(), t, z3(one[f"track/{k}"]), style.rgb(k))
         for k in FIXED:
             ok = one[f"accepted/{k}"]
-            rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(one[f"fix/{k}"][ok]), COLORS[k])
-            rec.scalars(f"hdop/{k.lower()}", t_fix[ok], one[f"hdop/{k}"][ok], COLORS[k], k)
+            rec.fixes(f"{k.lower()}_fix", t_fix[ok], z3(one[f"fix/{k}"][ok]), style.rgb(k))
+            rec.scalars(f"hdop/{k.lower()}", t_fix[ok], one[f"hdop/{k}"][ok], style.rgb(k), k)
         for k in METHODS:
-            rec.scalars(f"distance/{k.lower()}", t, one[f"distance/{k}"], COLORS[k], k)
+            rec.scalars(f"distance/{k.lower()}", t, one[f"distance/{k}"], style.rgb(k), k)
         rec.blueprint("distance", "hdop")
         rec.close()
         files.append("recording.rrd")
