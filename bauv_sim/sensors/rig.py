@@ -46,6 +46,7 @@ from bauv_sim.errors import ConfigError
 from bauv_sim.sensors import (  # noqa: F401
     compass,
     doa,
+    dvl,
     gps,
     ins,
     log,
