@@ -382,6 +382,7 @@ class Dvl:
         ranges = np.where(echo, np.maximum(sf_r * L + err_r, 0.0), 0.0)
         n_echo = echo.sum(-1)
         altitude = ranges.sum(-1) * self.cos_a / np.maximum(n_echo, 1)  # 0 without echo
+        # the measured altitude (range errors included) decides, as the DVL knows no other
         lock = (
             (n_echo >= cfg.min_beams)
             & (altitude >= cfg.min_altitude_m)
@@ -392,10 +393,9 @@ class Dvl:
         b_true = _rotate(self.true_directions_body, v_true)  # (n, k, 4): d_i . v
         b = sf_v * b_true + err_v
         use = np.where(lock[..., None], echo, alive_v) & (lock | water)[..., None]
-        v_instr = _solve_velocity(self.directions_instrument, b, use)
+        v_instr = _solve_velocity(self.directions_instrument, b, use)  # 0 where no beam is used
         velocity = _rotate(self.R_mount, v_instr)
         mode = np.where(lock, BOTTOM_LOCK, np.where(water, WATER_TRACK, NONE)).astype(np.int8)
-        velocity = np.where((mode != NONE)[..., None], velocity, 0.0)
         return DvlSamples(
             t_s=t,
             mode=mode,

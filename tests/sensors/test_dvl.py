@@ -20,6 +20,7 @@ from bauv_sim.sensors import (
 )
 from bauv_sim.truth import Truth
 
+pytestmark = pytest.mark.filterwarnings("error")  # a 0/0 on the way to an output fails
 EXACT = {"beam": SpeedErrorConfig(), "range": LengthErrorConfig()}  # every error off
 RELIEF = sb.SeabedConfig(
     half_extent_m=200.0,
@@ -398,3 +399,37 @@ def test_bad_input_is_a_clear_error():
             np.zeros((1, 3, 3)),
             np.arange(3.0),
         )
+
+
+def test_the_measured_altitude_decides_the_lock_and_echoes_beyond_the_beam_range_do_not_count():
+    # true altitude 14.9 m under a 15 m limit: every beam returns; a +0.5 m range bias reads
+    # (L + 0.5) cos(a) = 15.33 m: no bottom lock
+    truth = _level_descent(np.full(3, -15.1))
+    plane = PlaneSeabed(30.0)
+    s = Dvl(DvlConfig(max_altitude_m=15.0, **EXACT), 1, (0,)).sample(truth, np.arange(3), plane)
+    assert np.all(s.mode == 1)
+    biased = DvlConfig(
+        max_altitude_m=15.0, beam=SpeedErrorConfig(), range=LengthErrorConfig(bias_m=0.5)
+    )
+    s = Dvl(biased, 1, (0,)).sample(truth, np.arange(3), plane)
+    assert s.beam_echo.all() and np.all(s.mode == 2) and np.all(s.altitude_m == 0)
+
+    # a seabed that answers beyond the range asked for: those echoes are not the DVL's
+    class Far:
+        def ray_ranges(self, origin_m, directions, max_range_m):
+            shape = np.broadcast_shapes(np.shape(origin_m), np.shape(directions))[:-1]
+            return np.full(shape, max_range_m + 1.0), np.ones(shape, bool)
+
+    s = Dvl(DvlConfig(**EXACT), 1, (0,)).sample(truth, np.arange(3), Far())
+    assert not s.beam_echo.any() and np.all(s.mode == 2)
+
+
+def test_plane_rays_from_below_or_going_up_have_no_echo():
+    plane = PlaneSeabed(30.0, (0.1, 0.0))
+    o = np.array([[0.0, 0.0, -10.0], [0.0, 0.0, -40.0], [0.0, 0.0, -10.0], [100.0, 0.0, -35.0]])
+    e = np.array([[0.0, 0.0, -2.0], [0.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])
+    L, hit = plane.ray_ranges(o, e, 100.0)
+    np.testing.assert_array_equal(hit, [True, False, False, True])
+    np.testing.assert_allclose(L, [20.0, 0.0, 0.0, 5.0], atol=1e-12)
+    L, hit = plane.ray_ranges(o, e, 10.0)
+    np.testing.assert_array_equal(hit, [False, False, False, True])
