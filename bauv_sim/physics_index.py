@@ -31,6 +31,7 @@ SENSOR_SITES: tuple[str, ...] = (
     "sonar",
     "echo_down",
     "em_log",
+    "dvl",
     "pressure",
     "ins",
     "gps_antenna",

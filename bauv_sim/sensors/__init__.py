@@ -4,6 +4,14 @@
 from bauv_sim.sensors.base import SensorSamples, check_multiple, periodic_indices
 from bauv_sim.sensors.compass import Compass, CompassConfig
 from bauv_sim.sensors.doa import Doa, DoaConfig, DoaSamples
+from bauv_sim.sensors.dvl import (
+    Dvl,
+    DvlConfig,
+    DvlPing,
+    DvlSamples,
+    PlaneSeabed,
+    RaySeabed,
+)
 from bauv_sim.sensors.errors import (
     AngleErrorConfig,
     ErrorModel,
@@ -31,6 +39,10 @@ __all__ = [
     "Doa",
     "DoaConfig",
     "DoaSamples",
+    "Dvl",
+    "DvlConfig",
+    "DvlPing",
+    "DvlSamples",
     "ErrorModel",
     "ErrorProcess",
     "Gps",
@@ -46,8 +58,10 @@ __all__ = [
     "MultibeamImages",
     "Odometry",
     "OdometryConfig",
+    "PlaneSeabed",
     "Pressure",
     "PressureConfig",
+    "RaySeabed",
     "SensorSamples",
     "SpeedErrorConfig",
     "Usbl",
