@@ -13,7 +13,7 @@ from filterpy.kalman import KalmanFilter
 from scipy.spatial.transform import Rotation
 
 from bauv_sim.frames import R_from_roll_pitch_heading as R_frames
-from nav.dead_reckoning import DeadReckoning, track
+from nav.dead_reckoning import DeadReckoning, dead_reckon, track
 from nav.dvl import (
     DvlVelocityMeasurement,
     GroundVelocityMotion,
@@ -292,6 +292,9 @@ def test_online_dr_on_dvl_is_the_batched_dr():
     dr = DeadReckoning(np.zeros(3))
     P0 = np.diag([1.0, 1.0, 0.1])
     navs = [OnlineNavigator(est(g), 0.0, np.zeros(3), P0, g) for est in (SingleRunEKF, BatchEKF)]
+    log_motion = CourseSpeedDepthMotion(0.01, 0.01, 0.01)
+    log_nav = OnlineNavigator(SingleRunEKF(log_motion), 0.0, np.zeros(3), P0, g)
+    log_u = np.column_stack([att[1:, 2], np.full(len(t) - 1, 1.5), np.zeros(len(t) - 1)])
     for k in range(1, len(t)):
         u = 0.5 * (v_world[k - 1] + v_world[k])
         u[2] = -u[2] * dt  # depth change over the step, positive down
@@ -299,6 +302,11 @@ def test_online_dr_on_dvl_is_the_batched_dr():
         for nav in navs:
             nav.advance(t[k], u)
         assert np.allclose(dr.position, batched[k], atol=1e-9)
+        log_nav.advance(t[k], np.array([att[k, 2], 1.5, 0.0]), dr_input=u)
+    # the EKF on heading and log (through water, no current here), its DR on the DVL
+    assert np.allclose(log_nav.dr_position, batched[-1], atol=1e-9)
+    log_dr, _ = dead_reckon(np.zeros((1, 3)), log_u[None], dt, log_motion)
+    assert np.allclose(log_nav.estimate.x, log_dr[0, -1], atol=1e-9)
     for nav in navs:
         assert np.allclose(nav.estimate.x, batched[-1], atol=1e-9)
         assert np.allclose(nav.dr_position, batched[-1], atol=1e-9)
