@@ -23,6 +23,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "DeadReckonedTrack": ("nav.dead_reckoning", "DeadReckonedTrack"),
     "DeadReckoning": ("nav.dead_reckoning", "DeadReckoning"),
     "DepthMeasurement": ("nav.models", "DepthMeasurement"),
+    "DvlVelocityMeasurement": ("nav.dvl", "DvlVelocityMeasurement"),
     "Estimate": ("nav.navigator", "Estimate"),
     "Estimator": ("nav.ekf", "Estimator"),
     "FilterDivergedError": ("nav.errors", "FilterDivergedError"),
@@ -30,6 +31,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "FollowerOptions": ("nav.navigator", "FollowerOptions"),
     "FollowerReport": ("nav.navigator", "FollowerReport"),
     "GaOptions": ("nav.relative", "GaOptions"),
+    "GroundVelocityMotion": ("nav.dvl", "GroundVelocityMotion"),
     "GuidanceCommand": ("nav.guidance", "GuidanceCommand"),
     "Histogram": ("nav.metrics", "Histogram"),
     "HorizontalPositionMeasurement": ("nav.models", "HorizontalPositionMeasurement"),
@@ -42,6 +44,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "OnlineNavigator": ("nav.navigator", "OnlineNavigator"),
     "PredictedShift": ("nav.bearings.model", "PredictedShift"),
     "Prediction": ("nav.bearings.model", "Prediction"),
+    "R_from_roll_pitch_heading": ("nav.dvl", "R_from_roll_pitch_heading"),
     "RangeEkfOptions": ("nav.relative", "RangeEkfOptions"),
     "SeriesSum": ("nav.metrics", "SeriesSum"),
     "ShiftEstimate": ("nav.seabed", "ShiftEstimate"),
@@ -62,6 +65,8 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "direct_course": ("nav.guidance", "direct_course"),
     "distance_3d": ("nav.metrics", "distance_3d"),
     "dr_track": ("nav.relative", "dr_track"),
+    "dvl_increments": ("nav.dvl", "dvl_increments"),
+    "dvl_track": ("nav.dvl", "dvl_track"),
     "ekf_track": ("nav.relative", "ekf_track"),
     "filter_bank_step": ("nav.bearings.bank", "step"),
     "first_exceedance": ("nav.metrics", "first_exceedance"),
@@ -80,6 +85,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "track_with_covariance": ("nav.dead_reckoning", "track_with_covariance"),
     "train_cmnf": ("nav.bearings.cmnf", "train"),
     "upmf_update": ("nav.bearings.filters", "upmf_update"),
+    "velocity_world_from_dvl": ("nav.dvl", "velocity_world_from_dvl"),
 }
 """Public name -> (module, attribute), imported on first use."""
 
