@@ -96,10 +96,18 @@ def log_likelihood(
     hy = points_m[:, 1:2] + offset_m[None, :, 1]
     h, ok = terrain_map.depth(hx, hy)
     a = 1.0 / (s_m * s_m)
+    sb2 = sigma_bias_m * sigma_bias_m
+    if ok.all():  # the hot path: every hypothesis predicts every beam (constants left out)
+        e = z_m[None, :] - h
+        bias = (sb2 / (1.0 + sb2 * a.sum())) * (e @ a)
+        r = e - bias[:, None]
+        ll = -0.5 * ((r * r) @ a)
+        if sb2 > 0.0:
+            ll -= (0.5 / sb2) * bias * bias
+        return ll, h, ok
     e = np.where(ok, z_m[None, :] - h, 0.0)
     aok = ok * a[None, :]
     sum_a = aok.sum(axis=1)
-    sb2 = sigma_bias_m * sigma_bias_m
     denom = 1.0 + sb2 * sum_a
     bias = sb2 * (aok * e).sum(axis=1) / denom
     r = e - bias[:, None]
@@ -185,6 +193,7 @@ class DivergenceWindow:
         self.length = length
         self.probability = probability
         self._nis: deque[tuple[float, int]] = deque(maxlen=length)
+        self._limits: dict[int, float] = {}
 
     def clear(self) -> None:
         """Forget the window (after a re-initialisation)."""
@@ -199,7 +208,9 @@ class DivergenceWindow:
             return False
         total = sum(v for v, _ in self._nis)
         dof_sum = sum(d for _, d in self._nis)
-        return bool(total > float(chi2_ppf(1.0 - self.probability, dof_sum)))
+        if dof_sum not in self._limits:
+            self._limits[dof_sum] = float(chi2_ppf(1.0 - self.probability, dof_sum))
+        return bool(total > self._limits[dof_sum])
 
 
 def ping_inputs(
