@@ -159,20 +159,23 @@ def innovation_nis(
         ``(nis, dof)``: over the beams that every hypothesis holding weight predicts, provided the
         hypotheses that predict them all hold at least half the weight; ``(0.0, 0)`` otherwise.
     """
-    w_ok = weights[:, None] * ok
-    beam_mass = w_ok.sum(axis=0)
-    beams = beam_mass >= 1.0 - 1e-9
-    if not beams.any():
-        return 0.0, 0
-    all_ok = ok[:, beams].all(axis=1)
-    mass = float(weights[all_ok].sum())
-    if mass < 0.5:
-        return 0.0, 0
-    w = weights[all_ok] / mass
-    h = predicted[all_ok][:, beams]
-    mean = w @ h
-    dev = h - mean
-    spread = (dev * w[:, None]).T @ dev
+    if ok.all():  # the hot path: every hypothesis predicts every beam
+        beams = np.ones(ok.shape[1], dtype=bool)
+        mean = weights @ predicted
+        spread = (predicted.T * weights) @ predicted - np.outer(mean, mean)
+    else:
+        beams = (weights @ ok) >= 1.0 - 1e-9
+        if not beams.any():
+            return 0.0, 0
+        all_ok = ok[:, beams].all(axis=1)
+        mass = float(weights[all_ok].sum())
+        if mass < 0.5:
+            return 0.0, 0
+        w = weights[all_ok] / mass
+        h = predicted[all_ok][:, beams]
+        mean = w @ h
+        dev = h - mean
+        spread = (dev * w[:, None]).T @ dev
     s = s_m[beams]
     cov = spread + np.diag(s * s) + sigma_bias_m * sigma_bias_m
     nu = z_m[beams] - mean
