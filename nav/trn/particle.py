@@ -186,7 +186,7 @@ class ParticleTrn:
             p = (
                 cov + self.options.reinit_sigma_m**2 * np.eye(2)
                 if covariance_m2 is None
-                else (covariance_m2)
+                else covariance_m2
             )
             mean, cov = check_gaussian("center_m", c, "covariance_m2", p)
         else:

@@ -269,7 +269,7 @@ class PointMassTrn:
         p = (
             cov + self.options.reinit_sigma_m**2 * np.eye(2)
             if covariance_m2 is None
-            else (covariance_m2)
+            else covariance_m2
         )
         mean, cov = check_gaussian("center_m", c, "covariance_m2", p)
         self._set_gaussian(mean, cov)
