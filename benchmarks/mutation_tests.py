@@ -134,6 +134,21 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "bauv_sim/sensors/modem.py": ("tests/bauv_sim/test_modem.py", "tests/tasks/test_swarm.py"),
     "bauv_sim/sensors/doa.py": ("tests/bauv_sim/test_doa.py",),
     "bauv_sim/sensors/multibeam.py": ("tests/bauv_sim/test_multibeam.py",),
+    "bauv_sim/sensors/dvl.py": ("tests/sensors/test_dvl.py", "tests/sensors/test_dvl_device.py"),
+    "nav/dvl.py": ("tests/nav/test_dvl.py", "tests/nav/test_dvl_ekf.py"),
+    "nav/trn/likelihood.py": (
+        "tests/nav/trn/test_posterior.py",
+        "tests/nav/trn/test_filter_parts.py",
+    ),
+    "nav/trn/particle.py": (
+        "tests/nav/trn/test_posterior.py",
+        "tests/nav/trn/test_filter_parts.py",
+    ),
+    "nav/trn/point_mass.py": (
+        "tests/nav/trn/test_posterior.py",
+        "tests/nav/trn/test_filter_parts.py",
+    ),
+    "nav/trn/pcrb.py": ("tests/nav/trn/test_pcrb.py", "tests/nav/trn/test_posterior.py"),
     "bauv_sim/sensors/rig.py": (
         "tests/bauv_sim/test_sensors.py",
         "tests/tasks/test_run_data.py",
@@ -921,6 +936,74 @@ ISSUE22_CORE = [
 """Issue 22's core interfaces: the slant-range measurement, the one DR's displacement between
 samples, the one update's fast path."""
 
+ISSUE23 = [
+    Mutation(
+        "dvl-max-altitude-ignored",
+        "own",
+        "default",
+        "bauv_sim/sensors/dvl.py",
+        "            & (altitude <= cfg.max_altitude_m)\n",
+        "",
+        "the DVL keeps bottom lock above its maximum altitude",
+    ),
+    Mutation(
+        "dvl-misalignment-ignored",
+        "own",
+        "correction",
+        "bauv_sim/sensors/dvl.py",
+        "self.R_mount_true = self.R_mount @ rotation_rpy(cfg.misalignment_deg)",
+        "self.R_mount_true = self.R_mount",
+        "a misaligned DVL mounting measures as if it were aligned",
+    ),
+    Mutation(
+        "dvl-lever-arm-sign",
+        "own",
+        "sign",
+        "nav/dvl.py",
+        "    return np.cross(w, r)\n",
+        "    return -np.cross(w, r)\n",
+        "the DVL's lever-arm rotation term added instead of removed",
+    ),
+    Mutation(
+        "dvl-jacobian-not-transposed",
+        "own",
+        "transpose",
+        "nav/dvl.py",
+        "        H[..., :, i : i + 2] = Rt[..., :, :2]\n",
+        "        H[..., :, i : i + 2] = self._R_wb[..., :, :2]\n",
+        "the DVL measurement's Jacobian in the current built with R instead of R^T",
+    ),
+    Mutation(
+        "trn-bias-not-marginalised",
+        "own",
+        "correction",
+        "nav/trn/likelihood.py",
+        "        r = e - bias[:, None]\n",
+        "        r = e\n",
+        "TRN likelihood without the ping's common bias removed (a map offset biases the fix)",
+    ),
+    Mutation(
+        "trn-pcrb-without-process-noise",
+        "own",
+        "correction",
+        "nav/trn/pcrb.py",
+        "        prior_cov = np.linalg.inv(j) + q[i]\n",
+        "        prior_cov = np.linalg.inv(j)\n",
+        "the TRN bound forgets the motion's noise between pings",
+    ),
+    Mutation(
+        "trn-particle-covariance-halved",
+        "own",
+        "unit",
+        "nav/trn/particle.py",
+        "        return mean, 0.5 * (cov + cov.T)\n",
+        "        return mean, 0.25 * (cov + cov.T)\n",
+        "the particle filter states half its covariance",
+    ),
+]
+"""Issue 23: the DVL device's lock and mounting, the DVL measurement model, the TRN likelihood,
+bound and particle covariance."""
+
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
     *OWN,
@@ -928,6 +1011,7 @@ MUTATIONS: list[Mutation] = [
     *OWN_ROUND3,
     *ISSUE22_SEED004,
     *ISSUE22_CORE,
+    *ISSUE23,
 ]
 
 _IGNORE = shutil.ignore_patterns(
