@@ -66,6 +66,7 @@ class TrnVerdict(BaseModel):
     pcrb_rms_settled_m: float | None = Field(description="RMS of the bound, same samples, m")
     pcrb_ratio: float | None = Field(description="rms_settled / pcrb_rms_settled")
     within_2x_pcrb: bool
+    dr_dvl_ratio: float | None = Field(description="rms_settled / DR-DVL's rms_settled")
     verdict: str
 
 
@@ -81,7 +82,11 @@ class TrnMetrics(BaseModel):
     current_m_s: float | None
     gradient_rms: float = Field(description="RMS seabed gradient at the TRN beam footprints")
     altitude_mean_m: float = Field(description="mean true altitude of the DVL, m")
+    nees_pf_mean: float = Field(
+        description="particle TRN's mean NEES after the dive (2: consistent)"
+    )
     methods: dict[str, MethodSummary]
+    pcrb_start_m: float | None = Field(description="mean over runs of the bound at the dive, m")
     pcrb_final_m: float | None = Field(description="mean over runs of the final bound, m")
     pcrb_rms_settled_m: float | None
     dr_dvl_vs_log: DvlVsLog
@@ -177,10 +182,14 @@ def dvl_vs_log(results: list[TrnRunResult]) -> DvlVsLog:
     )
 
 
-def trn_verdict(results: list[TrnRunResult], m: str, settle_s: float) -> TrnVerdict:
+def trn_verdict(
+    results: list[TrnRunResult], m: str, settle_s: float, flat: bool = False
+) -> TrnVerdict:
     """Check 4 for one filter: bounded (:data:`GROWTH_BOUNDED`) and within
-    :data:`PCRB_FACTOR` of the bound after the settling."""
+    :data:`PCRB_FACTOR` of the bound after the settling; over a flat seabed, how it follows dead
+    reckoning on the DVL instead (``bounded`` is then False: nothing bounds it)."""
     e, b = _stack(results, m), _stack(results, None)
+    dvl = _stack(results, "dr_dvl")
     s = settled(results, settle_s)
     idx = np.flatnonzero(s)
     if len(idx) < 3:
@@ -204,6 +213,8 @@ def trn_verdict(results: list[TrnRunResult], m: str, settle_s: float) -> TrnVerd
     brms = float(np.sqrt(np.mean(b[:, idx] ** 2)))
     ratio = rms / brms if brms > 0 else None
     within = ratio is not None and ratio <= PCRB_FACTOR
+    drms = float(np.sqrt(np.mean(dvl[:, idx] ** 2)))
+    dratio = rms / drms if drms > 0 else None
     g = "-" if growth is None else f"{growth:.2f}"
     r = "-" if ratio is None else f"{ratio:.2f}"
     verdict = (
@@ -212,6 +223,14 @@ def trn_verdict(results: list[TrnRunResult], m: str, settle_s: float) -> TrnVerd
         f"m after the settling against the bound's {brms:.2f} m: x{r} "
         f"({'within' if within else 'NOT within'} {PCRB_FACTOR:g}x the PCRB)"
     )
+    if flat:
+        bounded = False
+        verdict = (
+            f"{LABELS[m]}: flat seabed, nothing bounds it: it follows dead reckoning on the DVL "
+            f"(RMS {rms:.2f} m after the settling against DR-DVL's {drms:.2f} m"
+            + (f", x{dratio:.2f}" if dratio is not None else "")
+            + f"), and the bound grows like it ({brms:.2f} m RMS, x{r})"
+        )
     return TrnVerdict(
         rms_middle_m=_f(mid),
         rms_last_m=_f(last),

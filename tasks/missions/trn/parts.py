@@ -106,6 +106,9 @@ class TrnNavigation:
             grid_points=c.grid_points,
             sigma_bias_m=c.sigma_bias_m,
             reinit_sigma_m=c.reinit_sigma_m,
+            reinitialise=c.reinitialise,
+            divergence_probability=c.divergence_probability,
+            nis_window=c.nis_window,
         )
         self.rng = rng_mod.generator(seed, run, "trn")
         self.started = False

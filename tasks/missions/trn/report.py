@@ -73,9 +73,9 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
     settle = scn.trn.settle_s
     methods = {m: summarise_method(results, m, settle) for m in METHODS}
     check2 = dvl_vs_log(results)
-    trn = {m: trn_verdict(results, m, settle) for m in TRN_METHODS}
     grad = _mean_stat(results, "gradient_rms")
     flat = grad < FLAT_GRADIENT
+    trn = {m: trn_verdict(results, m, settle, flat) for m in TRN_METHODS}
     counts = summary_of(results)
     nan_fraction = map_nan_fraction(scn, ctx.seed)
     b = _stack(results, None)
@@ -92,7 +92,9 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
         current_m_s=cur,
         gradient_rms=grad,
         altitude_mean_m=_mean_stat(results, "altitude_mean_m"),
+        nees_pf_mean=_mean_stat(results, "nees_pf_mean"),
         methods=methods,
+        pcrb_start_m=float(b[:, 0].mean()) if b.size else None,
         pcrb_final_m=float(b[:, -1].mean()) if b.size else None,
         pcrb_rms_settled_m=float(np.sqrt(np.mean(b[:, s] ** 2))) if b.size and s.any() else None,
         dr_dvl_vs_log=check2,
@@ -178,6 +180,7 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
             "PCRB RMS (m)",
             "Ratio",
             "Within 2x",
+            "/ DR-DVL",
         ],
         [
             [
@@ -190,6 +193,7 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
                 v.pcrb_rms_settled_m,
                 v.pcrb_ratio,
                 v.within_2x_pcrb,
+                v.dr_dvl_ratio,
             ]
             for m, v in trn.items()
         ],
@@ -229,7 +233,8 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
         digits=2,
         slug="pings",
         note=f"Mean true altitude {metrics.altitude_mean_m:.1f} m; RMS seabed gradient at the "
-        f"footprints {grad:.3f}; map without data on {100 * nan_fraction:.1f} % of its nodes.",
+        f"footprints {grad:.3f}; TRN-PF mean NEES {metrics.nees_pf_mean:.2f} (2 if "
+        f"consistent); map without data on {100 * nan_fraction:.1f} % of its nodes.",
     )
     tables = [t1, t2, t3, t4]
     if failures:

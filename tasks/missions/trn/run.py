@@ -35,7 +35,8 @@ class TrnRunResult:
         counts: the navigation part's counts (pings by DVL mode, TRN updates, updates with no
             usable beam, re-initialisations, beams used).
         stats: ``altitude_mean_m`` (true altitude of the DVL over the seabed, mean over the
-            pings), ``gradient_rms`` (RMS of the true seabed's gradient at the true beam
+            pings), ``nees_pf_mean`` (the particle TRN's mean NEES after the dive: 2 for a
+            consistent filter), ``gradient_rms`` (RMS of the true seabed's gradient at the true beam
             footprints of the TRN updates), ``duration_s``, ``reached`` (way-points reached).
         track: the recorded run's true track and every method's, (east, north) at the sample
             times, float32, by name (``truth`` and the methods); empty for other runs.
@@ -106,6 +107,11 @@ def reduce_flight(
     # the bound at the sample times: the latest update's (the start's before the first)
     pos = np.searchsorted(upd, idx, side="right") - 1
     pcrb = np.where(pos >= 0, bound_upd[np.maximum(pos, 0)] if len(bound_upd) else P0b, P0b)
+    if start < len(t):
+        e2 = (_col(v, "trn_pf")[idx, :2] - truth[idx, :2])[:, :, None]
+        P = _col(v, "trn_pf_P")[idx].reshape(-1, 2, 2)
+        nees = (np.swapaxes(e2, 1, 2) @ np.linalg.solve(P, e2))[:, 0, 0]
+        stats["nees_pf_mean"] = float(np.mean(nees)) if len(nees) else 0.0
     track = {}
     if keep_track:
         track["truth"] = truth[idx, :2].astype(np.float32)
