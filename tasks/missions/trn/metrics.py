@@ -201,6 +201,7 @@ def trn_verdict(
             rms_settled_m=None,
             pcrb_rms_settled_m=None,
             pcrb_ratio=None,
+            dr_dvl_ratio=None,
             within_2x_pcrb=False,
             verdict="too short after the settling for a verdict",
         )
@@ -240,6 +241,7 @@ def trn_verdict(
         pcrb_rms_settled_m=_f(brms),
         pcrb_ratio=_f(ratio) if ratio else None,
         within_2x_pcrb=bool(within),
+        dr_dvl_ratio=_f(dratio) if dratio else None,
         verdict=verdict,
     )
 
