@@ -187,7 +187,7 @@ def _bauv(tmp_path, *args):
     "args, pattern",
     [
         (["--set", "map.cell_m=0.5"], "map.cell_m = 0.5"),
-        (["--set", "trn.t_dive_s=900"], "trn.t_dive_s = 900"),
+        (["--set", "map.half_extent_m=3"], "map.half_extent_m = 3"),
         (["--set", "seabed.half_extent_m=100"], "seabed.half_extent_m = 100"),
         (["--set", "trn.update_period_s=0.3"], "trn.update_period_s"),
         (["--set", "navigation.steer=gps"], "navigation.steer"),

@@ -74,9 +74,9 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
     methods = {m: summarise_method(results, m, settle) for m in METHODS}
     check2 = dvl_vs_log(results)
     grad = _mean_stat(results, "gradient_rms")
-    flat = grad < FLAT_GRADIENT
-    trn = {m: trn_verdict(results, m, settle, flat) for m in TRN_METHODS}
     counts = summary_of(results)
+    flat = counts.get("updates", 0) > 0 and grad < FLAT_GRADIENT
+    trn = {m: trn_verdict(results, m, settle, flat) for m in TRN_METHODS}
     nan_fraction = map_nan_fraction(scn, ctx.seed)
     b = _stack(results, None)
     s = np.asarray(results[0].t_s[: b.shape[1]] >= settle) if results else np.zeros(0, bool)
@@ -240,9 +240,9 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
     if failures:
         tables.append(Table("Failed flights", ["Failure"], [[f] for f in failures], slug="failed"))
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
-    if scn.report.figures and results:
+    if scn.report.figures and results and all(len(r.t_s) > 1 for r in results):
         files += error_figure(exp.name, scn, results, ctx.out_dir)
-        rec = next((r for r in results if r.track), None)
+        rec = next((r for r in results if r.track and len(r.track["truth"]) > 1), None)
         if rec is not None:
             files += plan_figure(exp.name, scn, rec, ctx.seed, ctx.out_dir)
     text = "\n".join(t.to_text() for t in (t1, t2, t3)) + "\n"
