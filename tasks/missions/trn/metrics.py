@@ -16,9 +16,13 @@ from tasks.missions.trn.scenario import LABELS, METHODS, TRN_METHODS
 Array = NDArray[np.float64]
 
 GROWTH_BOUNDED = 1.25
-"""A TRN error is bounded when its RMS over the last third of the mission (after the settling)
-is at most this times its RMS over the middle third (dead reckoning's error, growing linearly,
-gives ~1.6 on the default survey)."""
+"""A TRN error is bounded when the bound itself stays bounded (its RMS over the runs grows by at
+most this from the middle to the last third of the mission after the settling: over relief the
+terrain's information holds it, over a flat seabed it grows like dead reckoning) and the error
+over the last third is within :data:`PCRB_FACTOR` of the bound's there (it has not left the
+bounded envelope by the end). The error's own growth between the thirds is reported beside: it
+swings by +-40 % with the terrain under the track (measured on the default survey, where the
+error ranges over 0.1-0.75 m with no trend), too much to judge a trend on its own."""
 
 PCRB_FACTOR = 2.0
 """Check 4: the TRN's RMS error after the settling within this times the bound's RMS."""
@@ -61,6 +65,7 @@ class TrnVerdict(BaseModel):
     rms_middle_m: float | None = Field(description="RMS error over the middle third, m")
     rms_last_m: float | None = Field(description="RMS error over the last third, m")
     growth: float | None = Field(description="rms_last / rms_middle")
+    pcrb_growth: float | None = Field(description="the bound's growth over the same thirds")
     bounded: bool
     rms_settled_m: float | None
     pcrb_rms_settled_m: float | None = Field(description="RMS of the bound, same samples, m")
@@ -197,6 +202,7 @@ def trn_verdict(
             rms_middle_m=None,
             rms_last_m=None,
             growth=None,
+            pcrb_growth=None,
             bounded=False,
             rms_settled_m=None,
             pcrb_rms_settled_m=None,
@@ -209,7 +215,10 @@ def trn_verdict(
     mid = float(np.sqrt(np.mean(e[:, thirds[1]] ** 2)))
     last = float(np.sqrt(np.mean(e[:, thirds[2]] ** 2)))
     growth = last / mid if mid > 0 else None
-    bounded = growth is not None and growth <= GROWTH_BOUNDED
+    b_mid = float(np.sqrt(np.mean(b[:, thirds[1]] ** 2)))
+    b_last = float(np.sqrt(np.mean(b[:, thirds[2]] ** 2)))
+    b_growth = b_last / b_mid if b_mid > 0 else None
+    bounded = b_growth is not None and b_growth <= GROWTH_BOUNDED and last <= PCRB_FACTOR * b_last
     rms = float(np.sqrt(np.mean(e[:, idx] ** 2)))
     brms = float(np.sqrt(np.mean(b[:, idx] ** 2)))
     ratio = rms / brms if brms > 0 else None
@@ -220,7 +229,8 @@ def trn_verdict(
     r = "-" if ratio is None else f"{ratio:.2f}"
     verdict = (
         f"{LABELS[m]}: {'bounded' if bounded else 'NOT bounded'} (RMS {mid:.2f} m in the middle "
-        f"third, {last:.2f} m in the last: x{g}, bounded at <= {GROWTH_BOUNDED:g}); RMS {rms:.2f} "
+        f"third, {last:.2f} m in the last: x{g}; the bound's x{b_growth or 0:.2f}, {b_last:.2f} m "
+        f"in the last third); RMS {rms:.2f} "
         f"m after the settling against the bound's {brms:.2f} m: x{r} "
         f"({'within' if within else 'NOT within'} {PCRB_FACTOR:g}x the PCRB)"
     )
@@ -236,6 +246,7 @@ def trn_verdict(
         rms_middle_m=_f(mid),
         rms_last_m=_f(last),
         growth=_f(growth) if growth else None,
+        pcrb_growth=_f(b_growth) if b_growth else None,
         bounded=bool(bounded),
         rms_settled_m=_f(rms),
         pcrb_rms_settled_m=_f(brms),
