@@ -136,7 +136,9 @@ class TrnNavigation(NavigationConfig):
     """The standard navigation settings plus which estimate guidance steers on."""
 
     steer: Literal["trn_pf", "trn_pmf", "dr_dvl", "dr_log", "ekf_log", "usbl_ekf"] = Field(
-        "trn_pf", description="estimate guidance steers on (the others are computed alongside)"
+        "trn_pf",
+        description="estimate guidance steers on (the others are computed alongside); its reach "
+        "test reads that method's horizontal covariance (the log EKF's for dr_log and ekf_log)",
     )
 
 
