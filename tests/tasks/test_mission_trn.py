@@ -154,7 +154,7 @@ def test_map_holes_and_extent():
     [
         (["map.half_extent_m=40"], "no usable beam"),
         (["map.nan_holes=12", "map.nan_hole_radius_m=20"], "no data on"),
-        (["dvl.max_altitude_m=3"], "without bottom lock"),
+        (["sensors.dvl.max_altitude_m=3"], "without bottom lock"),
     ],
 )
 def test_bad_geometry_degrades_with_counts_and_no_nan(tmp_path, over, warning):
@@ -163,7 +163,7 @@ def test_bad_geometry_degrades_with_counts_and_no_nan(tmp_path, over, warning):
     assert list(_finite(m)) == []
     assert any(warning in w for w in m["warnings"]), m["warnings"]
     c = m["counts"]
-    if "dvl.max_altitude_m=3" in over:
+    if "sensors.dvl.max_altitude_m=3" in over:
         # 5-14 m above the seabed: no ping locks, the DVL gives the water track, TRN gets nothing
         assert c["bottom"] == 0 and c["water"] == c["pings"] > 0, c
         assert c["unusable_updates"] == c["updates"] > 0, c
@@ -190,6 +190,7 @@ def _bauv(tmp_path, *args):
         (["--set", "seabed.half_extent_m=100"], "seabed.half_extent_m = 100"),
         (["--set", "trn.update_period_s=0.3"], "trn.update_period_s"),
         (["--set", "navigation.steer=gps"], "navigation.steer"),
+        (["--set", "sensors.use_dvl=false"], "sensors.use_dvl = false"),
     ],
 )
 def test_bad_input_is_one_line_exit_2(tmp_path, args, pattern):

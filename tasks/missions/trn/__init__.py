@@ -49,7 +49,7 @@ error per method over the runs, DR-DVL against DR-log (check 2), each TRN filter
 bounded, and within 2x the PCRB (check 4); over a flat seabed (``--set
 seabed.relief_std_m=0``) the report says why TRN grows like dead reckoning. Bad input degrades
 and is counted (a map smaller than the survey, ``map.half_extent_m``; holes of no data,
-``map.nan_holes``; the vehicle above ``dvl.max_altitude_m``): pings without bottom lock and
+``map.nan_holes``; the vehicle above ``sensors.dvl.max_altitude_m``): pings without bottom lock and
 TRN updates without a usable beam are counted in the report and its warnings; a scenario that
 cannot be flown is refused before anything is written (one line, exit status 2).
 """

@@ -299,7 +299,7 @@ class TrnMission:
         devices = {"compass": s.compass, "ins": s.ins}
         if s.use_log:
             devices["log"] = s.log
-        devices |= {"odometry": s.odometry, "pressure": s.pressure, "dvl": scn.dvl}
+        devices |= {"odometry": s.odometry, "pressure": s.pressure, "dvl": s.dvl}
         if s.use_usbl:
             devices["usbl"] = s.usbl
         rig = SensorRig(

@@ -45,9 +45,10 @@ def _warnings(scn: TrnScenario, counts: dict[str, int], nan_fraction: float) -> 
         out.append(
             f"{no_lock} of {pings} DVL pings after the dive without bottom lock "
             f"({counts.get('water', 0)} water track, {counts.get('none', 0)} none; lock between "
-            f"dvl.min_altitude_m = {scn.dvl.min_altitude_m:g} and dvl.max_altitude_m = "
-            f"{scn.dvl.max_altitude_m:g} m with >= {scn.dvl.min_beams} beams): DR-DVL used the "
-            "water track (or held the last velocity) there"
+            f"sensors.dvl.min_altitude_m = {scn.sensors.dvl.min_altitude_m:g} and "
+            f"sensors.dvl.max_altitude_m = {scn.sensors.dvl.max_altitude_m:g} m with >= "
+            f"{scn.sensors.dvl.min_beams} beams): DR-DVL used the water track (or held the last "
+            "velocity) there"
         )
     for key, name in (("unusable_updates", "TRN-PF"), ("pmf_unusable_updates", "TRN-PMF")):
         bad = counts.get(key, 0)

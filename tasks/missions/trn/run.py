@@ -87,7 +87,7 @@ def reduce_flight(
         q = _col(v, "trn_q")[upd].reshape(-1, 2, 2)
         bound_upd = pcrb_track(scn, seed, P0, q, truth[upd], rph[upd], dirs, lever)
         pings = np.arange(
-            start, len(t), max(1, round(scn.dvl.period_s / scn.timing.control_tick_s))
+            start, len(t), max(1, round(scn.sensors.dvl.period_s / scn.timing.control_tick_s))
         )
         pts, _ = true_footprints(scn, truth[pings], rph[pings], dirs, lever)
         bed = true_map(scn.seabed)

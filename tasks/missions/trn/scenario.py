@@ -10,7 +10,6 @@ from pydantic import Field, model_validator
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
 from bauv_sim.sensors import AngleErrorConfig, CompassConfig, check_multiple
-from bauv_sim.sensors.dvl import DvlConfig
 from tasks.closed_loop.scenario import MissionScenario, MissionSensors, NavigationConfig
 
 METHODS = ("dr_log", "dr_dvl", "trn_pf", "trn_pmf", "ekf_log", "usbl_ekf")
@@ -59,8 +58,11 @@ SURVEY_WAYPOINTS = [
 
 
 class TrnMissionSensors(MissionSensors):
-    """The standard rig; the compass has a residual 1 deg calibration bias by default (what makes
-    dead reckoning on the DVL drift: ~1.7 % of the distance run, the slow error TRN bounds)."""
+    """The standard rig with the DVL (``sensors.dvl``; ``use_dvl`` must stay true); the compass
+    has a residual 1 deg calibration bias by default (what makes dead reckoning on the DVL drift:
+    ~1.7 % of the distance run, the slow error TRN bounds)."""
+
+    use_dvl: bool = Field(True, description="the rig carries the DVL (required by this mission)")
 
     compass: CompassConfig = Field(
         default_factory=lambda: CompassConfig(
@@ -143,13 +145,12 @@ class TrnNavigation(NavigationConfig):
 
 
 class TrnScenario(MissionScenario):
-    """A mission scenario with a DVL, the navigator's map and the TRN settings."""
+    """A mission scenario with the DVL in the rig, the navigator's map and the TRN settings."""
 
     sensors: TrnMissionSensors = Field(default_factory=TrnMissionSensors)
     current: CurrentConfig = Field(
         default_factory=lambda: UniformCurrentConfig(speed_m_s=0.3, direction_deg=30.0)
     )
-    dvl: DvlConfig = Field(default_factory=DvlConfig, description="Doppler velocity log")
     map: MapConfig = Field(default_factory=MapConfig)
     trn: TrnConfig = Field(default_factory=TrnConfig)
     navigation: TrnNavigation = Field(default_factory=TrnNavigation)
@@ -157,8 +158,14 @@ class TrnScenario(MissionScenario):
     @model_validator(mode="after")
     def _check_trn(self) -> TrnScenario:
         tick = self.timing.control_tick_s
-        check_multiple(self.dvl.period_s, tick, "dvl.period_s")
-        check_multiple(self.trn.update_period_s, self.dvl.period_s, "trn.update_period_s")
+        if not self.sensors.use_dvl:
+            raise ValueError(
+                "sensors.use_dvl = false: must be true (every method of mission/trn but the log's "
+                "needs the DVL)"
+            )
+        dvl = self.sensors.dvl
+        check_multiple(dvl.period_s, tick, "sensors.dvl.period_s")
+        check_multiple(self.trn.update_period_s, dvl.period_s, "trn.update_period_s")
         if self.map.cell_m < self.seabed.cell_m:
             raise ValueError(
                 f"map.cell_m = {self.map.cell_m:g}: must be >= seabed.cell_m = "

@@ -94,14 +94,14 @@ def true_footprints(
 
     Returns:
         ``(points, lock)``: footprints (east, north), shape (k, m, 2), m; and whether each beam
-        returns within the DVL's lock (a hit, the ping's altitude between ``dvl.min_altitude_m``
-        and ``dvl.max_altitude_m``, at least ``dvl.min_beams`` beams), shape (k, m).
+        returns within the DVL's lock (a hit, the ping's altitude between ``sensors.dvl.
+        min_altitude_m`` and ``max_altitude_m``, at least ``min_beams`` beams), shape (k, m).
     """
     bed = true_seabed(scn.seabed)
     R = np.array([R_from_roll_pitch_heading(*a) for a in rph_rad])
     origin = position_m + R @ lever_arm_body_m
     dirs = np.einsum("kij,mj->kmi", R, directions_body)
-    d = scn.dvl
+    d = scn.sensors.dvl
     cos_a = math.cos(math.radians(d.beam_angle_deg))
     rng_max = 1.5 * d.max_altitude_m / cos_a
     ranges, hit = bed.ray_ranges(origin[:, None, :], dirs, rng_max)
