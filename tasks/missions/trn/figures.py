@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tasks.missions.trn.metrics import _stack
+from tasks.missions.trn.metrics import stack_runs
 from tasks.missions.trn.run import TrnRunResult
 from tasks.missions.trn.scenario import LABELS, METHODS, TrnScenario
 from tasks.missions.trn.terrain import navigator_map
@@ -20,12 +20,12 @@ def error_figure(name: str, scn: TrnScenario, results: list[TrnRunResult], out: 
 
     with style.context():
         fig, ax = style.subplots("page", 3.2)
-        n = _stack(results, METHODS[0]).shape[1]
+        n = stack_runs(results, METHODS[0]).shape[1]
         t = results[0].t_s[:n]
         for m in METHODS:
-            e = _stack(results, m)
+            e = stack_runs(results, m)
             ax.plot(t, np.sqrt(np.mean(e**2, axis=0)), **style.line(LABELS[m]))
-        b = np.sqrt(np.mean(_stack(results, None) ** 2, axis=0))
+        b = np.sqrt(np.mean(stack_runs(results, None) ** 2, axis=0))
         ax.plot(t, b, "k-", lw=1.0, label="TRN PCRB")
         ax.plot(t, 2 * b, "k--", lw=0.8, label="2x PCRB")
         ax.set_yscale("log")

@@ -109,7 +109,7 @@ def _f(v) -> float | None:
     return v if np.isfinite(v) else None
 
 
-def _stack(results: list[TrnRunResult], key: str | None) -> Array:
+def stack_runs(results: list[TrnRunResult], key: str | None) -> Array:
     """Errors (or the bound) of the runs cut to their common length, shape (runs, s)."""
     rows = [r.pcrb_m if key is None else r.errors_m[key] for r in results]
     n = min((len(a) for a in rows), default=0)
@@ -118,13 +118,13 @@ def _stack(results: list[TrnRunResult], key: str | None) -> Array:
 
 def settled(results: list[TrnRunResult], settle_s: float) -> NDArray[np.bool_]:
     """Which common samples are after the settling."""
-    n = _stack(results, METHODS[0]).shape[1]
+    n = stack_runs(results, METHODS[0]).shape[1]
     t = results[0].t_s[:n] if results else np.zeros(0)
     return t >= settle_s
 
 
 def summarise_method(results: list[TrnRunResult], m: str, settle_s: float) -> MethodSummary:
-    e = _stack(results, m)
+    e = stack_runs(results, m)
     if e.size == 0:
         return MethodSummary(
             label=LABELS[m],
@@ -151,7 +151,7 @@ def summarise_method(results: list[TrnRunResult], m: str, settle_s: float) -> Me
 
 def dvl_vs_log(results: list[TrnRunResult]) -> DvlVsLog:
     """Check 2 (see :class:`DvlVsLog`)."""
-    dvl, log = _stack(results, "dr_dvl"), _stack(results, "dr_log")
+    dvl, log = stack_runs(results, "dr_dvl"), stack_runs(results, "dr_log")
     if dvl.size == 0:
         return DvlVsLog(
             runs=len(results),
@@ -193,8 +193,8 @@ def trn_verdict(
     """Check 4 for one filter: bounded (:data:`GROWTH_BOUNDED`) and within
     :data:`PCRB_FACTOR` of the bound after the settling; over a flat seabed, how it follows dead
     reckoning on the DVL instead (``bounded`` is then False: nothing bounds it)."""
-    e, b = _stack(results, m), _stack(results, None)
-    dvl = _stack(results, "dr_dvl")
+    e, b = stack_runs(results, m), stack_runs(results, None)
+    dvl = stack_runs(results, "dr_dvl")
     s = settled(results, settle_s)
     idx = np.flatnonzero(s)
     if len(idx) < 3:
@@ -261,7 +261,7 @@ def flat_explanation(
     results: list[TrnRunResult], gradient_rms: float, methods: dict[str, MethodSummary]
 ) -> str:
     """Why TRN grows like dead reckoning over a flat seabed, with the numbers of the batch."""
-    b = _stack(results, None)
+    b = stack_runs(results, None)
     b0, b1 = (float(b[:, 0].mean()), float(b[:, -1].mean())) if b.size else (0.0, 0.0)
     dvl = methods["dr_dvl"].final_mean_m
     parts = [

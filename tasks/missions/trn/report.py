@@ -12,9 +12,9 @@ from tasks.missions.trn.figures import error_figure, plan_figure
 from tasks.missions.trn.metrics import (
     FLAT_GRADIENT,
     TrnMetrics,
-    _stack,
     dvl_vs_log,
     flat_explanation,
+    stack_runs,
     summarise_method,
     trn_verdict,
 )
@@ -79,7 +79,7 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
     flat = counts.get("updates", 0) > 0 and grad < FLAT_GRADIENT
     trn = {m: trn_verdict(results, m, settle, flat) for m in TRN_METHODS}
     nan_fraction = map_nan_fraction(scn, ctx.seed)
-    b = _stack(results, None)
+    b = stack_runs(results, None)
     s = np.asarray(results[0].t_s[: b.shape[1]] >= settle) if results else np.zeros(0, bool)
     failures = [r.failed for r in results if r.failed]
     warnings = _warnings(scn, counts, nan_fraction)
