@@ -72,9 +72,11 @@ class TrnNavigation:
     * From the dive on, dead reckoning on the DVL (``dr_dvl``) and the two TRN filters start from
       the EKF's estimate and covariance; each DVL ping's velocity (bottom track, or water track
       when the DVL says so) is rotated to the world with the measured attitude
-      (:func:`nav.dvl.velocity_world_from_dvl`, lever-arm term with the INS rates) and held over
+      (:func:`nav.dvl.velocity_world_from_dvl`, lever-arm term with the INS rates; the water
+      track plus the current the log EKF learnt before the dive) and held over
       the interval since the previous ping: that displacement, with covariance ``(dt
-      sigma_velocity)^2 I``, advances the DVL DR and predicts both filters; every
+      sigma)^2 I`` (``trn.sigma_velocity_m_s`` on bottom lock, ``sigma_water_track_m_s``
+      without: the current is unknown), advances the DVL DR and predicts both filters; every
       ``update_period_s`` a bottom-lock ping's beams become soundings
       (:func:`nav.trn.soundings`, measured attitude, pressure depth) that update both filters
       against the navigator's map. A ping without bottom lock updates nothing; a ping with
@@ -134,7 +136,9 @@ class TrnNavigation:
         self.base.nav.reset_dr(est.x)
         self.t_ping, self.next_update, self.started = t_s, t_s + self.period, True
 
-    def _ping(self, tick: RigTick, depth_m: float) -> tuple[int, bool, int]:
+    def _ping(
+        self, tick: RigTick, depth_m: float, current_m_s: Array | None
+    ) -> tuple[int, bool, int]:
         """Predict with the DVL and update the filters at this tick (class docstring).
 
         Returns:
@@ -159,6 +163,8 @@ class TrnNavigation:
                 omega,
                 np.asarray(p.lever_arm_body_m, float),
             )
+            if mode == 2 and current_m_s is not None:  # through the water: add the current
+                self.velocity[:2] += current_m_s
         self.counts["pings"] += 1
         self.counts[MODES.get(mode, "none")] += 1
         if ping is None:
@@ -166,7 +172,8 @@ class TrnNavigation:
         dt = t - self.t_ping
         self.t_ping = t
         d = self.velocity[:2] * dt
-        q = (dt * c.sigma_velocity_m_s) ** 2 * np.eye(2)
+        sigma = c.sigma_velocity_m_s if mode == 1 else c.sigma_water_track_m_s
+        q = (dt * sigma) ** 2 * np.eye(2)
         self.dr.advance(d, q)
         self.pf.predict(d, q)
         self.pmf.predict(d, q)
@@ -213,7 +220,7 @@ class TrnNavigation:
             self._start(out.estimate, t)
             out = dataclasses.replace(out, dr_position_m=self.base.nav.dr_position)
         elif self.started:
-            mode, updated, beams = self._ping(tick, out.depth_m)
+            mode, updated, beams = self._ping(tick, out.depth_m, out.current_m_s)
             if updated:
                 q, self.q = self.q, np.zeros((2, 2))
         z = out.estimate.x[2]

@@ -47,8 +47,8 @@ def _warnings(scn: TrnScenario, counts: dict[str, int], nan_fraction: float) -> 
             f"({counts.get('water', 0)} water track, {counts.get('none', 0)} none; lock between "
             f"sensors.dvl.min_altitude_m = {scn.sensors.dvl.min_altitude_m:g} and "
             f"sensors.dvl.max_altitude_m = {scn.sensors.dvl.max_altitude_m:g} m with >= "
-            f"{scn.sensors.dvl.min_beams} beams): DR-DVL used the water track (or held the last "
-            "velocity) there"
+            f"{scn.sensors.dvl.min_beams} beams): DR-DVL and TRN used the water track plus the "
+            "current the log EKF learnt before the dive (or held the last velocity) there"
         )
     for key, name in (("unusable_updates", "TRN-PF"), ("pmf_unusable_updates", "TRN-PMF")):
         bad = counts.get(key, 0)

@@ -119,6 +119,12 @@ class TrnConfig(Config):
         "runs, measured): the DR error is a slow drift (the compass bias), which white noise "
         "covers only when larger",
     )
+    sigma_water_track_m_s: float = Field(
+        0.1,
+        gt=0,
+        description="the same for a ping without bottom lock (water track plus the current the "
+        "log EKF learnt before the dive, or none: the last velocity held), m/s",
+    )
     particles: int = Field(2000, ge=10, le=200_000, description="particle filter size")
     grid_points: int = Field(48, ge=8, le=512, description="point-mass grid points per axis")
     sigma_bias_m: float = Field(1.0, ge=0, description="common per-ping bias prior, m")
