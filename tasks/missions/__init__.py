@@ -1,7 +1,8 @@
 """The registered closed-loop missions on the physical vehicle: ``mission/survey``,
 ``mission/surfacing``, ``mission/short``, ``mission/correction`` (seed 001 on the BAUV),
-``mission/swarm`` (seed 003: followers keeping station on a leader) and ``mission/seed004``
-(seed 004: bearings to beacons, locally optimal control). Importing registers them."""
+``mission/swarm`` (seed 003: followers keeping station on a leader), ``mission/seed004``
+(seed 004: bearings to beacons, locally optimal control) and ``mission/trn`` (a DVL and
+terrain-relative navigation over relief). Importing registers them."""
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
@@ -25,6 +26,6 @@ declare(
     },
 )
 
-from tasks.missions import correction, seed004, short, surfacing, survey, swarm  # noqa: E402
+from tasks.missions import correction, seed004, short, surfacing, survey, swarm, trn  # noqa: E402
 
-__all__ = ["correction", "seed004", "short", "surfacing", "survey", "swarm"]
+__all__ = ["correction", "seed004", "short", "surfacing", "survey", "swarm", "trn"]

@@ -604,6 +604,13 @@ def test_seed004_mission_block():
     same(roundtrip(block).value, block)
 
 
+def test_trn_mission_block():
+    block = _block("mission/trn", (0,), "timing.max_duration_s=70", "report.figures=false")
+    r = block[0]
+    assert r.failed is None and len(r.t_s) > 5 and r.track and set(r.errors_m) >= {"trn_pf"}
+    same(roundtrip(block).value, block)
+
+
 def test_every_experiment_class_has_a_block_test_above():
     tested = {
         "StraightPassageExperiment",
@@ -617,6 +624,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "Paper004Experiment",
         "SeabedShiftExperiment",
         "Seed004Experiment",
+        "TrnExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
