@@ -46,7 +46,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "PointMassTrn": ("nav.trn", "PointMassTrn"),
     "PredictedShift": ("nav.bearings.model", "PredictedShift"),
     "Prediction": ("nav.bearings.model", "Prediction"),
-    "R_from_roll_pitch_heading": ("nav.dvl", "R_from_roll_pitch_heading"),
+    "rotation_world_from_body": ("nav.angles", "rotation_world_from_body"),
     "RangeEkfOptions": ("nav.relative", "RangeEkfOptions"),
     "SeriesSum": ("nav.metrics", "SeriesSum"),
     "ShiftEstimate": ("nav.seabed", "ShiftEstimate"),

@@ -33,6 +33,8 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from nav.errors import NavInputError
+
 Array = NDArray[np.float64]
 Rate = TypeVar("Rate", float, Array)
 
@@ -51,6 +53,7 @@ __all__ = [
     "heading_rate_from_yaw_rate",
     "range_azimuth_elevation",
     "rel_from_range_azimuth_elevation",
+    "rotation_world_from_body",
     "theta_from_course",
     "unit_vector",
     "unit_vector_scalar",
@@ -310,3 +313,43 @@ def fold_azimuth_elevation(azimuth_rad: ArrayLike, elevation_rad: ArrayLike) -> 
     flipped = over | under
     b = np.where(over, np.pi - b, np.where(under, -np.pi - b, b))
     return wrap_2pi(np.where(flipped, a + np.pi, a)), b
+
+
+def rotation_world_from_body(roll_pitch_heading_rad: ArrayLike) -> Array:
+    """Rotation ``R_world_from_body`` (body FLU -> world ENU) from navigation attitude angles.
+
+    The body is turned to the heading about world z, pitched nose up about its starboard axis,
+    then rolled starboard down about its forward axis: ``R = Rz(pi/2 - heading) Ry(-pitch)
+    Rx(roll)``, written out: the numbers of ``bauv_sim.frames.R_from_roll_pitch_heading`` (which
+    takes the three angles apart), tested equal. Its first column is the forward axis
+    ``(sin h cos p, cos h cos p, sin p)``. The one attitude rotation of :mod:`nav` (the DVL's
+    velocity, the TRN's soundings).
+
+    Args:
+        roll_pitch_heading_rad: ``(roll, pitch, heading)``, shape (..., 3), rad; roll starboard
+            down +, pitch nose up +, heading clockwise from north.
+
+    Returns:
+        ``R_world_from_body``, shape (..., 3, 3).
+    """
+    a = np.asarray(roll_pitch_heading_rad, dtype=float)
+    if a.shape[-1:] != (3,):
+        raise NavInputError(
+            f"roll_pitch_heading_rad must have a last axis of 3 (roll, pitch, heading), "
+            f"not shape {a.shape}"
+        )
+    sr, cr = np.sin(a[..., 0]), np.cos(a[..., 0])
+    sp, cp = np.sin(a[..., 1]), np.cos(a[..., 1])
+    # yaw = pi/2 - heading: cos(yaw) = sin(heading), sin(yaw) = cos(heading)
+    cy, sy = np.sin(a[..., 2]), np.cos(a[..., 2])
+    R = np.empty((*a.shape[:-1], 3, 3))
+    R[..., 0, 0] = cy * cp
+    R[..., 0, 1] = -cy * sp * sr - sy * cr
+    R[..., 0, 2] = -cy * sp * cr + sy * sr
+    R[..., 1, 0] = sy * cp
+    R[..., 1, 1] = -sy * sp * sr + cy * cr
+    R[..., 1, 2] = -sy * sp * cr - cy * sr
+    R[..., 2, 0] = sp
+    R[..., 2, 1] = cp * sr
+    R[..., 2, 2] = cp * cr
+    return R

@@ -9,9 +9,10 @@ rotated by the MEASURED attitude (compass/INS, not the truth):
 ``v_ref_world = R(att) (v_dvl_body - omega x r)``  (rigid body: ``v_dvl = v_ref + omega x r``)
 
 with ``R = R_world_from_body`` of roll (starboard down +), pitch (nose up +) and heading
-(clockwise from north) (:func:`R_from_roll_pitch_heading`, the convention of the simulator's
-frames reproduced here, as :mod:`nav` imports no simulator), ``omega`` the body angular velocity
-(rad/s, body FLU) and ``r`` the transducer's lever arm from the reference point (m, body FLU).
+(clockwise from north) (:func:`nav.angles.rotation_world_from_body`, the convention of the
+simulator's frames reproduced in :mod:`nav`, which imports no simulator), ``omega`` the body
+angular velocity (rad/s, body FLU) and ``r`` the transducer's lever arm from the reference point
+(m, body FLU).
 
 Three uses:
 
@@ -44,49 +45,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from nav.angles import rotation_world_from_body
 from nav.dead_reckoning import DeadReckonedTrack, track_with_covariance
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-
-def R_from_roll_pitch_heading(roll_pitch_heading_rad: ArrayLike) -> Array:
-    """Rotation ``R_world_from_body`` (body FLU -> world ENU) from navigation attitude angles.
-
-    The body is turned to the heading about world z, pitched nose up about its starboard axis,
-    then rolled starboard down about its forward axis: ``R = Rz(pi/2 - heading) Ry(-pitch)
-    Rx(roll)``, written out (the simulator's ``bauv_sim.frames.R_from_roll_pitch_heading``,
-    tested equal). Its first column is the forward axis ``(sin h cos p, cos h cos p, sin p)``.
-
-    Args:
-        roll_pitch_heading_rad: ``(roll, pitch, heading)``, shape (..., 3), rad; roll starboard
-            down +, pitch nose up +, heading clockwise from north.
-
-    Returns:
-        ``R_world_from_body``, shape (..., 3, 3).
-    """
-    a = np.asarray(roll_pitch_heading_rad, dtype=float)
-    if a.shape[-1:] != (3,):
-        raise NavInputError(
-            f"roll_pitch_heading_rad must have a last axis of 3 (roll, pitch, heading), "
-            f"not shape {a.shape}"
-        )
-    sr, cr = np.sin(a[..., 0]), np.cos(a[..., 0])
-    sp, cp = np.sin(a[..., 1]), np.cos(a[..., 1])
-    # yaw = pi/2 - heading: cos(yaw) = sin(heading), sin(yaw) = cos(heading)
-    cy, sy = np.sin(a[..., 2]), np.cos(a[..., 2])
-    R = np.empty((*a.shape[:-1], 3, 3))
-    R[..., 0, 0] = cy * cp
-    R[..., 0, 1] = -cy * sp * sr - sy * cr
-    R[..., 0, 2] = -cy * sp * cr + sy * sr
-    R[..., 1, 0] = sy * cp
-    R[..., 1, 1] = -sy * sp * sr + cy * cr
-    R[..., 1, 2] = -sy * sp * cr - cy * sr
-    R[..., 2, 0] = sp
-    R[..., 2, 1] = cp * sr
-    R[..., 2, 2] = cp * cr
-    return R
 
 
 def _lever_term(
@@ -113,7 +77,7 @@ def velocity_world_from_dvl(
         velocity_body_m_s: the DVL's velocity over ground at the transducer, shape (..., 3), m/s,
             body FLU (bottom lock; a water-track velocity gives the velocity through water).
         roll_pitch_heading_rad: the measured attitude at the ping, shape (..., 3), rad
-            (:func:`R_from_roll_pitch_heading`).
+            (:func:`nav.angles.rotation_world_from_body`).
         angular_velocity_body_rad_s: body angular velocity (p, q, r), shape (..., 3), rad/s,
             body FLU, or ``None`` (zero).
         lever_arm_body_m: the transducer relative to the reference point, shape (..., 3), m,
@@ -128,7 +92,7 @@ def velocity_world_from_dvl(
     v = np.asarray(velocity_body_m_s, dtype=float)
     if v.shape[-1:] != (3,):
         raise NavInputError(f"velocity_body_m_s must end in an axis of 3, not shape {v.shape}")
-    R = R_from_roll_pitch_heading(roll_pitch_heading_rad)
+    R = rotation_world_from_body(roll_pitch_heading_rad)
     v_ref = v - _lever_term(angular_velocity_body_rad_s, lever_arm_body_m)
     return np.einsum("...ij,...j->...i", R, v_ref)
 
@@ -226,7 +190,7 @@ class DvlVelocityMeasurement:
                 raise NavInputError(
                     f"current_for_noise_m_s must be finite, shape (2,) or (n, 2), not {c.tolist()}"
                 )
-        object.__setattr__(self, "_R_wb", R_from_roll_pitch_heading(att))
+        object.__setattr__(self, "_R_wb", rotation_world_from_body(att))
 
     def _water_world(self) -> Array:
         """``v_water_world``, shape (3,) or (n, 3), m/s, world."""

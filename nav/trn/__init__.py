@@ -20,7 +20,7 @@ from nav.trn.options import TrnOptions, TrnUpdate
 from nav.trn.particle import ParticleTrn, systematic_resample
 from nav.trn.pcrb import terrain_information, trn_pcrb
 from nav.trn.point_mass import PointMassTrn
-from nav.trn.soundings import Soundings, soundings, world_from_body
+from nav.trn.soundings import Soundings, soundings
 
 __all__ = [
     "DivergenceWindow",
@@ -37,5 +37,4 @@ __all__ = [
     "systematic_resample",
     "terrain_information",
     "trn_pcrb",
-    "world_from_body",
 ]

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from nav.angles import rotation_world_from_body
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -46,27 +47,6 @@ class Soundings:
     def count(self) -> int:
         """Number of valid soundings."""
         return int(np.count_nonzero(self.valid))
-
-
-def world_from_body(roll_pitch_heading_rad: ArrayLike) -> Array:
-    """Rotation world ENU from body FLU for one attitude.
-
-    Args:
-        roll_pitch_heading_rad: ``(roll, pitch, heading)``, shape ``(3,)``, rad; roll starboard
-            down positive, pitch nose up positive, heading clockwise from north.
-
-    Returns:
-        ``R = Rz(pi/2 - heading) Ry(-pitch) Rx(roll)``, shape ``(3, 3)``.
-    """
-    roll, pitch, heading = (float(a) for a in np.asarray(roll_pitch_heading_rad, dtype=float))
-    yaw = np.pi / 2 - heading
-    cr, sr = np.cos(roll), np.sin(roll)
-    cp, sp = np.cos(-pitch), np.sin(-pitch)
-    cy, sy = np.cos(yaw), np.sin(yaw)
-    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    return rz @ ry @ rx
 
 
 def soundings(
@@ -112,7 +92,7 @@ def soundings(
     if not np.isfinite(vehicle_depth_m):
         raise NavInputError(f"vehicle_depth_m = {vehicle_depth_m}: must be finite")
     valid = ok & np.isfinite(rho) & (rho > 0.0) & np.all(np.isfinite(d), axis=1)
-    r = world_from_body(att)
+    r = rotation_world_from_body(att)
     rel_body = lever[None, :] + np.where(valid, rho, 0.0)[:, None] * np.where(
         valid[:, None], d, 0.0
     )

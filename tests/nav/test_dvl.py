@@ -13,11 +13,11 @@ from filterpy.kalman import KalmanFilter
 from scipy.spatial.transform import Rotation
 
 from bauv_sim.frames import R_from_roll_pitch_heading as R_frames
+from nav.angles import rotation_world_from_body
 from nav.dead_reckoning import DeadReckoning, dead_reckon, track
 from nav.dvl import (
     DvlVelocityMeasurement,
     GroundVelocityMotion,
-    R_from_roll_pitch_heading,
     dvl_increments,
     dvl_track,
     velocity_world_from_dvl,
@@ -35,16 +35,16 @@ def test_rotation_is_the_simulators():
     att = np.column_stack(
         [rng.uniform(-np.pi, np.pi, 500), rng.uniform(-1.5, 1.5, 500), rng.uniform(0, 7, 500)]
     )
-    R = R_from_roll_pitch_heading(att)
+    R = rotation_world_from_body(att)
     assert np.allclose(R, R_frames(att[:, 0], att[:, 1], att[:, 2]), atol=1e-14, rtol=0)
     # laws: orthonormal, det +1, forward axis along heading and pitch, port up when rolled +
     assert np.allclose(R @ np.swapaxes(R, -1, -2), np.eye(3), atol=1e-14)
     assert np.allclose(np.linalg.det(R), 1.0)
-    one = R_from_roll_pitch_heading([0.2, 0.0, math.radians(90)])
+    one = rotation_world_from_body([0.2, 0.0, math.radians(90)])
     assert np.allclose(one[:, 0], [1.0, 0.0, 0.0], atol=1e-15)  # heading east: nose east
     assert one[2, 1] > 0  # roll starboard down: the port (body y) axis rises
     with pytest.raises(NavInputError, match="roll_pitch_heading_rad"):
-        R_from_roll_pitch_heading(np.zeros(2))
+        rotation_world_from_body(np.zeros(2))
 
 
 def test_velocity_world_removes_the_lever_arm_of_a_rotating_body():
