@@ -147,6 +147,8 @@ CUMSUM_ALLOWED = {
     "tasks/core/figures.py::histograms": "the empirical CDF of a histogram",
     "tasks/missions/seed004/metrics.py": "the empirical CDF of the shift errors' histogram",
     "tasks/paper004/report.py": "the empirical CDF of the shift errors' histogram",
+    "nav/trn/particle.py::systematic_resample": "the cumulative distribution of the particles' "
+    "weights that systematic resampling points into",
 }
 """Sums of steps in ``nav`` and ``tasks`` that are not dead reckoning, each with its reason (the
 truth generators of ``bauv_sim.kinematic`` and the sensors' random walks integrate the truth or an

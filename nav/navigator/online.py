@@ -22,8 +22,9 @@ current its innovations grow beyond what it expects and a gate then rejects ever
 applied without the gate (the practice of IST's farol navigation).
 
 The dead-reckoning track (:class:`nav.dead_reckoning.DeadReckoning`) uses the same inputs
-without the current and is never corrected (``reset_dr`` restarts it, e.g. at a GPS fix when a
-mission wants DR-with-resets).
+without the current (or its own, :meth:`OnlineNavigator.advance`'s ``dr_input``: e.g. the DVL's
+velocity over ground with :class:`nav.dvl.GroundVelocityMotion`) and is never corrected
+(``reset_dr`` restarts it, e.g. at a GPS fix when a mission wants DR-with-resets).
 
 **Measurements carry their model.** A :class:`Measurement` is a value, its time of validity and
 its measurement model (:mod:`nav.models`: ``h``, ``H``, ``R``, ``residual``, ``active``), as a
@@ -43,6 +44,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,6 +55,14 @@ from nav.errors import FilterDivergedError, NavInputError
 from nav.models import CourseSpeedDepthMotion, CurrentAwareMotion
 
 Array = NDArray[np.float64]
+
+
+class StepMotion(Protocol):
+    """What the DR track needs from a motion model: one run's displacement over a step,
+    ``increment_one(u (p,), dt_s) -> (3,)`` m, world (:class:`nav.models.CourseSpeedDepthMotion`,
+    :class:`nav.dvl.GroundVelocityMotion`)."""
+
+    def increment_one(self, u: Array, dt_s: float) -> Array: ...
 
 
 @dataclass(frozen=True)
@@ -93,7 +103,7 @@ class _Slot:
     t_s: float
     x: Array  # (1, d) after the updates at t_s
     P: Array  # (1, d, d)
-    u: Array | None  # input that led from the previous slot to this one, (1, 3)
+    u: Array | None  # input that led from the previous slot to this one, (1, p)
     dt_s: float
 
 
@@ -122,7 +132,7 @@ class OnlineNavigator:
         t0_s: float,
         x0: Array,
         P0: Array,
-        dr_motion: CourseSpeedDepthMotion,
+        dr_motion: StepMotion,
         history_s: float = 10.0,
         gate_probability: float | None = None,
         max_consecutive_rejections: int | None = None,
@@ -187,18 +197,36 @@ class OnlineNavigator:
             NavInputError: if ``t_s`` is not after the current time or an input is not finite.
             FilterDivergedError: if the prediction is not finite.
         """
+        self.advance(t_s, np.array([heading_rad, speed_m_s, depth_change_m], dtype=float))
+
+    def advance(self, t_s: float, u: Array, dr_input: Array | None = None) -> None:
+        """Advance EKF and DR to ``t_s`` with any motion model's input held since the previous
+        tick (:meth:`predict` is this with ``u = (heading, speed, depth change)``; a
+        :class:`nav.dvl.GroundVelocityMotion` takes ``(v_east, v_north, depth change)``).
+
+        Args:
+            t_s: new time, s (> the current time).
+            u: the estimator's motion input, shape (p,).
+            dr_input: the DR motion model's input, shape (p',), or ``None`` (``u``).
+
+        Raises:
+            NavInputError: if ``t_s`` is not after the current time or an input is not finite.
+            FilterDivergedError: if the prediction is not finite.
+        """
         last = self._hist[-1]
         dt = t_s - last.t_s
         if not dt > 0:
             raise NavInputError(f"predict to t = {t_s} s: not after the current {last.t_s} s")
-        u = np.array([[heading_rad, speed_m_s, depth_change_m]], dtype=float)
-        if not np.all(np.isfinite(u)):
-            raise NavInputError(f"predict at t = {t_s} s: non-finite input {u[0].tolist()}")
+        u = np.asarray(u, dtype=float).reshape(1, -1)
+        du = u[0] if dr_input is None else np.asarray(dr_input, dtype=float).reshape(-1)
+        if not (np.all(np.isfinite(u)) and np.all(np.isfinite(du))):
+            bad = u[0].tolist() if not np.all(np.isfinite(u)) else du.tolist()
+            raise NavInputError(f"predict at t = {t_s} s: non-finite input {bad}")
         x, P = self.estimator.predict(last.x, last.P, u, dt)
         if not (np.isfinite(x).all() and np.isfinite(P).all()):
             raise FilterDivergedError(f"navigation estimate not finite at t = {t_s:g} s")
         self._hist.append(_Slot(float(t_s), x, P, u, dt))
-        self._dr.advance(self.dr_motion.increment_one(u[0], dt))
+        self._dr.advance(self.dr_motion.increment_one(du, dt))
         while len(self._hist) > 2 and self._hist[1].t_s < t_s - self.history_s:
             self._hist.popleft()
 
