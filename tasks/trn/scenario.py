@@ -158,9 +158,9 @@ class SweepConfig(Config):
     def _non_negative(cls, v: list[float]) -> list[float]:
         bad = [x for x in v if not (math.isfinite(x) and 0 <= x <= 50)]
         if bad:
-            raise ValueError(f"{v}: every value must be in [0, 50] m (not {bad[0]})")
+            raise ValueError(f"every value must be in [0, 50] m (not {bad[0]})")
         if len(set(v)) != len(v):
-            raise ValueError(f"{v}: a value appears twice")
+            raise ValueError("a value appears twice")
         return v
 
 
