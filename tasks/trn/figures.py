@@ -17,16 +17,17 @@ if TYPE_CHECKING:
 
 Array = NDArray[np.float64]
 
-MAP_LINESTYLES = ("-", "--", "-.", ":")
-"""Line style of each map error of the sweep (the method's colour stays its own)."""
+MAP_LINESTYLES = ("--", ":", (0, (5, 1, 1, 1)))
+"""Line style of the second, third... map error of the sweep (the first keeps the method's own
+look; the colour stays the method's)."""
 
 
 PCRB_MARKERS = (".", "x", "+", "1")
 """Marker of the PCRB's line for each map error (its line style is the PCRB's own)."""
 
 
-def _map_ls(i: int) -> str:
-    return MAP_LINESTYLES[i % len(MAP_LINESTYLES)]
+def _map_ls(i: int) -> dict:
+    return {} if i == 0 else {"ls": MAP_LINESTYLES[(i - 1) % len(MAP_LINESTYLES)]}
 
 
 @style.styled
@@ -64,7 +65,7 @@ def relief(path: Path, m: TrnReliefMetrics) -> list[str]:
                     [y[j] for j in keep],
                     yerr=[2 * (e[j] or 0.0) for j in keep],
                     capsize=2,
-                    **style.line(meth, label=f"{meth}{tag}", ls=_map_ls(i), marker="o"),
+                    **style.line(meth, label=f"{meth}{tag}", marker="o", **_map_ls(i)),
                 )
             b = [getattr(s, bound_key) for s in rows]
             ax.plot(x, b, **style.line("PCRB", label=f"PCRB{tag}", marker=PCRB_MARKERS[i % 4]))

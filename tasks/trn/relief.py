@@ -9,7 +9,7 @@ estimates start from the same erroneous position (``filters.initial_sigma_m``):
 
 * **DR-DVL**: dead reckoning on the DVL's velocity rotated by the measured heading
   (:mod:`nav.dvl`, :mod:`nav.dead_reckoning`);
-* **PF** and **PMF**: the particle and point-mass TRN filters (:mod:`nav.trn`), fed the DR
+* **TRN-PF** and **TRN-PMF**: the particle and point-mass TRN filters (:mod:`nav.trn`), fed the DR
   displacement between updates and one ping's four soundings every ``filters.update_every``
   pings, against the navigator's map, a degraded copy of the true seabed
   (:func:`nav.trn.degraded`: a coarser cell ``map.cell_m``, per-cell vertical noise from the

@@ -166,7 +166,9 @@ def warnings_of(m: TrnReliefMetrics) -> list[str]:
                 "(prediction only)"
             )
         for meth, k in s.non_finite_runs.items():
-            if k:
+            if k and not s.methods[meth].runs:
+                out.append(f"{tag}: {meth}: no data (no run with a finite error)")
+            elif k:
                 out.append(f"{tag}: {meth}: {k} runs with a non-finite error left the statistics")
         for meth in METHODS[1:]:
             st = s.methods[meth]

@@ -51,7 +51,7 @@ from tasks.trn.scenario import FiltersConfig, TrackConfig, TrnReliefScenario
 
 Array = NDArray[np.float64]
 
-METHODS = ("DR-DVL", "PF", "PMF")
+METHODS = ("DR-DVL", "TRN-PF", "TRN-PMF")
 """The estimates compared, in the order of the block's arrays."""
 
 

@@ -70,7 +70,7 @@ def test_noise_free_dvl_dead_reckoning_keeps_exactly_the_initial_error(tmp_path)
         "sensors.dvl.range.sigma_m=0",
         "sensors.compass.heading.sigma_deg=0",
     ]
-    _, summary = run(
+    run(
         "trn/relief",
         n_runs=1,
         seed=4,
@@ -131,7 +131,7 @@ def trend():
     return run_block(scn, 7, tuple(range(N_TREND)))
 
 
-@pytest.mark.parametrize("method", ["PF", "PMF"])
+@pytest.mark.parametrize("method", ["TRN-PF", "TRN-PMF"])
 def test_trn_error_falls_as_the_relief_grows(trend, method):
     """Each run's mean error over the updates, paired over the runs (same tracks, wave shapes
     and noise at every relief): no step up beyond 2 standard errors of the paired difference
@@ -151,7 +151,7 @@ def test_trn_error_falls_as_the_relief_grows(trend, method):
     assert np.all(mean[1:] < dr[1:]), (mean, dr)
 
 
-@pytest.mark.parametrize("method", ["PF", "PMF"])
+@pytest.mark.parametrize("method", ["TRN-PF", "TRN-PMF"])
 def test_filters_are_not_below_the_pcrb(trend, method):
     """The PCRB bounds any estimator's MSE: over the runs and updates, each filter's RMSE is at
     least the bound's RMS level, less 3 standard errors (over the runs)."""
@@ -205,3 +205,45 @@ def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, setting, pattern
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
     assert not out.exists()
+
+
+def test_a_method_with_no_finite_run_says_no_data():
+    """Estimates that ran away to infinity leave the statistics; with none left the metrics hold
+    None (a dash in the table, a "no data" warning), never NaN."""
+    from tasks.trn.report import TrnReliefMetrics, method_stats, tables, warnings_of
+
+    bad = np.array([np.inf, np.nan])
+    empty = method_stats(bad, bad, bad)
+    assert empty.runs == 0 and empty.final_mean_m is None and empty.rmse_m is None
+    half = method_stats(np.array([1.0, np.inf]), np.array([2.0, 1.0]), np.array([2.0, 1.0]))
+    assert half.runs == 1 and half.final_mean_m == 1.0 and half.final_se_m == 0.0
+    ok = method_stats(np.array([1.0, 3.0]), np.array([1.0, 1.0]), np.array([1.0, 1.0]))
+    setting = {
+        "relief_std_m": 1.0,
+        "map_sigma_m": 0.1,
+        "methods": {"DR-DVL": ok, "TRN-PF": empty, "TRN-PMF": half},
+        "pcrb_rms_m": 0.5,
+        "pcrb_final_m": 0.4,
+        "no_lock_pings": 0,
+        "updates_without_soundings": 0,
+        "reinitialisations": {"TRN-PF": 0, "TRN-PMF": 0},
+        "diverged_updates": {"TRN-PF": 0, "TRN-PMF": 0},
+        "non_finite_runs": {"DR-DVL": 0, "TRN-PF": 2, "TRN-PMF": 1},
+    }
+    m = TrnReliefMetrics(
+        experiment="trn/relief",
+        n_runs=2,
+        seed=0,
+        duration_s=60.0,
+        update_period_s=1.0,
+        map_cell_m=10.0,
+        map_offset_m=0.5,
+        settings=[setting],
+        warnings=[],
+    )
+    w = warnings_of(m)
+    assert any("TRN-PF: no data" in line for line in w), w
+    assert any("TRN-PMF: 1 runs with a non-finite error" in line for line in w), w
+    _no_nan(m.model_dump_json())
+    row = tables(m)[0].cells()[0]
+    assert row[5:8] == ["-", "-", "-"] and "nan" not in " ".join(row).lower(), row
