@@ -54,7 +54,7 @@ def relief(path: Path, m: TrnReliefMetrics) -> list[str]:
             )
             x = np.array([s.relief_std_m for s in rows])
             tag = f", map {sig:g} m" if len(sigmas) > 1 else ""
-            for meth in METHODS:
+            for meth in METHODS if i == 0 else METHODS[1:]:  # DR does not use the map
                 y = [getattr(s.methods[meth], key) for s in rows]
                 e = [getattr(s.methods[meth], se_key) for s in rows]
                 keep = [j for j, v in enumerate(y) if v is not None]

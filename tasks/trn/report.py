@@ -151,7 +151,8 @@ def setting_metrics(p: Pooled, s: int, relief: float, map_sigma: float) -> Setti
 
 def warnings_of(m: TrnReliefMetrics) -> list[str]:
     """Lines for the reader: lost bottom lock, pings with no sounding, estimates that were not
-    finite, a filter below the PCRB beyond Monte Carlo tolerance, a flat seabed."""
+    finite, re-initialised filters, a filter below the PCRB beyond Monte Carlo tolerance, a flat
+    seabed."""
     out = []
     for s in m.settings:
         tag = f"relief {s.relief_std_m:g} m, map sigma {s.map_sigma_m:g} m"
@@ -171,6 +172,11 @@ def warnings_of(m: TrnReliefMetrics) -> list[str]:
             elif k:
                 out.append(f"{tag}: {meth}: {k} runs with a non-finite error left the statistics")
         for meth in METHODS[1:]:
+            if s.reinitialisations[meth]:
+                out.append(
+                    f"{tag}: {meth} was re-initialised {s.reinitialisations[meth]} times (its "
+                    "divergence test fired; each spreads it again, so its error jumps)"
+                )
             st = s.methods[meth]
             if st.rmse_m is not None and st.rmse_m + BELOW_BOUND_SE * (st.rmse_se_m or 0.0) < (
                 s.pcrb_rms_m

@@ -38,7 +38,7 @@ class TrackConfig(Config):
 
     speed_m_s: float = Field(1.5, gt=0, le=10, description="speed over ground, m/s")
     depth_m: float = Field(10.0, ge=0, description="vehicle depth, m (constant)")
-    duration_s: float = Field(600.0, gt=0, le=36_000, description="duration of a run, s")
+    duration_s: float = Field(300.0, gt=0, le=36_000, description="duration of a run, s")
     leg_m: float = Field(300.0, gt=0, description="length of a survey leg, m")
     spacing_m: float = Field(50.0, gt=0, description="distance between two survey legs, m")
     start_box_m: float = Field(
