@@ -152,12 +152,20 @@ class DvlVelocityMeasurement:
     current's columns and zeros elsewhere (the velocity says nothing of the position itself; the
     position gains through its correlation with the current).
 
-    The noise is the DVL's (``sigma_m_s`` per body axis) plus the log's and the vertical rate's,
-    which enter ``h`` through ``v_water_world``: ``R = sigma^2 I + sigma_S^2 b b^T +
-    sigma_w^2 e e^T`` with ``b = R^T (sin h, cos h, 0)`` and ``e = R^T (0, 0, 1)``. The heading's
-    own error enters through ``R^T c``, of order ``|c| sigma_heading``; a filter that expects it
-    adds it to ``sigma_m_s``. A log whose noise is the same sample as the prediction's input
-    correlates the two; it is small beside the DVL's where ``sigma_S`` is a few cm/s.
+    The noise is the DVL's (``sigma_m_s`` per body axis) plus the errors of the other inputs of
+    ``h``, propagated to first order: the log's and the vertical rate's through
+    ``v_water_world``, and the heading's through ``R^T c`` (``R^T v_water_world`` does not depend
+    on the heading: both turn with it), ``d(R^T c)/d heading = R^T (e_z x c) = R^T (-c_n, c_e,
+    0)``:
+
+    ``R = sigma^2 I + sigma_S^2 b b^T + sigma_w^2 e e^T + sigma_h^2 g g^T``
+
+    with ``b = R^T (sin h, cos h, 0)``, ``e = R^T (0, 0, 1)`` and ``g = R^T (-c_n, c_e, 0)`` at
+    ``current_for_noise_m_s`` (``R`` cannot depend on the state in :mod:`nav.ekf`: the caller
+    gives the current to linearise about, e.g. the filter's estimate when the ping arrives; the
+    term is ``|c| sigma_h``, 5 mm/s for 0.3 m/s and 1 deg). A log whose noise is the same sample
+    as the prediction's input correlates the two; it is small beside the DVL's where ``sigma_S``
+    is a few cm/s (the NEES test of ``tests/nav/test_dvl_ekf.py`` runs with it).
 
     The attitude, speeds and rates are one run's (shapes (3,) and scalars: ``R()`` is (3, 3), for
     :meth:`nav.navigator.OnlineNavigator.fuse`) or a batch's (shapes (n, 3) and (n,): ``R()`` is
@@ -176,6 +184,9 @@ class DvlVelocityMeasurement:
         lever_arm_body_m: transducer from the reference point, shape (3,), m, body FLU, or
             ``None``.
         current_index: index of ``c_east`` in the state (``c_north`` follows).
+        sigma_heading_rad: the measured heading's standard deviation, rad (>= 0).
+        current_for_noise_m_s: the current ``(c_east, c_north)`` the heading's term of ``R`` is
+            linearised about, shape (2,) or (n, 2), m/s, or ``None`` (no heading term).
     """
 
     roll_pitch_heading_rad: Array
@@ -187,12 +198,14 @@ class DvlVelocityMeasurement:
     angular_velocity_body_rad_s: Array | None = None
     lever_arm_body_m: Array | None = None
     current_index: int = 3
+    sigma_heading_rad: float = 0.0
+    current_for_noise_m_s: Array | None = None
     _R_wb: Array = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not self.sigma_m_s > 0:
             raise NavInputError(f"sigma_m_s = {self.sigma_m_s}: must be > 0")
-        for name in ("sigma_speed_m_s", "sigma_vertical_m_s"):
+        for name in ("sigma_speed_m_s", "sigma_vertical_m_s", "sigma_heading_rad"):
             if not getattr(self, name) >= 0:
                 raise NavInputError(f"{name} = {getattr(self, name)}: must be >= 0")
         att = np.asarray(self.roll_pitch_heading_rad, dtype=float)
@@ -203,6 +216,12 @@ class DvlVelocityMeasurement:
         for name in ("speed_through_water_m_s", "vertical_velocity_m_s"):
             if not np.isfinite(np.asarray(getattr(self, name), dtype=float)).all():
                 raise NavInputError(f"{name} = {getattr(self, name)}: must be finite")
+        if self.current_for_noise_m_s is not None:
+            c = np.asarray(self.current_for_noise_m_s, dtype=float)
+            if c.ndim not in (1, 2) or c.shape[-1] != 2 or not np.isfinite(c).all():
+                raise NavInputError(
+                    f"current_for_noise_m_s must be finite, shape (2,) or (n, 2), not {c.tolist()}"
+                )
         object.__setattr__(self, "_R_wb", R_from_roll_pitch_heading(att))
 
     def _water_world(self) -> Array:
@@ -248,11 +267,17 @@ class DvlVelocityMeasurement:
         horiz = np.stack([np.sin(h), np.cos(h), np.zeros_like(h)], axis=-1)
         b = np.einsum("...ij,...j->...i", Rt, horiz)
         e = Rt[..., :, 2]
-        return (
+        out = (
             self.sigma_m_s**2 * np.eye(3)
             + self.sigma_speed_m_s**2 * b[..., :, None] * b[..., None, :]
             + self.sigma_vertical_m_s**2 * e[..., :, None] * e[..., None, :]
         )
+        if self.current_for_noise_m_s is not None and self.sigma_heading_rad > 0:
+            c = np.asarray(self.current_for_noise_m_s, dtype=float)
+            ez_x_c = np.stack([-c[..., 1], c[..., 0], np.zeros(c.shape[:-1])], axis=-1)
+            g = np.einsum("...ij,...j->...i", Rt, ez_x_c)
+            out = out + self.sigma_heading_rad**2 * g[..., :, None] * g[..., None, :]
+        return out
 
     def residual(self, z: Array, hx: Array) -> Array:
         """``z - h(x)``, shape (n, 3), m/s."""

@@ -19,8 +19,8 @@ triangles are MuJoCo's, or the analytic :class:`PlaneSeabed`); in the physics wo
 against the scene's heightfield (:meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances`). A beam
 **returns** when its ray meets the seabed within the beam's maximum range
 ``max_altitude_m / cos(a)`` (the slant range of the maximum altitude over a flat seabed with the
-instrument level) and it did not drop out (a dropout of its velocity or of its range loses the
-beam).
+instrument level) and neither its velocity nor its range dropped out (a velocity dropout loses
+the beam altogether, a range dropout its bottom echo).
 
 **Velocity.** The true beam velocity is ``d_i_true_body . v`` with ``v`` the transducer's velocity
 in body axes, over ground ``v = R^T v_ref_world + omega x r`` (bottom track) or through the water
@@ -36,10 +36,11 @@ layout already determine it).
 **Modes** (per ping): **bottom lock** (1) when at least ``min_beams`` beams return and the
 altitude, the mean over the returning beams of ``range_i cos(a)`` (along the instrument's axis, as
 a DVL reports it), lies in ``[min_altitude_m, max_altitude_m]``; else, with ``fallback =
-"water"``, **water track** (2) from the beams that did not drop out (at least ``min_beams``); else
-**none** (0). Without bottom lock the altitude is 0; the ranges and echo flags of the returning
-beams are reported in every mode (0 and False where a beam has no echo). Nothing is NaN: an absent
-output is flagged (mode 0), its values are zeros.
+"water"``, **water track** (2) from the beams whose velocity did not drop out (at least
+``min_beams``; water track needs no bottom echo); else **none** (0). Without bottom lock the
+altitude is 0; the ranges and echo flags of the returning beams are reported in every mode (0 and
+False where a beam has no echo). Nothing is NaN: an absent output is flagged (mode 0), its values
+are zeros.
 """
 
 from __future__ import annotations
@@ -107,11 +108,11 @@ class DvlConfig(Config):
     )
     beam: SpeedErrorConfig = Field(
         default_factory=lambda: SpeedErrorConfig(sigma_m_s=0.01),
-        description="error of each beam's velocity (dropouts lose the beam)",
+        description="error of each beam's velocity (a dropout loses the beam)",
     )
     range: LengthErrorConfig = Field(
         default_factory=lambda: LengthErrorConfig(sigma_m=0.02),
-        description="error of each beam's range (dropouts lose the beam)",
+        description="error of each beam's range (a dropout loses the beam's bottom echo)",
     )
 
     @field_validator("beam", "range")
@@ -251,6 +252,22 @@ class DvlSamples:
     true_velocity_body_m_s: Array
 
 
+def _rotate(M: Array, v: Array) -> Array:
+    """``M @ v`` over broadcast leading axes, as three products summed in a fixed order: the same
+    bits for a sample whatever the batch around it (a BLAS product's blocking depends on the
+    array sizes, so a batch and a ping alone could differ in the last bit).
+
+    Args:
+        M: shape (..., m, 3).
+        v: shape (..., 3), broadcast against ``M``'s leading axes.
+
+    Returns:
+        Shape (..., m).
+    """
+    v = np.asarray(v)[..., None, :]
+    return M[..., 0] * v[..., 0] + M[..., 1] * v[..., 1] + M[..., 2] * v[..., 2]
+
+
 def _solve_velocity(D: Array, b: Array, use: BoolArray) -> Array:
     """Least squares ``v = argmin sum_{i used} (D_i . v - b_i)^2`` per sample.
 
@@ -263,8 +280,11 @@ def _solve_velocity(D: Array, b: Array, use: BoolArray) -> Array:
         Shape (..., 3).
     """
     w = use.astype(float)
-    A = np.einsum("...i,ij,ik->...jk", w, D, D)  # D^T W D, (..., 3, 3)
-    rhs = np.einsum("...i,ij->...j", w * b, D)  # D^T W b
+    A = np.zeros((*b.shape[:-1], 3, 3))
+    rhs = np.zeros((*b.shape[:-1], 3))
+    for i in range(D.shape[0]):  # D^T W D and D^T W b, beam by beam (see _rotate)
+        A += w[..., i, None, None] * np.outer(D[i], D[i])
+        rhs += (w[..., i] * b[..., i])[..., None] * D[i]
     ok = use.sum(-1) >= 3
     A = np.where(ok[..., None, None], A, np.eye(3))  # 3 Janus beams span R^3: A is regular
     v = np.linalg.solve(A, rhs[..., None])[..., 0]
@@ -358,25 +378,24 @@ class Dvl:
             okr.append(ok)
         err_v, alive_v = np.stack(ev, -1), np.stack(okv, -1)  # (n, k, 4)
         err_r, alive_r = np.stack(er, -1), np.stack(okr, -1)
-        alive = alive_v & alive_r
-        echo = np.asarray(hit, bool) & alive & (L > 0) & (L <= cfg.max_range_m)
+        echo = np.asarray(hit, bool) & alive_v & alive_r & (L > 0) & (L <= cfg.max_range_m)
         ranges = np.where(echo, np.maximum(sf_r * L + err_r, 0.0), 0.0)
         n_echo = echo.sum(-1)
         altitude = ranges.sum(-1) * self.cos_a / np.maximum(n_echo, 1)  # 0 without echo
+        # the measured altitude (range errors included) decides, as the DVL knows no other
         lock = (
             (n_echo >= cfg.min_beams)
             & (altitude >= cfg.min_altitude_m)
             & (altitude <= cfg.max_altitude_m)
         )
-        water = ~lock & (alive.sum(-1) >= cfg.min_beams) & (cfg.fallback == "water")
+        water = ~lock & (alive_v.sum(-1) >= cfg.min_beams) & (cfg.fallback == "water")
         v_true = np.where(lock[..., None], vg, vw)
-        b_true = v_true @ self.true_directions_body.T  # (n, k, 4): d_i_true . v
+        b_true = _rotate(self.true_directions_body, v_true)  # (n, k, 4): d_i . v
         b = sf_v * b_true + err_v
-        use = np.where(lock[..., None], echo, alive) & (lock | water)[..., None]
-        v_instr = _solve_velocity(self.directions_instrument, b, use)
-        velocity = v_instr @ self.R_mount.T
+        use = np.where(lock[..., None], echo, alive_v) & (lock | water)[..., None]
+        v_instr = _solve_velocity(self.directions_instrument, b, use)  # 0 where no beam is used
+        velocity = _rotate(self.R_mount, v_instr)
         mode = np.where(lock, BOTTOM_LOCK, np.where(water, WATER_TRACK, NONE)).astype(np.int8)
-        velocity = np.where((mode != NONE)[..., None], velocity, 0.0)
         return DvlSamples(
             t_s=t,
             mode=mode,
@@ -438,10 +457,11 @@ class Dvl:
                 )
         r = np.asarray(self.cfg.transducer_body_m, dtype=float)
         lever = np.cross(w, r)  # omega x r, body
-        vg = np.einsum("...ji,...j->...i", R, vel_g) + lever
-        vw = np.einsum("...ji,...j->...i", R, vel_w) + lever
-        origin = pos + np.einsum("...ij,j->...i", R, r)
-        dirs = np.einsum("...ij,bj->...bi", R, self.true_directions_body)  # (n, k, 4, 3)
+        Rt = np.swapaxes(R, -1, -2)
+        vg = _rotate(Rt, vel_g) + lever
+        vw = _rotate(Rt, vel_w) + lever
+        origin = pos + _rotate(R, r)
+        dirs = _rotate(R[..., None, :, :], self.true_directions_body)  # (n, k, 4, 3)
         L, hit = seabed.ray_ranges(origin[..., None, :], dirs, self.cfg.max_range_m)
         return self.measure(L, hit, vg, vw, tr.t_s)
 
@@ -505,10 +525,10 @@ class DvlDevice:
         R = R_from_quat_wxyz(vt.quat_wxyz)
         r = self.lever_arm_body_m
         lever = np.cross(vt.angular_velocity_body_rad_s, r)
-        vg = R.T @ vt.velocity_world_m_s + lever
-        vw = R.T @ vt.velocity_through_water_world_m_s + lever
-        origin = vt.position_world_m + R @ r
-        dirs = self._dvl.true_directions_body @ R.T
+        vg = _rotate(R.T, vt.velocity_world_m_s) + lever
+        vw = _rotate(R.T, vt.velocity_through_water_world_m_s) + lever
+        origin = vt.position_world_m + _rotate(R, r)
+        dirs = _rotate(R, self._dvl.true_directions_body)
         dist, hit = self._physics.seabed_ray_distances(origin, dirs, self.cfg.max_range_m)
         s = self._dvl.measure(
             dist[None, None], hit[None, None], vg[None, None], vw[None, None], ctx.tt

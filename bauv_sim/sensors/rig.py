@@ -8,7 +8,7 @@ time of arrival), the way the vehicle's computer would receive them:
   ``period_s`` (a whole number of ticks) and their latest value is held in between; a device that
   produces nothing at a sampling tick (the log below its minimum speed) holds nothing until its
   next good sample;
-* **event** devices (USBL, GPS, the acoustic modem, DOA bearings, the multibeam) deliver
+* **event** devices (USBL, GPS, the acoustic modem, DOA bearings, the multibeam, the DVL) deliver
   measurements that are valid at one instant and reach the vehicle later (acoustic travel time
   and modem delay): the
   rig queues them and hands each one over at the first tick at or after its arrival, with its

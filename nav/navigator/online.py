@@ -197,7 +197,7 @@ class OnlineNavigator:
             NavInputError: if ``t_s`` is not after the current time or an input is not finite.
             FilterDivergedError: if the prediction is not finite.
         """
-        self.advance(t_s, np.array([heading_rad, speed_m_s, depth_change_m], dtype=float))
+        self._advance(t_s, np.array([[heading_rad, speed_m_s, depth_change_m]], dtype=float))
 
     def advance(self, t_s: float, u: Array, dr_input: Array | None = None) -> None:
         """Advance EKF and DR to ``t_s`` with any motion model's input held since the previous
@@ -213,15 +213,20 @@ class OnlineNavigator:
             NavInputError: if ``t_s`` is not after the current time or an input is not finite.
             FilterDivergedError: if the prediction is not finite.
         """
+        u2 = np.array(u, dtype=float).reshape(1, -1)
+        du = None if dr_input is None else np.array(dr_input, dtype=float).reshape(-1)
+        self._advance(t_s, u2, du)
+
+    def _advance(self, t_s: float, u: Array, du: Array | None = None) -> None:
+        """:meth:`advance` with ``u`` shape (1, p) and ``du`` shape (p',) (``None``: ``u[0]``)."""
         last = self._hist[-1]
         dt = t_s - last.t_s
         if not dt > 0:
             raise NavInputError(f"predict to t = {t_s} s: not after the current {last.t_s} s")
-        u = np.asarray(u, dtype=float).reshape(1, -1)
-        du = u[0] if dr_input is None else np.asarray(dr_input, dtype=float).reshape(-1)
-        if not (np.all(np.isfinite(u)) and np.all(np.isfinite(du))):
-            bad = u[0].tolist() if not np.all(np.isfinite(u)) else du.tolist()
-            raise NavInputError(f"predict at t = {t_s} s: non-finite input {bad}")
+        for v in (u[0],) if du is None else (u[0], du):
+            if not np.all(np.isfinite(v)):
+                raise NavInputError(f"predict at t = {t_s} s: non-finite input {v.tolist()}")
+        du = u[0] if du is None else du
         x, P = self.estimator.predict(last.x, last.P, u, dt)
         if not (np.isfinite(x).all() and np.isfinite(P).all()):
             raise FilterDivergedError(f"navigation estimate not finite at t = {t_s:g} s")

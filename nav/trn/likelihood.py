@@ -27,10 +27,11 @@ large. As ``sigma_b -> inf`` the quadratic form becomes mbtrnav's "contour match
 (``TNavParticleFilter.cpp``, ``USE_CONTOUR_MATCHING``).
 
 **Beams off the map.** A beam whose hit point is off the map or on a cell without data is left out
-of that hypothesis's likelihood and replaced by the expected log-likelihood of one beam at the true
-position, ``-1/2 (1 + log 2 pi s_i^2)``, so a hypothesis neither gains nor loses by a beam it
-cannot predict (mbtrnav treats such "sub-cloud" particles alike: their weight is scaled by the
-mean update of the particles that see the beam). A beam that no hypothesis can predict is not used.
+of that hypothesis's likelihood and replaced by the weighted mean likelihood of that beam over the
+hypotheses that do predict it, so a hypothesis neither gains nor loses, relative to the others, by
+a beam it cannot predict: mbtrnav scales the weight of the particles outside a beam's "sub-cloud"
+by the sub-cloud's mean update alike (``TNavParticleFilter.cpp``). A beam that no hypothesis can
+predict is not used; a hypothesis that predicts no beam keeps its weight relative to the mean.
 
 **Innovation and divergence.** The ping's NIS is ``nu^T S^-1 nu`` with ``nu = z - sum_j w_j h_j``
 over the beams every weighted hypothesis predicts and ``S = Cov_w(h) + R`` (mbtrnav's
@@ -66,8 +67,16 @@ def log_likelihood(
     offset_m: Array,
     s_m: Array,
     sigma_bias_m: float,
+    weights: Array | None = None,
 ) -> tuple[Array, Array, BoolArray]:
     """Log-likelihood of one ping's soundings at position hypotheses (module docstring).
+
+    The quadratic form is split into per-beam terms with the hypothesis's bias estimate
+    ``b_j = sigma_b^2 sum a_i e_ij / (1 + sigma_b^2 sum a_i)`` (the posterior mean of the bias):
+    ``e^T R^-1 e = sum a_i (e_ij - b_j)^2 + b_j^2 / sigma_b^2`` (completing the square), so that
+    a beam a hypothesis cannot predict is replaced by the weighted mean likelihood of that beam's
+    term over the hypotheses that predict it. Terms common to all hypotheses are left out (the
+    result is a log-likelihood up to a constant of the ping).
 
     Args:
         points_m: position hypotheses (east, north), shape ``(n, 2)``, m.
@@ -76,6 +85,8 @@ def log_likelihood(
         offset_m: their horizontal offsets, shape ``(m, 2)``, m.
         s_m: their standard deviations (beam and map), shape ``(m,)``, m.
         sigma_bias_m: prior standard deviation of the ping's common bias, m.
+        weights: prior weights of the hypotheses, ``(n,)`` (default equal), for the beams some
+            hypotheses cannot predict.
 
     Returns:
         ``(loglik (n,), predicted (n, m), ok (n, m))``: the log-likelihood (finite), the map's
@@ -85,18 +96,43 @@ def log_likelihood(
     hy = points_m[:, 1:2] + offset_m[None, :, 1]
     h, ok = terrain_map.depth(hx, hy)
     a = 1.0 / (s_m * s_m)
+    sb2 = sigma_bias_m * sigma_bias_m
+    if ok.all():  # the hot path: every hypothesis predicts every beam (constants left out)
+        e = z_m[None, :] - h
+        bias = (sb2 / (1.0 + sb2 * a.sum())) * (e @ a)
+        r = e - bias[:, None]
+        ll = -0.5 * ((r * r) @ a)
+        if sb2 > 0.0:
+            ll -= (0.5 / sb2) * bias * bias
+        return ll, h, ok
     e = np.where(ok, z_m[None, :] - h, 0.0)
     aok = ok * a[None, :]
     sum_a = aok.sum(axis=1)
-    sum_ae = (aok * e).sum(axis=1)
-    sum_aee = (aok * e * e).sum(axis=1)
-    sb2 = sigma_bias_m * sigma_bias_m
     denom = 1.0 + sb2 * sum_a
-    quad = sum_aee - sb2 * sum_ae * sum_ae / denom
-    logdet = (ok * np.log(s_m * s_m)[None, :]).sum(axis=1) + np.log(denom)
-    n_ok = ok.sum(axis=1)
-    missing = ((~ok) * (-0.5 * (1.0 + _LOG_2PI + np.log(s_m * s_m)))[None, :]).sum(axis=1)
-    ll = -0.5 * (quad + logdet + n_ok * _LOG_2PI) + missing
+    bias = sb2 * (aok * e).sum(axis=1) / denom
+    r = e - bias[:, None]
+    per_beam = -0.5 * (a[None, :] * r * r + np.log(s_m * s_m)[None, :] + _LOG_2PI)
+    # the determinant's term log(1 + sigma_b^2 sum a_i) is the same for every hypothesis that
+    # predicts every beam and is left out, so that one predicting fewer beams is not favoured
+    shared = -0.5 * (bias * bias / sb2) if sb2 > 0.0 else 0.0
+    ll = shared + np.where(ok, per_beam, 0.0).sum(axis=1)
+    missing = ~ok
+    if missing.any():
+        w = np.full(ok.shape[0], 1.0 / ok.shape[0]) if weights is None else weights
+        beams = missing.any(axis=0) & ok.any(axis=0)
+        wb = w[:, None] * ok[:, beams]
+        top = np.where(ok[:, beams], per_beam[:, beams], -np.inf).max(axis=0)
+        mean_lik = (wb * np.exp(np.where(ok[:, beams], per_beam[:, beams] - top, -np.inf))).sum(
+            axis=0
+        )
+        mass = wb.sum(axis=0)
+        fill = np.full(ok.shape[1], 0.0)
+        good = mass > 0.0
+        fill_b = np.where(
+            good, top + np.log(np.where(good, mean_lik / np.where(good, mass, 1.0), 1.0)), 0.0
+        )
+        fill[beams] = fill_b
+        ll = ll + (missing * fill[None, :]).sum(axis=1)
     return ll, h, ok
 
 
@@ -123,20 +159,23 @@ def innovation_nis(
         ``(nis, dof)``: over the beams that every hypothesis holding weight predicts, provided the
         hypotheses that predict them all hold at least half the weight; ``(0.0, 0)`` otherwise.
     """
-    w_ok = weights[:, None] * ok
-    beam_mass = w_ok.sum(axis=0)
-    beams = beam_mass >= 1.0 - 1e-9
-    if not beams.any():
-        return 0.0, 0
-    all_ok = ok[:, beams].all(axis=1)
-    mass = float(weights[all_ok].sum())
-    if mass < 0.5:
-        return 0.0, 0
-    w = weights[all_ok] / mass
-    h = predicted[all_ok][:, beams]
-    mean = w @ h
-    dev = h - mean
-    spread = (dev * w[:, None]).T @ dev
+    if ok.all():  # the hot path: every hypothesis predicts every beam
+        beams = np.ones(ok.shape[1], dtype=bool)
+        mean = weights @ predicted
+        spread = (predicted.T * weights) @ predicted - np.outer(mean, mean)
+    else:
+        beams = (weights @ ok) >= 1.0 - 1e-9
+        if not beams.any():
+            return 0.0, 0
+        all_ok = ok[:, beams].all(axis=1)
+        mass = float(weights[all_ok].sum())
+        if mass < 0.5:
+            return 0.0, 0
+        w = weights[all_ok] / mass
+        h = predicted[all_ok][:, beams]
+        mean = w @ h
+        dev = h - mean
+        spread = (dev * w[:, None]).T @ dev
     s = s_m[beams]
     cov = spread + np.diag(s * s) + sigma_bias_m * sigma_bias_m
     nu = z_m[beams] - mean
@@ -157,6 +196,7 @@ class DivergenceWindow:
         self.length = length
         self.probability = probability
         self._nis: deque[tuple[float, int]] = deque(maxlen=length)
+        self._limits: dict[int, float] = {}
 
     def clear(self) -> None:
         """Forget the window (after a re-initialisation)."""
@@ -171,7 +211,9 @@ class DivergenceWindow:
             return False
         total = sum(v for v, _ in self._nis)
         dof_sum = sum(d for _, d in self._nis)
-        return bool(total > float(chi2_ppf(1.0 - self.probability, dof_sum)))
+        if dof_sum not in self._limits:
+            self._limits[dof_sum] = float(chi2_ppf(1.0 - self.probability, dof_sum))
+        return bool(total > self._limits[dof_sum])
 
 
 def ping_inputs(

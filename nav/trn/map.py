@@ -87,10 +87,12 @@ class TerrainMap:
         fx, fy = np.broadcast_arrays(fx, fy)
         inside = (fx >= 0.0) & (fx <= self._nx - 1) & (fy >= 0.0) & (fy <= self._ny - 1)
         # NaN coordinates compare False above: they are flagged invalid
-        ix = np.clip(np.floor(np.where(inside, fx, 0.0)), 0, self._nx - 2).astype(np.intp)
-        iy = np.clip(np.floor(np.where(inside, fy, 0.0)), 0, self._ny - 2).astype(np.intp)
-        u = np.where(inside, fx - ix, 0.0)
-        v = np.where(inside, fy - iy, 0.0)
+        fx = np.where(inside, fx, 0.0)
+        fy = np.where(inside, fy, 0.0)
+        ix = np.minimum(fx.astype(np.intp), self._nx - 2)  # floor: fx >= 0 here
+        iy = np.minimum(fy.astype(np.intp), self._ny - 2)
+        u = fx - ix
+        v = fy - iy
         k = iy * self._nx + ix
         valid = inside & self._cell_ok[iy * (self._nx - 1) + ix]
         return k, u, v, valid

@@ -13,6 +13,10 @@ from nav.errors import NavInputError
 Array = NDArray[np.float64]
 
 
+def _integer(value: object) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
 @dataclass(frozen=True)
 class TrnOptions:
     """Options of :class:`nav.trn.ParticleTrn` and :class:`nav.trn.PointMassTrn`.
@@ -56,14 +60,14 @@ class TrnOptions:
 
     def __post_init__(self) -> None:
         rules = {
-            "particles": (lambda v: isinstance(v, int) and v >= 10, "an integer >= 10"),
-            "grid_points": (lambda v: isinstance(v, int) and v >= 8, "an integer >= 8"),
+            "particles": (lambda v: _integer(v) and v >= 10, "an integer >= 10"),
+            "grid_points": (lambda v: _integer(v) and v >= 8, "an integer >= 8"),
             "grid_sigmas": (lambda v: v >= 3.0, "a finite number >= 3"),
             "min_cell_m": (lambda v: v > 0.0, "a finite number > 0"),
             "sigma_bias_m": (lambda v: v >= 0.0, "a finite number >= 0"),
             "resample_threshold": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
             "roughening": (lambda v: v >= 0.0, "a finite number >= 0"),
-            "nis_window": (lambda v: isinstance(v, int) and v >= 1, "an integer >= 1"),
+            "nis_window": (lambda v: _integer(v) and v >= 1, "an integer >= 1"),
             "divergence_probability": (lambda v: 0.0 < v < 0.5, "in (0, 0.5)"),
             "reinitialise": (lambda v: isinstance(v, bool), "True or False"),
             "reinit_sigma_m": (lambda v: v > 0.0, "a finite number > 0"),
@@ -71,7 +75,9 @@ class TrnOptions:
         for f in fields(self):
             value = getattr(self, f.name)
             check, allowed = rules[f.name]
-            numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+            numeric = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+                value, (bool, np.bool_)
+            )
             if f.name == "reinitialise":
                 numeric = True
             ok = numeric and (isinstance(value, bool) or math.isfinite(value)) and check(value)

@@ -133,7 +133,9 @@ class ParticleTrn:
         z, off, s = ping_inputs(soundings, sigma_m, terrain_map.sigma_m)
         if z.size == 0:
             return TrnUpdate(0.0, self.ess, False, False, 0)
-        ll, h, ok = log_likelihood(self.particles, terrain_map, z, off, s, opt.sigma_bias_m)
+        ll, h, ok = log_likelihood(
+            self.particles, terrain_map, z, off, s, opt.sigma_bias_m, self.weights
+        )
         used = int(ok.any(axis=0).sum())
         if used == 0:
             return TrnUpdate(0.0, self.ess, False, False, 0)
@@ -184,7 +186,7 @@ class ParticleTrn:
             p = (
                 cov + self.options.reinit_sigma_m**2 * np.eye(2)
                 if covariance_m2 is None
-                else (covariance_m2)
+                else covariance_m2
             )
             mean, cov = check_gaussian("center_m", c, "covariance_m2", p)
         else:

@@ -220,7 +220,9 @@ class PointMassTrn:
         prior, c, d = self._w, self._c, self._d
         nis, dof, used = 0.0, 0, 0
         for attempt in range(_REFINES + 1):
-            ll, h, ok = log_likelihood(self._points(c, d), terrain_map, z, off, s, opt.sigma_bias_m)
+            ll, h, ok = log_likelihood(
+                self._points(c, d), terrain_map, z, off, s, opt.sigma_bias_m, prior
+            )
             if attempt == 0:
                 used = int(ok.any(axis=0).sum())
                 if used == 0:
@@ -267,7 +269,7 @@ class PointMassTrn:
         p = (
             cov + self.options.reinit_sigma_m**2 * np.eye(2)
             if covariance_m2 is None
-            else (covariance_m2)
+            else covariance_m2
         )
         mean, cov = check_gaussian("center_m", c, "covariance_m2", p)
         self._set_gaussian(mean, cov)

@@ -17,6 +17,7 @@ from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
     CompassConfig,
+    DvlConfig,
     GpsConfig,
     LengthErrorConfig,
     LogConfig,
@@ -99,6 +100,15 @@ class MissionSensors(Config):
     use_usbl: bool = Field(True, description="give USBL fixes to the navigator")
     use_gps: bool = Field(True, description="give GPS fixes to the navigator")
     use_log: bool = Field(True, description="the vehicle has a log (else odometry speed)")
+    dvl: DvlConfig = Field(
+        default_factory=DvlConfig,
+        description="Doppler velocity log at 5 Hz on the hull's dvl site (rig only with use_dvl)",
+    )
+    use_dvl: bool = Field(
+        False,
+        description="the rig carries the DVL (its pings reach the mission's navigator, which "
+        "may ignore them)",
+    )
 
 
 class NavigationConfig(Config):
@@ -227,6 +237,8 @@ class MissionScenario(Config):
         for name in ("compass", "ins", "log", "pressure", "usbl", "gps"):
             check_multiple(getattr(s, name).period_s, tick, f"sensors.{name}.period_s")
         check_multiple(s.odometry.period_s, tick, "sensors.odometry.period_s")
+        if s.use_dvl:
+            check_multiple(s.dvl.period_s, tick, "sensors.dvl.period_s")
         for name in ("compass", "ins"):
             period = getattr(s, name).period_s
             if abs(period - tick) > 1e-9:

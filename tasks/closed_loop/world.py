@@ -117,6 +117,8 @@ def standard_vehicle(
     if s.use_usbl:
         devices["usbl"] = s.usbl
     devices["gps"] = s.gps
+    if s.use_dvl:
+        devices["dvl"] = s.dvl
     rig = SensorRig(
         devices, physics, vehicle, seed, run, prefix, extra={"odometry": {"speed_table": table}}
     )
