@@ -88,7 +88,7 @@ def relief(path: Path, m: TrnReliefMetrics) -> list[str]:
 @style.styled
 def against_time(path: Path, m: TrnReliefMetrics, p: Pooled, times_s: Array) -> list[str]:
     """RMSE over runs against time, one panel per relief (the first map error of the sweep),
-    DR-DVL, PF and PMF beside the PCRB.
+    DR-DVL, PF and PMF beside the PCRB (without and with the filters' per-ping bias).
 
     Returns:
         The files written (PNG and PDF), relative to the PNG's folder.
@@ -104,7 +104,9 @@ def against_time(path: Path, m: TrnReliefMetrics, p: Pooled, times_s: Array) -> 
                 continue
             rmse = np.sqrt(np.divide(p.sq_err_sum[s, k], np.maximum(c, 1)))
             ax.plot(times_s[c > 0], rmse[c > 0], **style.line(meth))
-        ax.plot(times_s, np.sqrt(p.pcrb_sum[s] / n), **style.line("PCRB"))
+        ax.plot(times_s, np.sqrt(p.pcrb_sum[s, 0] / n), **style.line("PCRB"))
+        bias = style.line("PCRB", label="PCRB, per-ping bias marginalised", ls="--", alpha=0.6)
+        ax.plot(times_s, np.sqrt(p.pcrb_sum[s, 1] / n), **bias)
         ax.set_yscale("log")
         ax.set_xlabel(style.label("time", "s"))
         style.title(ax, f"relief {m.settings[s].relief_std_m:g} m")

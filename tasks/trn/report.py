@@ -58,6 +58,11 @@ class SettingMetrics(BaseModel):
     methods: dict[str, MethodStats]
     pcrb_rms_m: float = Field(description="sqrt(mean trace PCRB) over runs and updates, m")
     pcrb_final_m: float = Field(description="sqrt(mean trace PCRB) at the end, m")
+    pcrb_bias_rms_m: float = Field(
+        description="the same with the filters' per-ping bias prior marginalised (the bound of "
+        "their measurement model), m"
+    )
+    pcrb_bias_final_m: float = Field(description="that bound at the end, m")
     no_lock_pings: int = Field(description="DVL pings without bottom lock, all runs")
     updates_without_soundings: int = Field(description="TRN updates with no sounding, all runs")
     reinitialisations: dict[str, int] = Field(description="per filter, all runs")
@@ -86,7 +91,7 @@ class Pooled:
 
     sq_err_sum: Array  # (S, 3, J + 1)
     count: NDArray[np.int64]  # (S, 3, J + 1)
-    pcrb_sum: Array  # (S, J + 1)
+    pcrb_sum: Array  # (S, 2, J + 1): without, with the per-ping bias
     final_m: Array  # (n, S, 3)
     mean_m: Array
     rms_m: Array
@@ -139,8 +144,10 @@ def setting_metrics(p: Pooled, s: int, relief: float, map_sigma: float) -> Setti
         relief_std_m=relief,
         map_sigma_m=map_sigma,
         methods=methods,
-        pcrb_rms_m=float(np.sqrt(p.pcrb_sum[s, 1:].mean() / n)),
-        pcrb_final_m=float(np.sqrt(p.pcrb_sum[s, -1] / n)),
+        pcrb_rms_m=float(np.sqrt(p.pcrb_sum[s, 0, 1:].mean() / n)),
+        pcrb_final_m=float(np.sqrt(p.pcrb_sum[s, 0, -1] / n)),
+        pcrb_bias_rms_m=float(np.sqrt(p.pcrb_sum[s, 1, 1:].mean() / n)),
+        pcrb_bias_final_m=float(np.sqrt(p.pcrb_sum[s, 1, -1] / n)),
         no_lock_pings=int(p.no_lock[:, s].sum()),
         updates_without_soundings=int(p.no_update[:, s].sum()),
         reinitialisations={m: int(p.reinit[:, s, i].sum()) for i, m in enumerate(METHODS[1:])},
@@ -201,18 +208,19 @@ def tables(m: TrnReliefMetrics) -> list[Table]:
         for meth in METHODS:
             st = s.methods[meth]
             row += [st.final_mean_m, st.mean_m, st.rmse_m]
-        row += [s.pcrb_final_m, s.pcrb_rms_m]
+        row += [s.pcrb_final_m, s.pcrb_rms_m, s.pcrb_bias_final_m, s.pcrb_bias_rms_m]
         rows.append(row)
     cols = ["relief std (m)", "map sigma (m)"]
     for meth in METHODS:
         cols += [f"{meth} final (m)", f"{meth} mean (m)", f"{meth} RMSE (m)"]
-    cols += ["PCRB final (m)", "PCRB RMS (m)"]
+    cols += ["PCRB final (m)", "PCRB RMS (m)", "PCRB-bias final (m)", "PCRB-bias RMS (m)"]
     note = (
         f"{runs(m.n_runs)} of {m.duration_s:g} s, a TRN update every {m.update_period_s:g} s; "
         f"map cell {m.map_cell_m:g} m, offset {m.map_offset_m:g} m. Final: mean over runs of the "
         "error at the end; mean: mean over runs of each run's mean error; RMSE over runs and "
-        "updates; PCRB: root of the mean trace of the bound (true track, true seabed). A dash: "
-        "no data."
+        "updates; PCRB: root of the mean trace of the bound (true track, true seabed's gradients, "
+        "beam and map noise); PCRB-bias: the same with the filters' per-ping depth bias "
+        "marginalised. A dash: no data."
     )
     return [
         Table(

@@ -189,7 +189,8 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
 
     Returns:
         ``errors`` (S, 3, J + 1) m, horizontal error of DR-DVL, PF, PMF at the start and each
-        update; ``pcrb`` (S, J + 1) m^2, trace of the PCRB; ``reinit`` and ``diverged`` (S, 2)
+        update; ``pcrb`` (S, 2, J + 1) m^2, trace of the PCRB without and with the filters'
+        per-ping bias marginalised; ``reinit`` and ``diverged`` (S, 2)
         for PF and PMF; ``no_lock`` (S,) pings without bottom lock; ``no_update`` (S,) updates
         with no sounding.
     """
@@ -218,7 +219,7 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
     n_set, n_upd = len(settings), len(upd)
     out = {
         "errors": np.zeros((n_set, len(METHODS), n_upd + 1)),
-        "pcrb": np.zeros((n_set, n_upd + 1)),
+        "pcrb": np.zeros((n_set, 2, n_upd + 1)),
         "reinit": np.zeros((n_set, 2), np.int64),
         "diverged": np.zeros((n_set, 2), np.int64),
         "no_lock": np.zeros(n_set, np.int64),
@@ -265,16 +266,18 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
         grad = np.where(active[..., None], grad, 0.0)
         for map_sigma in scn.sweep.map_sigma_m:
             s = settings.index((relief, map_sigma))
-            sigma_pcrb = math.hypot(sig_range, map_sigma)
-            bound = trn_pcrb(
-                np.eye(2) / f.initial_sigma_m**2,  # J0 = P0^-1
-                true_q,
-                grad,
-                np.full(active.shape, sigma_pcrb),
-                active,
-            )
-            out["pcrb"][s, 0] = np.trace(p0)
-            out["pcrb"][s, 1:] = np.trace(bound, axis1=1, axis2=2)
+            sigma_pcrb = np.full(active.shape, math.hypot(sig_range, map_sigma))
+            out["pcrb"][s, :, 0] = np.trace(p0)
+            for b, bias in enumerate((0.0, f.sigma_bias_m)):
+                bound = trn_pcrb(
+                    np.eye(2) / f.initial_sigma_m**2,  # J0 = P0^-1
+                    true_q,
+                    grad,
+                    sigma_pcrb,
+                    active,
+                    sigma_bias_m=bias,
+                )
+                out["pcrb"][s, b, 1:] = np.trace(bound, axis1=1, axis2=2)
             out["errors"][s, 0] = np.hypot(*(dr_en - truth_en).T)
             out["no_lock"][s] = int(np.count_nonzero(mode != 1))
             out["no_update"][s] = sum(snd.count == 0 for snd in pings)
@@ -303,7 +306,7 @@ def run_block(scenario: TrnReliefScenario, seed: int, runs: tuple[int, ...]) -> 
     Returns:
         ``runs`` (n,); per setting and update, summed over the block's runs: ``sq_err_sum`` (S,
         3, J + 1) m^2 over the finite errors, ``count`` (S, 3, J + 1) of them, ``pcrb_sum`` (S,
-        J + 1) m^2; per run: ``final_m``, ``mean_m``, ``rms_m``
+        2, J + 1) m^2; per run: ``final_m``, ``mean_m``, ``rms_m``
         (n, S, 3) m (mean and RMS over the updates 1..J), ``reinit``, ``diverged`` (n, S, 2),
         ``no_lock``, ``no_update`` (n, S).
     """
