@@ -210,9 +210,10 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
     psi = heading.values[0]
     rph = np.column_stack([np.zeros((n_ping, 2)), psi])
     lever = np.asarray(dcfg.transducer_body_m, float)
-    sig_v = horizontal_velocity_sigma(dcfg.beam.sigma_m_s, dcfg.beam_angle_deg)
-    sig_psi = math.radians(scn.sensors.compass.heading.sigma_deg)
-    sig_range = dcfg.range.sigma_m * math.cos(math.radians(dcfg.beam_angle_deg))
+    # the white noise of the devices (gaussian or uniform), what the filters and the PCRB model
+    sig_v = horizontal_velocity_sigma(dcfg.beam.to_model().noise_std, dcfg.beam_angle_deg)
+    sig_psi = scn.sensors.compass.heading.to_model().noise_std
+    sig_range = dcfg.range.to_model().noise_std * math.cos(math.radians(dcfg.beam_angle_deg))
     true_q = increment_covariance(truth.vel_ground_world_m_s[0, :, :2], dt, sig_v, sig_psi, every)
     settings = scn.settings()
     options = trn_options(f)

@@ -12,7 +12,9 @@ Reading of the experiment where the issue is silent (documented in the fields):
   as the terrain allows;
 * the heading and the DVL's beams have white errors (no bias, no random walk by default), so the
   dead-reckoning error grows as a random walk whose increments the filters and the PCRB model
-  exactly (:func:`tasks.trn.run.increment_covariance`).
+  exactly (:func:`tasks.trn.run.increment_covariance`). A bias, scale factor or random walk set
+  in the devices' error models is simulated, but neither the filters' process noise nor the PCRB
+  includes it (the bound then bounds a smaller error than the one flown).
 """
 
 from __future__ import annotations
@@ -202,6 +204,13 @@ class TrnReliefScenario(Config):
                 f"{s.half_extent_m / 4:g} m"
             )
         dvl = self.sensors.dvl
+        pings = math.floor(t.duration_s / dvl.period_s + 1e-9)
+        if pings < self.filters.update_every:
+            raise ValueError(
+                f"track.duration_s = {t.duration_s}: {pings} DVL pings of "
+                f"sensors.dvl.period_s = {dvl.period_s} s, fewer than one TRN update every "
+                f"filters.update_every = {self.filters.update_every} pings"
+            )
         relief = max(self.sweep.relief_std_m)
         # +-5 sigma of relief about the mean depth (the depth at the origin is pinned, so the
         # mean itself moves by about one sigma); a ping that loses the bottom anyway is counted

@@ -193,6 +193,7 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
         ("terrain.half_extent_m=300", "terrain.half_extent_m = 300.0"),
         ("filters.particles=5", "filters.particles"),
         ("track.speed_m_s=nan", "track.speed_m_s"),
+        ("track.duration_s=0.5", "fewer than one TRN update"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, setting, pattern):
