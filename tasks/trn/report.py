@@ -177,12 +177,13 @@ def warnings_of(m: TrnReliefMetrics) -> list[str]:
             if k and not s.methods[meth].runs:
                 out.append(f"{tag}: {meth}: no data (no run with a finite error)")
             elif k:
-                out.append(f"{tag}: {meth}: {k} runs with a non-finite error left the statistics")
+                out.append(f"{tag}: {meth}: {runs(k)} with a non-finite error left the statistics")
         for meth in METHODS[1:]:
             if s.reinitialisations[meth]:
+                times = runs(s.reinitialisations[meth], "time")
                 out.append(
-                    f"{tag}: {meth} was re-initialised {s.reinitialisations[meth]} times (its "
-                    "divergence test fired; each spreads it again, so its error jumps)"
+                    f"{tag}: {meth} was re-initialised {times} (its divergence test fired; each "
+                    "spreads it again, so its error jumps)"
                 )
             st = s.methods[meth]
             if st.rmse_m is not None and st.rmse_m + BELOW_BOUND_SE * (st.rmse_se_m or 0.0) < (

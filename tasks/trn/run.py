@@ -329,9 +329,9 @@ def run_block(scenario: TrnReliefScenario, seed: int, runs: tuple[int, ...]) -> 
     }
 
 
-def runs(n: int) -> str:
-    """``"1 run"``, ``"8 runs"``."""
-    return f"{n} run" if n == 1 else f"{n} runs"
+def runs(n: int, noun: str = "run") -> str:
+    """``"1 run"``, ``"8 runs"`` (or another noun)."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def update_times(scenario: TrnReliefScenario) -> Array:

@@ -249,7 +249,7 @@ def test_a_method_with_no_finite_run_says_no_data():
     )
     w = warnings_of(m)
     assert any("TRN-PF: no data" in line for line in w), w
-    assert any("TRN-PMF: 1 runs with a non-finite error" in line for line in w), w
+    assert any("TRN-PMF: 1 run with a non-finite error" in line for line in w), w
     _no_nan(m.model_dump_json())
     row = tables(m)[0].cells()[0]
     assert row[5:8] == ["-", "-", "-"] and "nan" not in " ".join(row).lower(), row
