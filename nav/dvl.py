@@ -30,10 +30,10 @@ Three uses:
   :meth:`nav.navigator.OnlineNavigator.advance`.
 
 References:
-    Rigid-body velocity transport ``v_P = v_O + omega x r_OP`` and the DVL's lever-arm term:
-    Kinsey, Eustice & Whitcomb, "A survey of underwater vehicle navigation", IFAC MCMC 2006,
-    section 3.2; the EKF of seed 000 (eq. 17-23) with the current in the state as in
-    :class:`nav.models.CurrentAwareMotion`.
+    Rigid-body velocity transport ``v_P = v_O + omega x r_OP`` (the DVL's lever-arm term);
+    DVL-aided navigation: Kinsey, Eustice & Whitcomb, "A survey of underwater vehicle
+    navigation: recent advances and new challenges", IFAC MCMC 2006; the EKF of seed 000
+    (eq. 17-23) with the current in the state as in :class:`nav.models.CurrentAwareMotion`.
 """
 
 from __future__ import annotations
@@ -166,6 +166,10 @@ class DvlVelocityMeasurement:
     term is ``|c| sigma_h``, 5 mm/s for 0.3 m/s and 1 deg). A log whose noise is the same sample
     as the prediction's input correlates the two; it is small beside the DVL's where ``sigma_S``
     is a few cm/s (the NEES test of ``tests/nav/test_dvl_ekf.py`` runs with it).
+
+    Bottom-lock pings only: a water-track ping measures the velocity through water, which holds
+    nothing of this state (its ``h`` would not depend on ``x``); through a water-track spell a
+    navigator dead-reckons on the water velocity plus its current estimate.
 
     The attitude, speeds and rates are one run's (shapes (3,) and scalars: ``R()`` is (3, 3), for
     :meth:`nav.navigator.OnlineNavigator.fuse`) or a batch's (shapes (n, 3) and (n,): ``R()`` is

@@ -49,6 +49,7 @@ from collections import deque
 import numpy as np
 from numpy.typing import NDArray
 
+from nav.errors import NavInputError
 from nav.metrics import chi2_ppf
 from nav.trn.map import TerrainMap
 from nav.trn.options import beam_sigmas
@@ -220,14 +221,20 @@ def ping_inputs(
     soundings: Soundings, sigma_m: float | Array, map_sigma_m: float
 ) -> tuple[Array, Array, Array]:
     """The valid beams' depths ``(m',)``, offsets ``(m', 2)`` and standard deviations ``(m',)``
-    (beam and map), m; beams with non-finite numbers are dropped."""
-    m = soundings.valid.shape[0]
+    (beam and map), m; beams with non-finite numbers are dropped.
+
+    Raises:
+        NavInputError: soundings whose arrays do not match, or a bad ``sigma_m``.
+    """
+    valid = np.asarray(soundings.valid, dtype=bool)
+    m = valid.shape[0] if valid.ndim == 1 else -1
+    if m < 0 or np.shape(soundings.depth_m) != (m,) or np.shape(soundings.offset_m) != (m, 2):
+        raise NavInputError(
+            f"soundings with offset_m {np.shape(soundings.offset_m)}, depth_m "
+            f"{np.shape(soundings.depth_m)}, valid {valid.shape}: must be (m, 2), (m,), (m,)"
+        )
     s_all = beam_sigmas(sigma_m, m, map_sigma_m)
-    keep = (
-        np.asarray(soundings.valid, dtype=bool)
-        & np.isfinite(soundings.depth_m)
-        & np.all(np.isfinite(soundings.offset_m), axis=1)
-    )
+    keep = valid & np.isfinite(soundings.depth_m) & np.all(np.isfinite(soundings.offset_m), axis=1)
     return (
         np.asarray(soundings.depth_m, dtype=float)[keep],
         np.asarray(soundings.offset_m, dtype=float)[keep],

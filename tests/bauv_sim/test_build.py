@@ -110,7 +110,7 @@ def test_a_custom_seabed_replaces_the_heightfield():
     )
     phys = build.build_physics(cfg)
     m = phys.model.ptr
-    assert m.hfield_nrow[0] == 21 and m.nsite == 1 + 12  # transceiver + the vehicle's 12 sites
+    assert m.hfield_nrow[0] == 21 and m.nsite == 1 + 13  # transceiver + the vehicle's 13 sites
     assert np.allclose(m.site("usbl_transceiver").pos, [100.0, 0.0, -30.0], atol=1e-6)
 
 

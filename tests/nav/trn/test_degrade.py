@@ -101,6 +101,8 @@ def test_bad_state_or_noise_is_one_clear_error(name, make):
         f.predict([np.nan, 0.0], np.eye(2))
     with pytest.raises(NavInputError, match="sigma_m"):
         f.update(toy_map(50.0), Soundings(np.zeros((2, 2)), np.ones(2), np.ones(2, bool)), -1.0)
+    with pytest.raises(NavInputError, match="soundings with offset_m"):
+        f.update(toy_map(50.0), Soundings(np.zeros((3, 2)), np.ones(2), np.ones(2, bool)), 0.3)
 
 
 def test_same_seed_same_numbers():
