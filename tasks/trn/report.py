@@ -102,12 +102,22 @@ class Pooled:
 
     @classmethod
     def of(cls, blocks: Iterator[dict[str, Array]]) -> Pooled:
-        parts = list(blocks)
-        sums = ("sq_err_sum", "count", "pcrb_sum")
-        cat = ("final_m", "mean_m", "rms_m", "reinit", "diverged", "no_lock", "no_update")
-        out = {k: sum((p[k] for p in parts[1:]), parts[0][k].copy()) for k in sums}
-        out |= {k: np.concatenate([p[k] for p in parts]) for k in cat}
-        return cls(**out)
+        """Sum the per-update arrays and stack the per-run ones, one block at a time (the
+        per-update arrays of a block are not kept: memory grows with the runs' scalars only)."""
+        sums: dict[str, Array] = {}
+        cat: dict[str, list[Array]] = {k: [] for k in PER_RUN}
+        for block in blocks:
+            for k in SUMMED:
+                sums[k] = block[k].copy() if k not in sums else sums[k] + block[k]
+            for k in PER_RUN:
+                cat[k].append(block[k])
+        return cls(**sums, **{k: np.concatenate(v) for k, v in cat.items()})
+
+
+SUMMED = ("sq_err_sum", "count", "pcrb_sum")
+"""The block's arrays summed over its runs (:func:`tasks.trn.run.run_block`)."""
+PER_RUN = ("final_m", "mean_m", "rms_m", "reinit", "diverged", "no_lock", "no_update")
+"""The block's arrays with one row per run."""
 
 
 def method_stats(final: Array, mean: Array, rms: Array) -> MethodStats:
