@@ -15,7 +15,8 @@ block or worker):
 3. per map error of the sweep, the navigator's map (:func:`nav.trn.degraded` of the true grid)
    and the two filters, :class:`nav.trn.ParticleTrn` and :class:`nav.trn.PointMassTrn`, fed the
    DR displacement between updates and the soundings of one ping every
-   ``filters.update_every``.
+   ``filters.update_every`` (every beam with an echo, with or without bottom lock: a range
+   stands alone; a ping with no echo gives a prediction only).
 
 The block keeps per setting the sums over its runs of each method's squared error and of the
 PCRB's trace at every update (the curves against time), and per run and setting the final,
@@ -241,7 +242,7 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
         pings = [
             soundings(
                 sam.beam_ranges_m[0, k],
-                sam.beam_echo[0, k] & (mode[k] == 1),
+                sam.beam_echo[0, k],
                 sam.beam_directions_body,
                 rph[k],
                 lever,
@@ -252,7 +253,7 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
         truth_snd = [
             soundings(
                 sam.beam_ranges_m[0, k],
-                sam.beam_echo[0, k] & (mode[k] == 1),
+                sam.beam_echo[0, k],
                 sam.beam_directions_body,
                 np.array([0.0, 0.0, truth.heading_rad[0, k]]),
                 lever,

@@ -253,3 +253,28 @@ def test_a_method_with_no_finite_run_says_no_data():
     _no_nan(m.model_dump_json())
     row = tables(m)[0].cells()[0]
     assert row[5:8] == ["-", "-", "-"] and "nan" not in " ".join(row).lower(), row
+
+
+def test_lost_beams_and_bottom_lock_degrade_without_nan(tmp_path):
+    """Beams lost at random (range dropouts): pings with fewer than three echoes have no bottom
+    lock (water track carries the DR) but their echoes still sound the seabed, pings with no
+    echo give the filters nothing (a prediction only); the report counts both and writes no
+    NaN."""
+    out, summary = run(
+        "trn/relief",
+        n_runs=1,
+        seed=2,
+        out_dir=tmp_path / "run",
+        overrides=[*FAST, "sensors.dvl.range.dropout_probability=0.7", "report.figures=false"],
+        progress=False,
+    )
+    m = _no_nan((out / "metrics.json").read_text())
+    for s in m["settings"]:
+        # P(fewer than 3 of 4 beams) = 1 - 0.3^4 - 4 0.3^3 0.7 = 0.92; P(no beam) = 0.7^4 = 0.24
+        pings = 60 / 0.2
+        assert 0.85 * pings < s["no_lock_pings"] < pings
+        assert 0 < s["updates_without_soundings"] < 0.5 * 60
+        assert all(v["runs"] == 1 for v in s["methods"].values())
+    assert any("without bottom lock" in w for w in m["warnings"])
+    assert any("had no sounding" in w for w in m["warnings"])
+    assert "warning:" in summary.text
