@@ -568,6 +568,18 @@ def test_paper004_seabed_shift_block():
     same(roundtrip(block).value, block)
 
 
+def test_trn_relief_block():
+    block = _block(
+        "trn/relief",
+        (3, 4),
+        "track.duration_s=5",
+        "sweep.relief_std_m=[1.0]",
+        "sweep.map_sigma_m=[0.1]",
+    )
+    assert block["final_m"].shape == (2, 1, 3) and block["sq_err_sum"].shape == (1, 3, 6)
+    same(roundtrip(block).value, block)
+
+
 def test_accuracy_block():
     assert _block("paper-000/accuracy", (0,)) is None
     assert roundtrip(None).value is None
@@ -625,6 +637,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "SeabedShiftExperiment",
         "Seed004Experiment",
         "TrnExperiment",
+        "TrnReliefExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
