@@ -76,6 +76,34 @@ class TerrainMap:
         self._nx = self.x_m.size
         self._ny = self.y_m.size
 
+    def interpolation_sigma_m(self) -> float:
+        """RMS error of the bilinear interpolation between the nodes, estimated from the map's
+        own second differences, m.
+
+        Between nodes a bilinear surface misses the terrain's curvature. On a cell at fractions
+        ``(u, v)`` the error is, to second order, ``e = (u (1 - u) Dxx + v (1 - v) Dyy) / 2``,
+        with ``Dxx = hx^2 d2z/dx2`` and ``Dyy = hy^2 d2z/dy2`` the nodes' second differences.
+        Over ``u, v`` uniform (``E[u(1-u)] = 1/6``, ``E[(u(1-u))^2] = 1/30``):
+        ``E[e^2] = (Dxx^2 / 30 + Dyy^2 / 30 + Dxx Dyy / 18) / 4``, averaged over the interior
+        nodes with data. The map cannot show curvature finer than its own cells, so this is the
+        part of the interpolation error the map itself reveals (a lower estimate on terrain
+        rougher than its grid). 0 for a map of fewer than 3 x 3 nodes or without an interior
+        node with data.
+
+        Returns:
+            The RMS error, m (a filter's measurement sigma adds it in quadrature).
+        """
+        z = self.depth_m
+        if z.shape[0] < 3 or z.shape[1] < 3:
+            return 0.0
+        dxx = z[1:-1, 2:] - 2.0 * z[1:-1, 1:-1] + z[1:-1, :-2]
+        dyy = z[2:, 1:-1] - 2.0 * z[1:-1, 1:-1] + z[:-2, 1:-1]
+        e2 = (dxx * dxx / 30.0 + dyy * dyy / 30.0 + dxx * dyy / 18.0) / 4.0
+        ok = np.isfinite(e2)
+        if not ok.any():
+            return 0.0
+        return float(np.sqrt(np.mean(e2[ok])))
+
     @property
     def extent(self) -> tuple[float, float, float, float]:
         """``(x_min, x_max, y_min, y_max)`` of the grid, m."""

@@ -290,8 +290,10 @@ def run_one(scenario: TrnReliefScenario, seed: int, run: int) -> dict[str, Array
                 scn.map.offset_m,
                 generator(seed, run, "trn", "map"),
             )
-            # the filters add the map's own sigma (map_sigma) in quadrature
-            sigma = math.hypot(sig_range, f.map_model_sigma_m)
+            # the filters add the map's own sigma (map_sigma) in quadrature; the measurement
+            # sigma holds the range error, the model floor and what the map's bilinear
+            # interpolation misses, estimated from its second differences
+            sigma = math.hypot(sig_range, f.map_model_sigma_m, nav_map.interpolation_sigma_m())
             for m, cls in enumerate((ParticleTrn, PointMassTrn)):
                 stream = generator(seed, run, "trn", METHODS[m + 1])
                 filt = cls(options, x0_est[:2], p0, stream)

@@ -134,8 +134,9 @@ class FiltersConfig(Config):
     map_model_sigma_m: float = Field(
         0.2,
         ge=0,
-        description="what the map's interpolation misses, m (added in quadrature to the vertical "
-        "sigma and the beam's range error in the filters' measurement sigma)",
+        description="what the filters' measurement model misses beyond the beam's range error, "
+        "the map's stated sigma and the map's own interpolation error "
+        "(nav.trn.TerrainMap.interpolation_sigma_m), m, added in quadrature",
     )
 
 
