@@ -56,6 +56,9 @@ RUNS: dict[str, list[str]] = {
     "mission_seed004": ["mission/seed004", "--runs", "1", "--seed", "1"]
     + ["--set", "seed004.duration_s=40", "--set", "timing.max_duration_s=40"]
     + ["--set", "seed004.train_paths=500", "--set", "seed004.surrogate_test_paths=200"],
+    # issue 23: the DVL and TRN (recorded when they landed)
+    "mission_trn": ["mission/trn", "--runs", "2", "--seed", "1"],
+    "trn_relief": ["trn/relief", "--runs", "2", "--seed", "1"],
 }
 
 
