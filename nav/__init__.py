@@ -72,6 +72,7 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "direct_course": ("nav.guidance", "direct_course"),
     "distance_3d": ("nav.metrics", "distance_3d"),
     "dr_track": ("nav.relative", "dr_track"),
+    "dvl_increment_covariance": ("nav.dvl", "dvl_increment_covariance"),
     "dvl_increments": ("nav.dvl", "dvl_increments"),
     "dvl_track": ("nav.dvl", "dvl_track"),
     "ekf_track": ("nav.relative", "ekf_track"),

@@ -266,6 +266,51 @@ def _hold_last_valid(v: Array, valid: BoolArray) -> Array:
     return np.where((last >= 0)[..., None], held, 0.0)
 
 
+def dvl_increment_covariance(
+    velocity_en_m_s: ArrayLike,
+    dt_s: float,
+    sigma_velocity_m_s: float,
+    sigma_heading_rad: float = 0.0,
+) -> Array:
+    """Covariance of each ping's horizontal DR displacement ``dt v``, m^2.
+
+    The displacement ``dt R(psi) v_body`` (first order in the errors) has the velocity's white
+    error ``sigma_v^2 I`` per horizontal component and, from a white heading error, ``sigma_psi^2
+    w w^T`` with ``w = d(R v)/d psi = (v_north, -v_east)`` (the heading clockwise from north turns
+    east into north): ``Q = dt^2 (sigma_v^2 I + sigma_psi^2 w w^T)``. Independent pings add, so
+    the covariance over several pings is the sum of theirs. A bias or a scale factor is not white
+    and is not in it.
+
+    Args:
+        velocity_en_m_s: (east, north) velocity over ground of each ping, shape (..., 2), m/s.
+        dt_s: the ping's duration, s.
+        sigma_velocity_m_s: noise of each horizontal velocity component, m/s.
+        sigma_heading_rad: white heading noise per ping, rad.
+
+    Returns:
+        Shape (..., 2, 2), m^2.
+
+    Raises:
+        NavInputError: if the velocity's last axis is not 2 or a value is not finite, or a
+            sigma or ``dt_s`` is negative.
+    """
+    v = np.asarray(velocity_en_m_s, dtype=float)
+    if v.shape[-1:] != (2,) or not np.all(np.isfinite(v)):
+        raise NavInputError(
+            f"velocity_en_m_s of shape {v.shape}: must be (..., 2) finite (east, north), m/s"
+        )
+    for name, value in (
+        ("dt_s", dt_s),
+        ("sigma_velocity_m_s", sigma_velocity_m_s),
+        ("sigma_heading_rad", sigma_heading_rad),
+    ):
+        if not (np.isfinite(value) and value >= 0.0):
+            raise NavInputError(f"{name} = {value}: must be finite and >= 0")
+    w = np.stack([v[..., 1], -v[..., 0]], axis=-1)
+    ww = w[..., :, None] * w[..., None, :]
+    return dt_s**2 * (sigma_velocity_m_s**2 * np.eye(2) + sigma_heading_rad**2 * ww)
+
+
 def dvl_increments(
     velocity_world_m_s: ArrayLike, t_s: ArrayLike, valid: ArrayLike | None = None
 ) -> Array:

@@ -37,7 +37,7 @@ from bauv_sim.sensors import Compass
 from bauv_sim.sensors.dvl import Dvl, DvlSamples
 from bauv_sim.truth import Truth
 from nav import dead_reckoning
-from nav.dvl import dvl_increments, velocity_world_from_dvl
+from nav.dvl import dvl_increment_covariance, dvl_increments, velocity_world_from_dvl
 from nav.errors import NavInputError
 from nav.trn import (
     ParticleTrn,
@@ -138,11 +138,9 @@ def horizontal_velocity_sigma(sigma_beam_m_s: float, beam_angle_deg: float) -> f
 def increment_covariance(
     velocity_en_m_s: Array, dt_s: float, sigma_v_m_s: float, sigma_heading_rad: float, every: int
 ) -> Array:
-    """Covariance of the DR displacement between two TRN updates, m^2.
-
-    Each ping's displacement ``dt R(psi) v`` has the velocity error ``sigma_v^2 I`` and, from the
-    heading's white error, ``sigma_psi^2 w w^T`` with ``w = dR/dpsi v = (v_n, -v_e)``; pings are
-    independent, so the covariance of ``every`` pings is the sum.
+    """Covariance of the DR displacement between two TRN updates, m^2: the sum of ``every``
+    pings' :func:`nav.dvl.dvl_increment_covariance` (white velocity and heading errors; the pings
+    are independent).
 
     Args:
         velocity_en_m_s: (east, north) velocity of every ping, shape (K + 1, 2), m/s.
@@ -156,9 +154,7 @@ def increment_covariance(
     """
     n = (len(velocity_en_m_s) - 1) // every
     v = velocity_en_m_s[: n * every].reshape(n, every, 2)
-    w = np.stack([v[..., 1], -v[..., 0]], axis=-1)
-    ww = np.einsum("jpa,jpb->jab", w, w)
-    return dt_s**2 * (every * sigma_v_m_s**2 * np.eye(2) + sigma_heading_rad**2 * ww)
+    return dvl_increment_covariance(v, dt_s, sigma_v_m_s, sigma_heading_rad).sum(axis=1)
 
 
 def _filter_errors(
