@@ -12,8 +12,9 @@ Reading of the experiment where the issue is silent (documented in the fields):
   as the terrain allows;
 * the heading and the DVL's beams have white errors (no bias, no random walk by default), so the
   dead-reckoning error grows as a random walk whose increments the filters and the PCRB model
-  exactly (:func:`nav.dvl.dvl_increment_covariance`, summed by :func:`tasks.trn.run.increment_covariance`). A bias, scale factor or random walk set
-  in the devices' error models is simulated, but neither the filters' process noise nor the PCRB
+  exactly (:func:`nav.dvl.dvl_increment_covariance`, summed per update by
+  :func:`tasks.trn.run.increment_covariance`). A bias, scale factor or random walk set in the
+  devices' error models is simulated, but neither the filters' process noise nor the PCRB
   includes it (the bound then bounds a smaller error than the one flown).
 """
 
