@@ -42,6 +42,8 @@ _EXPORTS: dict[str, tuple[str, str]] = {
     "NavInputError": ("nav.errors", "NavInputError"),
     "Navigator": ("nav.navigator", "Navigator"),
     "OnlineNavigator": ("nav.navigator", "OnlineNavigator"),
+    "DvlAidedOptions": ("nav.trn", "DvlAidedOptions"),
+    "DvlAidedTrn": ("nav.trn", "DvlAidedTrn"),
     "ParticleTrn": ("nav.trn", "ParticleTrn"),
     "PointMassTrn": ("nav.trn", "PointMassTrn"),
     "PredictedShift": ("nav.bearings.model", "PredictedShift"),

@@ -8,12 +8,15 @@
   normalised innovation and the windowed divergence test;
 * :mod:`nav.trn.particle`: :class:`ParticleTrn`; :mod:`nav.trn.point_mass`:
   :class:`PointMassTrn` (the same methods);
-* :mod:`nav.trn.pcrb`: the posterior Cramer-Rao bound from the terrain's gradients.
+* :mod:`nav.trn.pcrb`: the posterior Cramer-Rao bound from the terrain's gradients;
+* :mod:`nav.trn.dvl_aided`: :class:`DvlAidedTrn`, DR on the DVL and the filters on one clock
+  (prediction at every ping, an update every period).
 
 Learned from MB-System's ``mbtrnav`` (MBARI; innovation-based weighting, windowed NIS,
 re-initialisation) and from Bergman (1999) and Anonsen & Hallingstad (2006); written here.
 """
 
+from nav.trn.dvl_aided import DvlAidedOptions, DvlAidedTrn
 from nav.trn.likelihood import DivergenceWindow, innovation_nis, log_likelihood
 from nav.trn.map import TerrainMap, degraded
 from nav.trn.options import TrnOptions, TrnUpdate
@@ -24,6 +27,8 @@ from nav.trn.soundings import Soundings, soundings
 
 __all__ = [
     "DivergenceWindow",
+    "DvlAidedOptions",
+    "DvlAidedTrn",
     "ParticleTrn",
     "PointMassTrn",
     "Soundings",

@@ -14,11 +14,18 @@ from bauv_sim import rng as rng_mod
 from bauv_sim.build import SceneConfig
 from bauv_sim.design.speed_table import load_speed_table
 from bauv_sim.sensors.rig import RigTick, SensorRig
-from nav.dead_reckoning import DeadReckoning
 from nav.dvl import velocity_world_from_dvl
 from nav.errors import NavError
 from nav.navigator import Estimate
-from nav.trn import ParticleTrn, PointMassTrn, TerrainMap, TrnOptions, soundings
+from nav.trn import (
+    DvlAidedOptions,
+    DvlAidedTrn,
+    ParticleTrn,
+    PointMassTrn,
+    TerrainMap,
+    TrnOptions,
+    soundings,
+)
 from tasks.closed_loop import parts as P
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance
 from tasks.closed_loop.world import (
@@ -79,8 +86,9 @@ class TrnNavigation:
       without: the current is unknown), advances the DVL DR and predicts both filters; every
       ``update_period_s`` a bottom-lock ping's beams become soundings
       (:func:`nav.trn.soundings`, measured attitude, pressure depth) that update both filters
-      against the navigator's map. A ping without bottom lock updates nothing; a ping with
-      neither mode holds the last velocity (counted).
+      against the navigator's map (that clock is :class:`nav.trn.DvlAidedTrn`'s). A ping
+      without bottom lock updates nothing; a ping with neither mode holds the last velocity
+      (counted).
 
     Args:
         base: the vehicle's standard part.
@@ -102,7 +110,13 @@ class TrnNavigation:
     ):
         self.base, self.reference, self.scn, self.map = base, reference, scn, terrain_map
         c = scn.trn
-        self.t_dive, self.period = c.t_dive_s, c.update_period_s
+        self.t_dive = c.t_dive_s
+        self.aided_options = DvlAidedOptions(
+            update_period_s=c.update_period_s,
+            sigma_bottom_m_s=c.sigma_velocity_m_s,
+            sigma_water_m_s=c.sigma_water_track_m_s,
+            sounding_sigma_m=c.sounding_sigma_m,
+        )
         self.options = TrnOptions(
             particles=c.particles,
             grid_points=c.grid_points,
@@ -114,13 +128,10 @@ class TrnNavigation:
         )
         self.rng = rng_mod.generator(seed, run, "trn")
         self.started = False
-        self.dr: DeadReckoning | None = None
+        self.aided: DvlAidedTrn | None = None
         self.pf: ParticleTrn | None = None
         self.pmf: PointMassTrn | None = None
         self.velocity = np.zeros(3)
-        self.t_ping: float | None = None
-        self.next_update = 0.0
-        self.q = np.zeros((2, 2))
         self.counts = {k: 0 for k in ("pings", "bottom", "water", "none", "held", "updates")}
         self.counts |= {"unusable_updates": 0, "pf_reinit": 0, "pmf_reinit": 0, "beams_used": 0}
         self.counts |= {"pmf_unusable_updates": 0}
@@ -130,22 +141,23 @@ class TrnNavigation:
 
     def _start(self, est: Estimate, t_s: float) -> None:
         x, P2 = est.x[:2].copy(), est.P[:2, :2].copy()
-        self.dr = DeadReckoning(x, P2)
         self.pf = ParticleTrn(self.options, x, P2, self.rng)
         self.pmf = PointMassTrn(self.options, x, P2, self.rng)
+        self.aided = DvlAidedTrn(self.aided_options, t_s, x, P2, (self.pf, self.pmf))
         self.base.nav.reset_dr(est.x)
-        self.t_ping, self.next_update, self.started = t_s, t_s + self.period, True
+        self.started = True
 
     def _ping(
         self, tick: RigTick, depth_m: float, current_m_s: Array | None
-    ) -> tuple[int, bool, int]:
+    ) -> tuple[int, Array | None, int]:
         """Predict with the DVL and update the filters at this tick (class docstring).
 
         Returns:
-            The DVL's mode, whether a TRN update was made, the beams the particle filter used.
+            The DVL's mode, the prediction covariance since the previous update if an update
+            was due at this tick (else ``None``), the beams the particle filter used.
         """
         ping = next((m for m in tick.arrived if m.device == "dvl"), None)
-        c, t = self.scn.trn, tick.t_s
+        t = tick.t_s
         mode = 0
         if ping is not None:
             p = ping.payload
@@ -169,18 +181,9 @@ class TrnNavigation:
         self.counts[MODES.get(mode, "none")] += 1
         if ping is None:
             self.counts["held"] += 1
-        dt = t - self.t_ping
-        self.t_ping = t
-        d = self.velocity[:2] * dt
-        sigma = c.sigma_velocity_m_s if mode == 1 else c.sigma_water_track_m_s
-        q = (dt * sigma) ** 2 * np.eye(2)
-        self.dr.advance(d, q)
-        self.pf.predict(d, q)
-        self.pmf.predict(d, q)
-        self.q = self.q + q
-        if t + 1e-9 < self.next_update:
-            return mode, False, 0
-        self.next_update += self.period
+        q = self.aided.advance(t, self.velocity, mode == 1)
+        if q is None:
+            return mode, None, 0
         beams = 0
         if ping is not None and mode == 1:
             p = ping.payload
@@ -192,8 +195,7 @@ class TrnNavigation:
                 p.lever_arm_body_m,
                 depth_m,
             )
-            u = self.pf.update(self.map, snd, c.sounding_sigma_m)
-            v = self.pmf.update(self.map, snd, c.sounding_sigma_m)
+            u, v = self.aided.update(self.map, snd)
             beams = int(u.used_beams)
             self.counts["beams_used"] += beams
             self.counts["unusable_updates"] += int(beams == 0)
@@ -204,7 +206,7 @@ class TrnNavigation:
             self.counts["unusable_updates"] += 1
             self.counts["pmf_unusable_updates"] += 1
         self.counts["updates"] += 1
-        return mode, True, beams
+        return mode, q, beams
 
     def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
         t = tick.t_s
@@ -220,14 +222,14 @@ class TrnNavigation:
             self._start(out.estimate, t)
             out = dataclasses.replace(out, dr_position_m=self.base.nav.dr_position)
         elif self.started:
-            mode, updated, beams = self._ping(tick, out.depth_m, out.current_m_s)
-            if updated:
-                q, self.q = self.q, np.zeros((2, 2))
+            mode, q_update, beams = self._ping(tick, out.depth_m, out.current_m_s)
+            if q_update is not None:
+                updated, q = True, q_update
         z = out.estimate.x[2]
         if self.started:
             pf_x, pf_P = self.pf.estimate()
             pmf_x, pmf_P = self.pmf.estimate()
-            dvl_x = self.dr.position
+            dvl_x = self.aided.dr.position
             dr_log = out.dr_position_m
         else:
             pf_x = pmf_x = dvl_x = out.estimate.x[:2]
@@ -247,7 +249,7 @@ class TrnNavigation:
         covs = {
             "trn_pf": pf_P,
             "trn_pmf": pmf_P,
-            "dr_dvl": self.dr.covariance if self.started else out.estimate.P[:2, :2],
+            "dr_dvl": self.aided.dr.covariance if self.started else out.estimate.P[:2, :2],
             "usbl_ekf": ref.estimate.P[:2, :2],
         }
         steer = self.scn.navigation.steer
