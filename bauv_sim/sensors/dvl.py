@@ -61,7 +61,6 @@ from bauv_sim.sensors.online import (
     DeviceBuild,
     Measurement,
     TickContext,
-    lever_arm_from_site,
     register_device,
 )
 from bauv_sim.truth import Truth
@@ -504,12 +503,7 @@ class DvlDevice:
     kind = "event"
 
     def __init__(self, cfg: DvlConfig, build: DeviceBuild):
-        if cfg.transducer_body_m == (0.0, 0.0, 0.0):
-            cfg = cfg.model_copy(
-                update={
-                    "transducer_body_m": lever_arm_from_site(build.physics, "dvl", build.vehicle)
-                }
-            )
+        cfg = build.with_site(cfg, "transducer_body_m", "dvl")
         self.cfg = cfg
         self.lever_arm_body_m = np.asarray(cfg.transducer_body_m, dtype=float)
         self.name = build.name

@@ -52,7 +52,6 @@ from bauv_sim.sensors.online import (
     DeviceBuild,
     Measurement,
     TickContext,
-    lever_arm_from_site,
     register_device,
 )
 from nav import clib
@@ -671,12 +670,7 @@ class MultibeamDevice:
     kind = "event"
 
     def __init__(self, cfg: MultibeamConfig, build: DeviceBuild):
-        if cfg.transducer_body_m == (0.0, 0.0, 0.0):
-            cfg = cfg.model_copy(
-                update={
-                    "transducer_body_m": lever_arm_from_site(build.physics, "sonar", build.vehicle)
-                }
-            )
+        cfg = build.with_site(cfg, "transducer_body_m", "sonar")
         self.cfg = cfg
         self.lever_arm_body_m = np.asarray(cfg.transducer_body_m, dtype=float)
         self.name = build.name

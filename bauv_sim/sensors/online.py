@@ -200,6 +200,15 @@ class DeviceBuild:
             return cfg.model_copy(update={field_name: self.lever_arm_body_m})
         return cfg
 
+    def with_site(self, cfg: Config, field_name: str, site: str) -> Config:
+        """The configuration with its lever-arm field (body FLU, m) set to the model's ``site``
+        when the configuration leaves it at zero (a device whose site does not depend on its
+        name in the rig: the multibeam's ``sonar``, the DVL's ``dvl``)."""
+        if getattr(cfg, field_name) == (0.0, 0.0, 0.0):
+            arm = lever_arm_from_site(self.physics, site, self.vehicle)
+            return cfg.model_copy(update={field_name: arm})
+        return cfg
+
     def every(self, period_s: float) -> int:
         """The period in ticks (a whole multiple of the tick, else :class:`ConfigError`)."""
         return check_multiple(period_s, self.tick_s, f"sensors.{self.name}.period_s")
