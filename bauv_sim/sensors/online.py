@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from bauv_sim.config import Config
 from bauv_sim.sensors.base import check_multiple
 from bauv_sim.truth import Truth
+from nav.acoustics import Propagation
 
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics, VehicleTruth
@@ -181,6 +182,9 @@ class DeviceBuild:
         physics: the physics facade (scene geometry such as the USBL transceiver).
         vehicle: the vehicle's name in the scene.
         extra: per-device settings the mission supplies (e.g. the odometry's speed table).
+        propagation: the true acoustic medium of the sea (:class:`nav.acoustics.Propagation`),
+            or ``None``: an acoustic device then keeps its configured ``sound_speed_m_s`` as the
+            true, isovelocity speed (the behaviour before sound-speed profiles).
     """
 
     name: str
@@ -192,6 +196,7 @@ class DeviceBuild:
     physics: BauvPhysics
     vehicle: str
     extra: Mapping[str, Any] = field(default_factory=dict)
+    propagation: Propagation | None = None
 
     def with_lever_arm(self, cfg: Config, field_name: str) -> Config:
         """The configuration with its lever-arm field (body FLU, m) set to the model's site

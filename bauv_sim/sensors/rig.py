@@ -65,6 +65,7 @@ from bauv_sim.sensors.online import (
     TickContext,
     lever_arm_from_site,
 )
+from nav.acoustics import Propagation
 
 if TYPE_CHECKING:
     from bauv_sim.physics import BauvPhysics, VehicleTruth
@@ -113,6 +114,8 @@ class SensorRig:
         run: run index.
         stream_prefix: prefix of the device streams ("" for the scene's only or first vehicle).
         extra: per-device settings, by device name (see :class:`DeviceBuild`).
+        propagation: the sea's true acoustic medium for the acoustic devices (see
+            :class:`DeviceBuild`), or ``None``.
 
     Raises:
         ConfigError: for a configuration type without a device class, or a period that is not
@@ -128,6 +131,7 @@ class SensorRig:
         run: int,
         stream_prefix: str = "",
         extra: Mapping[str, Mapping[str, Any]] | None = None,
+        propagation: Propagation | None = None,
     ):
         tick = physics.control_tick_s
         self.devices: list[Device] = []
@@ -151,6 +155,7 @@ class SensorRig:
                 physics=physics,
                 vehicle=vehicle,
                 extra=(extra or {}).get(name, {}),
+                propagation=propagation,
             )
             dev = factory(cfg, build)
             self.devices.append(dev)
