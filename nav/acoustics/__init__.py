@@ -8,6 +8,15 @@ back into a range with the medium they assume) use it: it lives in ``nav`` becau
 cannot import ``bauv_sim``.
 """
 
+from nav.acoustics.profile import SoundSpeedProfile, mackenzie_speed
 from nav.acoustics.propagation import Eigenray, Isovelocity, Propagation
+from nav.acoustics.rays import LayeredMedium
 
-__all__ = ["Eigenray", "Isovelocity", "Propagation"]
+__all__ = [
+    "Eigenray",
+    "Isovelocity",
+    "LayeredMedium",
+    "Propagation",
+    "SoundSpeedProfile",
+    "mackenzie_speed",
+]
