@@ -21,6 +21,8 @@ from nav.acoustics import (
     SoundSpeedProfile,
     mackenzie_speed,
 )
+from nav.acoustics.inversion import range_from_travel_time, source_from_arrival
+from nav.angles import range_azimuth_elevation
 from nav.errors import NavInputError
 
 
@@ -235,3 +237,50 @@ def test_shapes_broadcast_and_bad_input() -> None:
         medium.eigenray(np.zeros(2), np.zeros(2))
     with pytest.raises(NavInputError, match="profile"):
         LayeredMedium("not a profile")  # type: ignore[arg-type]
+
+
+def test_inversion_isovelocity_closed_forms() -> None:
+    rng = np.random.default_rng(6)
+    n = 300
+    c = 1487.0
+    za, zb = rng.uniform(0.0, 300.0, n), rng.uniform(0.0, 300.0, n)
+    travel = np.hypot(rng.uniform(1.0, 900.0, n), zb - za) / c
+    for medium in (Isovelocity(c), LayeredMedium(SoundSpeedProfile.isovelocity(c))):
+        x = range_from_travel_time(medium, za, zb, travel)
+        np.testing.assert_allclose(x, np.sqrt((c * travel) ** 2 - (zb - za) ** 2), rtol=1e-9)
+    receiver = np.column_stack([rng.uniform(-50, 50, (n, 2)), -rng.uniform(0, 30, n)])
+    azimuth = rng.uniform(0.0, 2 * np.pi, n)
+    elevation = rng.uniform(-1.5, 1.5, n)
+    source = source_from_arrival(Isovelocity(c), receiver, azimuth, elevation, travel)
+    r = c * travel
+    expected = receiver + np.column_stack(
+        [
+            r * np.cos(elevation) * np.sin(azimuth),
+            r * np.cos(elevation) * np.cos(azimuth),
+            r * np.sin(elevation),
+        ]
+    )
+    np.testing.assert_allclose(source, expected, rtol=0, atol=1e-6)
+    # A time shorter than the vertical ray's (noise) gives range 0, not NaN.
+    assert range_from_travel_time(Isovelocity(c), 0.0, 150.0, 100.0 / c) == 0.0
+
+
+def test_inversion_round_trip_through_a_thermocline() -> None:
+    rng = np.random.default_rng(5)
+    n = 600
+    a = np.column_stack([rng.uniform(-1500, 1500, (n, 2)), -rng.uniform(0, 500, n)])
+    b = np.column_stack([rng.uniform(-1500, 1500, (n, 2)), -rng.uniform(0, 500, n)])
+    b[:40, 2] = a[:40, 2]
+    medium = LayeredMedium(THERMOCLINE)
+    ray = medium.eigenray(a, b)
+    ok = np.isfinite(ray.travel_time_s)
+    assert ok.sum() > 500
+    a, b, travel = a[ok], b[ok], ray.travel_time_s[ok]
+    horizontal = np.hypot(*(b[:, :2] - a[:, :2]).T)
+    x = range_from_travel_time(medium, -a[:, 2], -b[:, 2], travel)
+    np.testing.assert_allclose(x, horizontal, rtol=1e-9, atol=1e-9)
+    azimuth = range_azimuth_elevation(a - b)[:, 1]
+    source = source_from_arrival(medium, b, azimuth, ray.arrival_elevation_rad[ok], travel)
+    np.testing.assert_allclose(source, a, rtol=0, atol=1e-5)
+    with pytest.raises(NavInputError, match="medium"):
+        range_from_travel_time(THERMOCLINE, 0.0, 1.0, 1.0)  # type: ignore[arg-type]
