@@ -136,6 +136,14 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "bauv_sim/sensors/multibeam.py": ("tests/bauv_sim/test_multibeam.py",),
     "bauv_sim/sensors/dvl.py": ("tests/sensors/test_dvl.py", "tests/sensors/test_dvl_device.py"),
     "nav/dvl.py": ("tests/nav/test_dvl.py", "tests/nav/test_dvl_ekf.py"),
+    "nav/acoustics/rays.py": (
+        "tests/nav/test_acoustic_rays.py",
+        "tests/sensors/test_usbl_sound.py",
+    ),
+    "nav/acoustics/inversion.py": (
+        "tests/nav/test_acoustic_rays.py",
+        "tests/tasks/test_acoustics_sound.py",
+    ),
     "nav/trn/likelihood.py": (
         "tests/nav/trn/test_posterior.py",
         "tests/nav/trn/test_filter_parts.py",
@@ -1004,6 +1012,60 @@ ISSUE23 = [
 """Issue 23: the DVL device's lock and mounting, the DVL measurement model, the TRN likelihood,
 bound and particle covariance."""
 
+ISSUE24_RAYS = [
+    Mutation(
+        "ray-layer-distance-top-speed",
+        "own",
+        "correction",
+        "nav/acoustics/rays.py",
+        "x = np.where(crossed, dz * (c1 + c2) / (q * (s1 + s2)), 0.0)",
+        "x = np.where(crossed, dz * (2.0 * c1) / (q * (s1 + s2)), 0.0)",
+        "a ray's horizontal distance across a layer of constant gradient from its top speed only",
+    ),
+    Mutation(
+        "ray-turning-below-arrives-from-above",
+        "own",
+        "sign",
+        "nav/acoustics/rays.py",
+        "[np.where(down, theta_r, -theta_r), -theta_r, theta_r]",
+        "[np.where(down, theta_r, -theta_r), theta_r, theta_r]",
+        "a ray that turns below the receiver is said to arrive from above",
+    ),
+    Mutation(
+        "source-from-arrival-east-north-swapped",
+        "own",
+        "columns",
+        "nav/acoustics/inversion.py",
+        "            rcv[:, 0] + horizontal * np.sin(az),\n"
+        "            rcv[:, 1] + horizontal * np.cos(az),",
+        "            rcv[:, 0] + horizontal * np.cos(az),\n"
+        "            rcv[:, 1] + horizontal * np.sin(az),",
+        "the USBL source traced back with the azimuth taken from east instead of north",
+    ),
+    Mutation(
+        "usbl-elevation-straight-in-a-profile",
+        "own",
+        "correction",
+        "bauv_sim/sensors/usbl.py",
+        "np.where(reached, ray.arrival_elevation_rad, true_rae[..., 2])",
+        "true_rae[..., 2]",
+        "the USBL in a sound-speed profile measures the straight line's elevation, not the ray's",
+        ("tests/sensors/test_usbl_sound.py",),
+    ),
+    Mutation(
+        "modem-latency-straight-in-a-profile",
+        "own",
+        "correction",
+        "bauv_sim/sensors/modem.py",
+        "        t_arr = t[None, :] + travel + c.processing_delay_s",
+        "        t_arr = t[None, :] + r / c.sound_speed_m_s + c.processing_delay_s",
+        "the modem's latency in a sound-speed profile from the straight line at the nominal speed",
+        ("tests/sensors/test_usbl_sound.py",),
+    ),
+]
+"""Issue 24, part A: the layered medium's eigenray (distance per layer, arrival sign of a
+turning ray), the USBL source traced back, the devices in a profile."""
+
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
     *OWN,
@@ -1012,6 +1074,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_SEED004,
     *ISSUE22_CORE,
     *ISSUE23,
+    *ISSUE24_RAYS,
 ]
 
 _IGNORE = shutil.ignore_patterns(
