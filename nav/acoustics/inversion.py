@@ -208,7 +208,9 @@ def _trace(
     xm, _ = _leg(medium, q, start, depth, turn_start, ~up, j1)
     horizontal = np.where(in_leg1, xm, x1 + xm)
     # Horizontal ray in a constant-speed layer: straight.
-    flat = (elevation == 0.0) & (grad == 0.0)
+    layer_grad = np.concatenate([[0.0], profile.layer_gradient_per_s, [0.0]])
+    grad_above = layer_grad[np.searchsorted(profile.depth_m, z0, side="left")]
+    flat = (elevation == 0.0) & ((grad == 0.0) | (grad_above == 0.0))
     horizontal = np.where(flat, c0 * travel, horizontal)
     depth = np.where(flat, z0, depth)
     lost = ~(in_leg1 | in_leg2 | flat)

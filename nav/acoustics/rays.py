@@ -173,33 +173,43 @@ class LayeredMedium:
         ``za``: there ``c = q`` and ``sin(theta) = 0`` exactly, and the layer's thickness is
         ``(q - c) / g`` from the other end, so rounding of the turning depth does not leak into
         the near-singular sine."""
-        lo = np.clip(za[:, None], self._edges[:-1], self._edges[1:])
-        hi = np.clip(zb[:, None], self._edges[:-1], self._edges[1:])
+        if za.size == 0:
+            return np.zeros(0), np.zeros(0)
+        # Only the layers that some ray of the call crosses (the others add exact zeros).
+        first = max(int(np.searchsorted(self._edges, za.min(), side="right")) - 1, 0)
+        last = int(np.searchsorted(self._edges, zb.max(), side="left"))
+        span = slice(first, max(last, first + 1))
+        top, bottom = self._edges[:-1][span], self._edges[1:][span]
+        grad, ctop, base = self._grad[span], self._ctop[span], self._base[span]
+        lo = np.clip(za[:, None], top, bottom)
+        hi = np.clip(zb[:, None], top, bottom)
         dz = hi - lo
-        c1, c2 = self._speed(lo), self._speed(hi)
+        c1, c2 = ctop + grad * (lo - base), ctop + grad * (hi - base)
         q = (c_ref + delta)[:, None]
         s1 = _sine(c_ref, delta, c1, q)
         s2 = _sine(c_ref, delta, c2, q)
         if turn_layer is not None:
-            rows = np.arange(za.size)
-            j = turn_layer
-            g = self._grad[j]
+            # A turning point on the edge of the span has no thickness there: nothing to fix.
+            j = turn_layer - first
+            rows = np.flatnonzero((j >= 0) & (j < top.size))
+            j, c_ref, delta = j[rows], c_ref[rows], delta[rows]
+            g = grad[j]
             if turn_below:
                 gap = (c_ref - c1[rows, j]) + delta
                 with np.errstate(divide="ignore", invalid="ignore"):
                     thick = np.where(g > 0.0, np.maximum(gap, 0.0) / g, dz[rows, j])
-                c2[rows, j], s2[rows, j], dz[rows, j] = q[:, 0], 0.0, thick
+                c2[rows, j], s2[rows, j], dz[rows, j] = q[rows, 0], 0.0, thick
             else:
                 gap = (c_ref - c2[rows, j]) + delta
                 with np.errstate(divide="ignore", invalid="ignore"):
                     thick = np.where(g < 0.0, np.maximum(gap, 0.0) / -g, dz[rows, j])
-                c1[rows, j], s1[rows, j], dz[rows, j] = q[:, 0], 0.0, thick
+                c1[rows, j], s1[rows, j], dz[rows, j] = q[rows, 0], 0.0, thick
         crossed = dz > 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(crossed, dz * (c1 + c2) / (q * (s1 + s2)), 0.0)
             a = (1.0 + (c1 + c2) / (c2 * s1 + c1 * s2)) / (c1 * (1.0 + s2))
             t = np.where(
-                crossed, dz * a * _log1p_over_x(np.where(crossed, self._grad * dz * a, 0.0)), 0.0
+                crossed, dz * a * _log1p_over_x(np.where(crossed, grad * dz * a, 0.0)), 0.0
             )
         return x.sum(axis=1), t.sum(axis=1)
 

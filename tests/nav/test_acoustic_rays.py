@@ -271,6 +271,7 @@ def test_inversion_round_trip_through_a_thermocline() -> None:
     a = np.column_stack([rng.uniform(-1500, 1500, (n, 2)), -rng.uniform(0, 500, n)])
     b = np.column_stack([rng.uniform(-1500, 1500, (n, 2)), -rng.uniform(0, 500, n)])
     b[:40, 2] = a[:40, 2]
+    a[40:80, 2], b[60:100, 2] = -40.0, -60.0  # on the knots (the layer sums' edges)
     medium = LayeredMedium(THERMOCLINE)
     ray = medium.eigenray(a, b)
     ok = np.isfinite(ray.travel_time_s)
@@ -284,3 +285,17 @@ def test_inversion_round_trip_through_a_thermocline() -> None:
     np.testing.assert_allclose(source, a, rtol=0, atol=1e-5)
     with pytest.raises(NavInputError, match="medium"):
         range_from_travel_time(THERMOCLINE, 0.0, 1.0, 1.0)  # type: ignore[arg-type]
+
+
+def test_surface_to_surface_is_the_straight_ray_both_ways() -> None:
+    # The profile is constant above its first knot: two points on the surface of a sea whose
+    # speed falls with depth are joined by the horizontal straight ray, at the surface speed.
+    medium = LayeredMedium(SoundSpeedProfile.constant_gradient(1540.0, -0.05, 1000.0))
+    a, b = np.array([0.0, 0.0, 0.0]), np.array([600.0, 300.0, 0.0])
+    ray = medium.eigenray(a, b)
+    distance = float(np.linalg.norm(b - a))
+    assert ray.travel_time_s == pytest.approx(distance / 1540.0, rel=1e-12)
+    assert ray.launch_elevation_rad == 0.0 and ray.arrival_elevation_rad == 0.0
+    azimuth = range_azimuth_elevation(a - b)[1]
+    back = source_from_arrival(medium, b, azimuth, 0.0, ray.travel_time_s)
+    np.testing.assert_allclose(back, a, atol=1e-9)
