@@ -1,6 +1,6 @@
 """The report of ``acoustics/sound-speed``: what a sound-speed mismatch costs (acceptance check 5
 of issue 24), for the USBL (position error) and the modem (range error), with the nominal speed
-against the profile and with the profile known.
+against the profile, with the harmonic-mean-speed correction, and with the profile known.
 
 Two figures per navigator: the **systematic** error (the devices without their random errors:
 the cost of the profile alone) and the **Monte Carlo** error over the runs (with the devices'
@@ -229,7 +229,8 @@ def tables(m: SoundSpeedMetrics) -> list[Table]:
         for meth, st in u.methods.items()
     ]
     t1 = Table(
-        f"USBL position error, nominal speed vs profile known ({m.n_runs} runs, seed {m.seed})",
+        f"USBL position error: nominal speed, harmonic mean, profile known ({m.n_runs} runs, "
+        f"seed {m.seed})",
         [
             "navigator",
             "systematic mean (m)",
@@ -249,7 +250,8 @@ def tables(m: SoundSpeedMetrics) -> list[Table]:
             f"transponder at {u.depth_m:g} m passing {u.closest_approach_m:g} m off, +-"
             f"{u.half_length_m:g} m, {u.fixes} fixes. Systematic: without the device's errors; "
             "the rest with them, over runs and fixes. nominal: straight ray at the nominal "
-            "speed; profile: the ray traced back through the known profile."
+            "speed; harmonic: straight ray, range scaled by the harmonic mean speed between the "
+            "depths; profile: the ray traced back through the known profile."
         ),
         slug="usbl-sound-speed",
     )
@@ -264,14 +266,16 @@ def tables(m: SoundSpeedMetrics) -> list[Table]:
             row += [st.systematic_m, st.mean_m, st.rms_m]
         rows2.append(row)
     t2 = Table(
-        f"Modem range error, nominal speed vs profile known ({m.n_runs} runs, seed {m.seed})",
+        f"Modem range error: nominal speed, harmonic mean, profile known ({m.n_runs} runs, "
+        f"seed {m.seed})",
         cols2,
         rows2,
         digits=3,
         note=(
             f"Signed slant-range error (estimate minus truth); nominal speed "
             f"{m.modem_nominal_speed_m_s:g} m/s. nominal: the measured range (nominal speed x "
-            "travel time); profile: the horizontal range between the two known depths from the "
+            "travel time); harmonic: scaled by the harmonic mean speed between the depths over "
+            "the nominal; profile: the horizontal range between the two known depths from the "
             "travel time through the known profile, then the slant range. A dash: no data."
         ),
         slug="modem-sound-speed",

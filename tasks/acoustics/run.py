@@ -4,6 +4,11 @@ turned into positions and ranges by two navigators.
 * **nominal**: the navigator assumes the devices' nominal speed and straight rays: a USBL fix
   is ``transceiver + r (cos b sin a, cos b cos a, sin b)`` (:func:`nav.angles.
   rel_from_range_azimuth_elevation`), a modem range is the measured one;
+* **harmonic**: the common correction: straight rays, but the range rescaled by the harmonic
+  mean speed between the two depths over the nominal one, ``r c_h / c_nom``
+  (:meth:`nav.acoustics.SoundSpeedProfile.harmonic_mean_speed`); the USBL fix's own depth gives
+  ``c_h`` (a fixed point, :data:`HARMONIC_ITERATIONS` passes from the nominal fix), the modem's
+  depths are known;
 * **profile**: the navigator knows the profile: the travel time ``r / c_nom`` is traced back
   along the arrival direction (:func:`nav.acoustics.source_from_arrival`), and a modem travel
   time becomes the horizontal range between the two known depths
@@ -34,8 +39,12 @@ from tasks.acoustics.scenario import SoundSpeedScenario
 
 Array = NDArray[np.float64]
 
-METHODS = ("nominal", "profile")
+METHODS = ("nominal", "harmonic", "profile")
 """The navigators, in the order of the last axis of the block's arrays."""
+
+HARMONIC_ITERATIONS = 5
+"""Passes of the harmonic-mean correction of a USBL fix (its depth -> c_h -> its depth; the
+change after the fifth is below 1e-9 m at the default geometry)."""
 
 
 def _truth(pos: Array) -> Truth:
@@ -54,6 +63,13 @@ def medium(scn: SoundSpeedScenario, nominal_m_s: float) -> LayeredMedium | Isove
         return Isovelocity(nominal_m_s)
     assert isinstance(true, LayeredMedium | Isovelocity)
     return true
+
+
+def harmonic_speed(true: LayeredMedium | Isovelocity, depth_a_m: Array, depth_b_m: Array) -> Array:
+    """The harmonic mean speed between two depths in the true medium, m/s."""
+    if isinstance(true, LayeredMedium):
+        return true.profile.harmonic_mean_speed(depth_a_m, depth_b_m)
+    return np.full(np.broadcast_shapes(np.shape(depth_a_m), np.shape(depth_b_m)), true.speed_m_s)
 
 
 def passage(scn: SoundSpeedScenario) -> tuple[Array, Array]:
@@ -81,7 +97,8 @@ def usbl_errors(
     """Position errors of both navigators' USBL fixes.
 
     Returns:
-        ``horizontal_m`` and ``error_3d_m`` (n, k, 2) (0 where absent), ``present`` (n, k, 2).
+        ``horizontal_m`` and ``error_3d_m`` (n, k, 3) (0 where absent), ``present`` (n, k, 3),
+        the last axis :data:`METHODS`.
     """
     transceiver, pos = passage(scn)
     true = medium(scn, cfg.sound_speed_m_s)
@@ -89,11 +106,17 @@ def usbl_errors(
         _truth(pos[None]), np.arange(len(pos))
     )
     rae = s.values
-    nominal = transceiver + rel_from_range_azimuth_elevation(rae)
+    rel = rel_from_range_azimuth_elevation(rae)
+    nominal = transceiver + rel
+    scale = np.ones(rae.shape[:-1])
+    for _ in range(HARMONIC_ITERATIONS):
+        depth = -(transceiver[2] + scale * rel[..., 2])
+        scale = harmonic_speed(true, -transceiver[2], depth) / cfg.sound_speed_m_s
+    harmonic = transceiver + scale[..., None] * rel
     known = source_from_arrival(
         true, transceiver, rae[..., 1], rae[..., 2], rae[..., 0] / cfg.sound_speed_m_s
     )
-    est = np.stack([nominal, known], axis=-2)  # (n, k, 2, 3)
+    est = np.stack([nominal, harmonic, known], axis=-2)  # (n, k, 3, 3)
     err = est - pos[None, :, None, :]
     present = s.produced[..., None] & np.all(np.isfinite(est), axis=-1)
     err = np.where(present[..., None], err, 0.0)
@@ -110,7 +133,8 @@ def modem_errors(
     """Slant-range errors of both navigators' modem ranges.
 
     Returns:
-        ``error_m`` (n, g, 2) (0 where absent), ``present`` (n, g, 2).
+        ``error_m`` (n, g, 3) (0 where absent), ``present`` (n, g, 3), the last axis
+        :data:`METHODS`.
     """
     sender, receiver = links(scn)
     true = medium(scn, cfg.sound_speed_m_s)
@@ -122,7 +146,8 @@ def modem_errors(
     meas = np.where(s.produced, s.values, 0.0)
     horizontal = range_from_travel_time(true, depth_a, depth_b, meas / cfg.sound_speed_m_s)
     known = np.hypot(horizontal, depth_b - depth_a)
-    est = np.stack([meas, known], axis=-1)
+    harmonic = meas * harmonic_speed(true, depth_a, depth_b) / cfg.sound_speed_m_s
+    est = np.stack([meas, harmonic, known], axis=-1)
     present = s.produced[..., None] & np.isfinite(est)
     return {"error_m": np.where(present, est - slant[:, None], 0.0), "present": present}
 

@@ -37,13 +37,13 @@ def test_one_speed_sea_scales_every_range_by_the_speed_ratio():
     sender, receiver = links(scn)
     slant = np.linalg.norm(receiver - sender, axis=-1)
     np.testing.assert_allclose(got["modem_error_m"][:, 0], slant * (k - 1), rtol=1e-9)
-    np.testing.assert_allclose(got["modem_error_m"][:, 1], 0.0, atol=1e-6)
+    np.testing.assert_allclose(got["modem_error_m"][:, 1:], 0.0, atol=1e-6)
     transceiver, pos = passage(scn)
     rel = pos - transceiver
     np.testing.assert_allclose(
         got["usbl_horizontal_m"][:, 0], np.hypot(rel[:, 0], rel[:, 1]) * (1 - k), rtol=1e-9
     )
-    np.testing.assert_allclose(got["usbl_horizontal_m"][:, 1], 0.0, atol=1e-6)
+    np.testing.assert_allclose(got["usbl_horizontal_m"][:, 1:], 0.0, atol=1e-6)
     assert got["usbl_present"].all() and got["modem_present"].all()
 
 
@@ -51,8 +51,12 @@ def test_profile_known_is_exact_and_nominal_pays_the_profile():
     scn = load_config(SoundSpeedScenario)
     got = exact(scn)
     assert got["usbl_present"].all() and got["modem_present"].all()
-    assert np.abs(got["usbl_error_3d_m"][:, 1]).max() < 1e-5
-    assert np.abs(got["modem_error_m"][:, 1]).max() < 1e-6
+    assert np.abs(got["usbl_error_3d_m"][:, 2]).max() < 1e-5
+    assert np.abs(got["modem_error_m"][:, 2]).max() < 1e-6
+    # The harmonic-mean correction removes most of the nominal speed's error, not the bending.
+    for key in ("usbl_horizontal_m", "modem_error_m"):
+        nominal, harmonic = np.abs(got[key][:, 0]), np.abs(got[key][:, 1])
+        assert np.all(harmonic < 0.2 * nominal)
     # Munk's sea is faster than 1500 m/s at these depths: nominal ranges are short, by about
     # (1 - 1500 / c_h) of the range, c_h the speed between the depths (>= 1540 m/s here).
     sender, receiver = links(scn)
@@ -74,7 +78,7 @@ def test_profile_known_modem_error_is_the_devices_own():
     ratio = slant / (slant + exact(scn)["modem_error_m"][:, 0])
     b = run_block(scn, 3, tuple(range(120)))
     assert b["modem_present"].all()
-    e = (b["modem_error_m"][..., 1] / ratio).ravel()
+    e = (b["modem_error_m"][..., 2] / ratio).ravel()
     sd = 0.1 / math.sqrt(3)
     assert abs(e.mean() - 0.025) < 4 * sd / math.sqrt(e.size)
     assert e.std() == pytest.approx(sd, rel=4 * math.sqrt(1 / (2 * e.size)))
@@ -87,7 +91,7 @@ def test_a_small_batch_writes_metrics_and_tables_without_nan(tmp_path):
     )
     m = _no_nan((out / "metrics.json").read_text())
     assert m["experiment"] == "acoustics/sound-speed" and m["n_runs"] == 4
-    assert set(m["usbl"]["methods"]) == {"nominal", "profile"}
+    assert set(m["usbl"]["methods"]) == {"nominal", "harmonic", "profile"}
     nominal, known = m["usbl"]["methods"]["nominal"], m["usbl"]["methods"]["profile"]
     assert nominal["systematic_max_m"] > 10 and known["systematic_max_m"] < 1e-5
     assert nominal["horizontal"]["samples"] == 4 * m["usbl"]["fixes"]

@@ -584,8 +584,8 @@ def test_acoustics_sound_speed_block():
     block = _block(
         "acoustics/sound-speed", (3, 4), "usbl.fixes=5", "modem.horizontal_ranges_m=[300]"
     )
-    assert block["usbl_horizontal_m"].shape == (2, 5, 2)
-    assert block["modem_error_m"].shape == (2, 3, 2)
+    assert block["usbl_horizontal_m"].shape == (2, 5, 3)
+    assert block["modem_error_m"].shape == (2, 3, 3)
     assert block["usbl_present"].dtype == bool
     same(roundtrip(block).value, block)
 
