@@ -43,8 +43,8 @@ METHODS = ("nominal", "harmonic", "profile")
 """The navigators, in the order of the last axis of the block's arrays."""
 
 HARMONIC_ITERATIONS = 5
-"""Passes of the harmonic-mean correction of a USBL fix (its depth -> c_h -> its depth; the
-change after the fifth is below 1e-9 m at the default geometry)."""
+"""Passes of the harmonic-mean correction of a USBL fix (its depth -> c_h -> its depth): at the
+default geometry the fifth pass moves the noise-free fix by 1.2e-11 m, the fourth by 1.2e-8 m."""
 
 
 def _truth(pos: Array) -> Truth:
