@@ -18,9 +18,9 @@ ocean, with application to SOFAR", J. Acoust. Soc. Am. 55(2), 220-226 (1974):
 ``c(z) = 1500 [1 + eps (eta - 1 + exp(-eta))]``, ``eta = 2 (z - 1300) / 1300``, ``eps =
 0.00737``: the main thermocline from 1548.5 m/s at the surface down to the sound-channel axis at
 1300 m (1500 m/s), then the pressure-dominated rise (the test case of Jensen, Kuperman, Porter &
-Schmidt, *Computational Ocean Acoustics*, 2nd ed. 2011, sec. 3.4). It is sampled at
+Schmidt, *Computational Ocean Acoustics*, 2nd ed. 2011). It is sampled at
 :data:`MUNK_KNOTS_M` and interpolated linearly: within 0.0024 m/s of the formula down to 100 m
-(knots every 10 m), 0.05 m/s to 500 m, 0.10 m/s below (measured on a 1 cm grid). Near the
+(knots every 10 m), 0.05 m/s to 500 m, 0.11 m/s below (measured on a 1 cm grid). Near the
 surface the speed is 3 % above the nominal 1500 m/s, with a gradient of -0.108 1/s.
 """
 

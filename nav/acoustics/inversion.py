@@ -16,7 +16,7 @@ positive up.
 
 References:
     F. B. Jensen, W. A. Kuperman, M. B. Porter, H. Schmidt, *Computational Ocean Acoustics*,
-    2nd ed., Springer (2011), sec. 3.2 (``dT/dX = p`` along the eigenrays between two depths:
+    2nd ed., Springer (2011), ch. 3 (``dT/dX = p`` along the eigenrays between two depths:
     the ray parameter is the horizontal slowness).
 """
 
@@ -54,7 +54,7 @@ def range_from_travel_time(
     """The horizontal range between two depths whose direct eigenray takes ``travel_time_s``.
 
     Newton's method on ``T(X) = travel_time_s`` with the exact derivative ``dT/dX = p =
-    cos(launch) / c(depth_a)`` (Jensen et al. 2011, sec. 3.2), from the harmonic-mean guess
+    cos(launch) / c(depth_a)`` (Jensen et al. 2011, ch. 3), from the harmonic-mean guess
     ``X0 = sqrt((c_h T)^2 - dz^2)``; T grows with X, so the root is unique.
 
     Args:

@@ -5,8 +5,8 @@ invariant ``p = cos(theta) / c`` (theta the grazing angle) and is an arc of a ci
 ``1 / (|g| p)`` centred at the depth where ``c`` would be 0; in a layer of constant speed it is
 straight. With ``s = sin(theta) = sqrt(1 - p^2 c^2)``, the horizontal distance and the travel
 time across a layer from ``c1`` to ``c2`` are, in closed form (Jensen, Kuperman, Porter &
-Schmidt, *Computational Ocean Acoustics*, 2nd ed. 2011, sec. 3.2; Medwin & Clay, *Fundamentals
-of Acoustical Oceanography* 1998, sec. 2.6),
+Schmidt, *Computational Ocean Acoustics*, 2nd ed. 2011, ch. 3; Medwin & Clay, *Fundamentals
+of Acoustical Oceanography* 1998),
 
     X = (s1 - s2) / (g p) = p dz (c1 + c2) / (s1 + s2),
     T = (1/g) ln[c2 (1 + s1) / (c1 (1 + s2))] = dz A log1p(g dz A) / (g dz A),

@@ -3,7 +3,7 @@
 Truth used: Mackenzie's (1981) published check value; the straight line of isovelocity; the
 circular ray of a constant-gradient layer (its centre on the depth where c would vanish, the
 travel time ``(1/|g|) |ln tan(psi_B/2) - ln tan(psi_A/2)|`` from ``dt = R dpsi / (|g| R sin
-psi)``); the ray equations of Jensen et al. (2011, eq. 3.23) integrated by scipy's RK45 from
+psi)``); the ray equations of Jensen et al. (2011, ch. 3) integrated by scipy's RK45 from
 the returned launch angle for a multi-layer profile (shooting: the integrated ray must reach the
 receiver at the returned time).
 """
@@ -157,7 +157,7 @@ def test_reciprocity() -> None:
 
 
 def _shoot(profile: SoundSpeedProfile, source: np.ndarray, launch: float, horizontal: float):
-    """Integrate the ray equations (Jensen et al. 2011, eq. 3.23) in arclength s:
+    """Integrate the ray equations (Jensen et al. 2011, ch. 3) in arclength s:
     dx/ds = c xi, dz/ds = c zeta, dxi/ds = 0, dzeta/ds = -c_z / c^2, dt/ds = 1/c (z depth),
     from the launch elevation until the horizontal distance is reached; the integration stops
     and restarts at every knot (the gradient jumps there), so the steps never straddle one."""
