@@ -121,10 +121,15 @@ def _pool(blocks: Iterator[dict[str, Array]]) -> dict[str, Array]:
 
 
 def metrics_of(
-    name: str, scn: SoundSpeedScenario, n_runs: int, seed: int, p: dict[str, Array]
+    name: str,
+    scn: SoundSpeedScenario,
+    n_runs: int,
+    seed: int,
+    p: dict[str, Array],
+    sys_: dict[str, Array],
 ) -> SoundSpeedMetrics:
-    """The metrics from the pooled blocks ``p`` and the error-free measurements."""
-    sys_ = exact(scn)
+    """The metrics from the pooled blocks ``p`` and the error-free measurements ``sys_``
+    (:func:`tasks.acoustics.run.exact`)."""
     usbl_methods = {}
     for i, meth in enumerate(METHODS):
         ok0 = sys_["usbl_present"][:, i]
@@ -284,12 +289,17 @@ def tables(m: SoundSpeedMetrics) -> list[Table]:
 
 
 def report_sound_speed(name: str, summary: str, ctx: ReportContext) -> ReportSummary:
-    """Write ``metrics.json`` and the tables of a finished batch."""
+    """Write ``metrics.json``, the tables and the figure of a finished batch."""
     scn: SoundSpeedScenario = ctx.scenario  # type: ignore[assignment]
-    m = metrics_of(name, scn, ctx.n_runs, ctx.seed, _pool(ctx.blocks))
+    sys_ = exact(scn)
+    m = metrics_of(name, scn, ctx.n_runs, ctx.seed, _pool(ctx.blocks), sys_)
     files = [write_metrics(ctx.out_dir, m)]
     tabs = tables(m)
     files += write_tables(ctx.out_dir, tabs, heading=f"{name}: {summary}")
+    if scn.report.figures:
+        from tasks.acoustics import figures
+
+        files += figures.systematic(ctx.out_dir / "sound-speed.png", scn, m, sys_)
     text = "".join(t.to_text() for t in tabs)
     text += "".join(f"warning: {w}\n" for w in m.warnings)
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"

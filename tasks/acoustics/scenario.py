@@ -88,6 +88,12 @@ class ModemLinksConfig(Config):
         return v
 
 
+class ReportConfig(Config):
+    """What the report draws."""
+
+    figures: bool = Field(True, description="draw the figure of the systematic errors")
+
+
 class RunnerConfig(Config):
     """Batching (fixed by the scenario, never by the worker count)."""
 
@@ -103,6 +109,7 @@ class SoundSpeedScenario(Config):
     )
     usbl: UsblPassageConfig = Field(default_factory=UsblPassageConfig)
     modem: ModemLinksConfig = Field(default_factory=ModemLinksConfig)
+    report: ReportConfig = Field(default_factory=ReportConfig)
     runner: RunnerConfig = Field(default_factory=RunnerConfig)
 
     @model_validator(mode="after")

@@ -97,11 +97,14 @@ def test_a_small_batch_writes_metrics_and_tables_without_nan(tmp_path):
     assert nominal["horizontal"]["samples"] == 4 * m["usbl"]["fixes"]
     assert len(m["modem"]) == 15
     assert "nan" not in (out / "tables.md").read_text().lower()
+    for name in ("sound-speed.png", "sound-speed.pdf"):
+        assert (out / name).is_file(), name
     assert "Modem range error" in summary.text and "USBL position error" in summary.text
 
 
 def test_one_and_two_workers_give_the_same_bytes(tmp_path):
-    args = dict(n_runs=4, seed=9, overrides=["runner.block_size=1", "usbl.fixes=11"])
+    overrides = ["runner.block_size=1", "usbl.fixes=11", "report.figures=false"]
+    args = dict(n_runs=4, seed=9, overrides=overrides)
     one, _ = run("acoustics/sound-speed", out_dir=tmp_path / "one", progress=False, **args)
     two, _ = run(
         "acoustics/sound-speed", out_dir=tmp_path / "two", workers=2, progress=False, **args
