@@ -285,3 +285,105 @@ def test_a_schedule_that_does_not_fit_names_the_field(base, field):
 def test_bad_packet_names_the_field():
     with pytest.raises(ConfigError, match="packet_s"):
         load_config(AcousticNetworkConfig, overrides=["packet_s=3.0"])
+
+
+# ----------------------------------------------------------------------------------------------
+# The online device
+
+
+def _truth(k_t, p, v):
+    from bauv_sim.physics_state import VehicleTruth
+
+    return VehicleTruth(
+        t_s=k_t,
+        position_world_m=p,
+        quat_wxyz=np.array([1.0, 0.0, 0.0, 0.0]),
+        roll_pitch_heading_rad=np.zeros(3),
+        depth_m=-p[2],
+        velocity_world_m_s=v,
+        velocity_through_water_world_m_s=v,
+        current_world_m_s=np.zeros(3),
+        angular_velocity_body_rad_s=np.zeros(3),
+    )
+
+
+def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2):
+    """Every vehicle's device, stepped on the straight lines; returns the measurements by
+    receiver."""
+    from bauv_sim.acoustics.network import AcousticNetworkDevice
+    from bauv_sim.sensors.online import Broadcast, DeviceBuild, Peer, TickContext
+
+    devs = {
+        me: AcousticNetworkDevice(
+            cfg,
+            DeviceBuild("net", f"{me}/net", seed, run, tick, None, None, me, {"vehicles": NAMES}),
+        )
+        for me in NAMES
+    }
+    got = {me: [] for me in NAMES}
+    for k in range(1, round(t_end / tick) + 1):
+        t = k * tick
+        truths = {v: _truth(t, START[n] + VEL[n] * t, VEL[n]) for n, v in enumerate(NAMES)}
+        for me in NAMES:
+            peers = {
+                v: Peer(truths[v], Broadcast(v, t, truths[v].position_world_m, None, VEL[0, :2]))
+                for v in NAMES
+                if v != me
+            }
+            m = devs[me].step(TickContext(k, t, truths[me], {}, {}, peers))
+            if m is not None:
+                got[me].append(m)
+    return got
+
+
+def test_online_device_gives_the_batched_numbers_on_the_same_truth():
+    clocks = {
+        "leader": ClockConfig(jitter_s=1e-4),
+        "f1": ClockConfig(offset_s=0.003, drift_ppm=2.0, offset_sigma_s=0.002, jitter_s=1e-4),
+        "f2": ClockConfig(offset_s=-0.004, drift_sigma_ppm=1.0, jitter_s=1e-4),
+    }
+    sonar = {"enabled": True, "source_level_db": 126.0, "fading_sigma_db": 4.0}
+    cfg = load_config(
+        AcousticNetworkConfig,
+        base={
+            "clocks": clocks,
+            "sonar": sonar,
+            "travel_time_sigma_s": 2e-4,
+            "period_s": 9.0,
+            "slot_s": 3.0,
+            "transducer_body_m": [0.0, 0.0, 0.0],
+        },
+    )
+    arm = np.array([0.3, -0.1, 0.05])
+    cfg = cfg.model_copy(update={"transducer_body_m": tuple(arm)})
+    batched = AcousticNetwork(cfg, NAMES, 9, (0, 2)).exchange(
+        T_GRID, line_positions(START + arm, VEL)
+    )
+    online = _fly_devices(cfg)
+    lost_some = False
+    for i, me in enumerate(NAMES):
+        e = np.flatnonzero((batched.receiver == i) & batched.produced[1])
+        lost_some |= bool((~batched.produced[1][batched.receiver == i]).any())
+        ms = [m for m in online[me] if m.payload.tx_local_s <= batched.tx_local_s[1].max()]
+        assert len(ms) == e.size > 5
+        for m, ev in zip(ms, e, strict=True):
+            p = m.payload
+            assert p.sender == NAMES[batched.sender[ev]] and p.receiver == me
+            assert p.tx_local_s == batched.tx_local_s[1, ev]
+            assert p.rx_local_s == pytest.approx(batched.rx_local_s[1, ev], abs=1e-9)
+            assert m.value[0] == pytest.approx(batched.range_m[1, ev], abs=1e-6)
+            assert p.snr_db == pytest.approx(batched.snr_db[1, ev], abs=1e-9)
+            assert m.t_valid_s == pytest.approx(batched.t_rx_s[1, ev], abs=1e-9)
+            assert m.t_arrival_s == pytest.approx(batched.t_available_s[1, ev], abs=1e-9)
+            assert p.broadcast.sender == p.sender
+    assert lost_some  # the sonar's draws were exercised
+
+
+def test_online_device_refuses_two_way_ranging():
+    from bauv_sim.acoustics.network import AcousticNetworkDevice
+    from bauv_sim.sensors.online import DeviceBuild
+
+    cfg = AcousticNetworkConfig(ranging="twtt", transducer_body_m=(0.1, 0.0, 0.0))
+    build = DeviceBuild("net", "net", 1, 0, 0.1, None, None, "f1", {"vehicles": NAMES})
+    with pytest.raises(ConfigError, match="ranging"):
+        AcousticNetworkDevice(cfg, build)
