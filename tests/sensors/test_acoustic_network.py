@@ -387,3 +387,41 @@ def test_online_device_refuses_two_way_ranging():
     build = DeviceBuild("net", "net", 1, 0, 0.1, None, None, "f1", {"vehicles": NAMES})
     with pytest.raises(ConfigError, match="ranging"):
         AcousticNetworkDevice(cfg, build)
+
+
+def test_online_device_in_a_rig_ranges_between_the_model_sites_with_the_clock_bias():
+    import dataclasses
+
+    from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
+    from bauv_sim.sensors.online import Broadcast, Peer
+    from bauv_sim.sensors.rig import SensorRig
+
+    scene = SceneConfig(
+        vehicles=(
+            VehicleSpec(name="leader", east_m=0.0, north_m=0.0, heading_deg=30.0),
+            VehicleSpec(name="f1", east_m=80.0, north_m=-60.0, heading_deg=30.0, depth_m=4.0),
+        )
+    )
+    phys = build_physics(scene, control_tick_s=0.2)
+    cfg = AcousticNetworkConfig(clocks={"f1": ClockConfig(offset_s=0.002)}, start_s=2.0)
+    rig = SensorRig({"net": cfg}, phys, "f1", 5, 0, "f1")
+    site = {v: phys.site_position_world("modem", v) for v in ("leader", "f1")}
+    true_r = float(np.linalg.norm(site["leader"] - site["f1"]))
+    lead, me = phys.truth("leader"), phys.truth("f1")
+    lead = dataclasses.replace(lead, velocity_world_m_s=np.zeros(3))
+    me = dataclasses.replace(me, velocity_world_m_s=np.zeros(3))
+    bc = Broadcast("leader", 0.0, np.zeros(3), np.ones(3), np.zeros(2), clock_offset_s=1e-4)
+    got = []
+    for k in range(1, 100):
+        t = 0.2 * k
+        peers = {"leader": Peer(dataclasses.replace(lead, t_s=t), bc)}
+        got += rig.sense(k, dataclasses.replace(me, t_s=t), {}, peers=peers).arrived
+    # the leader transmits at 2, 12 s (slot 0); f1's own slot (2 s later) is not heard by f1
+    assert [round(m.payload.tx_local_s, 9) for m in got] == [2.0, 12.0]
+    for m in got:
+        # the range is the true one plus c x (f1's offset - the leader's): +3 m
+        assert m.value[0] == pytest.approx(true_r + C * 0.002, abs=1e-9)
+        assert m.t_valid_s == pytest.approx(m.payload.tx_local_s + true_r / C, abs=1e-12)
+        assert m.t_arrival_s == pytest.approx(m.t_valid_s + 0.5)
+        assert m.payload.broadcast is bc and m.payload.sender == "leader"
+    assert rig.lever_arms_body_m["net"] == pytest.approx((0.36, 0.0, 0.166), abs=1e-9)
