@@ -37,13 +37,17 @@ reception instant, biased by the clocks' offset difference (Eustice et al. 2007;
 
 **Two-way travel time (TWTT).** The vehicle of the slot interrogates: it transmits at its local
 ``T``; every other vehicle ``j`` receives the ping at ``t1`` (as above), stamps it ``L1 =
-local_j(t1) + noise`` and replies when its clock reads ``L1 + turnaround_s``, at true time
-``t2 = true_of_local_j(L1 + turnaround_s)``; the interrogator receives the reply at ``t3`` and
+local_j(t1) + noise`` and replies when its clock reads ``L1 + turnaround_j``, at true time
+``t2 = true_of_local_j(L1 + turnaround_j)``; the interrogator receives the reply at ``t3`` and
 stamps ``L3 = local_i(t3) + noise``:
 
-    range = c_nom * (L3 - T - turnaround_s) / 2.
+    range = c_nom * (L3 - T - turnaround_j) / 2,
 
-The offsets cancel; the drifts leave ``c_nom/2 * (d_i (t3 - t_tx) - d_j turnaround_s / (1 +
+with ``turnaround_j = turnaround_s + k * reply_stagger_s`` for the k-th responder (k = 0, 1, ...
+in the scene's order, the interrogator skipped): with no stagger all replies leave together and
+those arriving within ``packet_s`` of one another collide at the interrogator.
+
+The offsets cancel; the drifts leave ``c_nom/2 * (d_i (t3 - t_tx) - d_j turnaround_j / (1 +
 d_j))`` (to first order; 1 ppm on a 1 s turnaround and 2 s round trip: 1.5e-3 m). An event of
 TWTT has ``receiver`` = the interrogator (who measures) and ``sender`` = the responder; its true
 range is the mean of the two legs' true ranges ``(|p_i(t_tx) - p_j(t1)| + |p_j(t2) -
@@ -70,9 +74,10 @@ while it receives a ping is not modelled (it needs a slot shorter than a round t
 
 **Streams.** Each vehicle's clock draws from ``("clock", <vehicle>)``; the noise of what vehicle
 ``i`` receives from ``("acoustic", <i>, "jitter" | "travel_time" | "packet")``, one draw per event
-(TWTT: two, one per leg) in the order of the schedule, so a receiver's numbers do not depend on
-the other receivers, and the online device (:class:`AcousticNetworkDevice`), which receives the
-same events one by one, draws the same numbers.
+(TWTT: the ping's at responder ``j`` from ``("acoustic", <j>, "ping", ...)``, the reply's at the
+interrogator from ``("acoustic", <i>, ...)``), in the order of the schedule, so a receiver's
+numbers do not depend on the other receivers, and the online device
+(:class:`AcousticNetworkDevice`), which receives the same events one by one, draws the same numbers.
 
 :class:`AcousticNetwork` is the batched form (positions on a time grid, any number of runs);
 :class:`AcousticNetworkDevice` the online device of a receiver's rig (OWTT).
@@ -135,6 +140,12 @@ class AcousticNetworkConfig(Config):
     turnaround_s: float = Field(
         0.5, ge=0, description="TWTT: responder's delay, by its own clock, s"
     )
+    reply_stagger_s: float = Field(
+        0.0,
+        ge=0,
+        description="TWTT: the k-th responder (scene order, the interrogator skipped) waits "
+        "turnaround_s + k * reply_stagger_s (0: all reply together)",
+    )
     nominal_sound_speed_m_s: float = Field(
         1500.0, gt=0, description="speed that turns a travel time into a range, m/s"
     )
@@ -170,11 +181,13 @@ class AcousticNetworkConfig(Config):
         """The clock configuration of a vehicle."""
         return self.clocks.get(vehicle, self.clock)
 
-    def horizon_s(self) -> float:
-        """The longest exchange after a transmission (last arrival at the maximum range), s."""
+    def horizon_s(self, n_vehicles: int = 2) -> float:
+        """The longest exchange after a transmission among ``n_vehicles`` (last arrival at the
+        maximum range), s."""
         leg = self.max_range_m / self.nominal_sound_speed_m_s
         if self.ranging == "twtt":
-            return 2 * leg + self.turnaround_s + self.packet_s
+            stagger = max(n_vehicles - 2, 0) * self.reply_stagger_s
+            return 2 * leg + self.turnaround_s + stagger + self.packet_s
         return leg + self.packet_s
 
 
@@ -231,9 +244,11 @@ class NetworkRanges:
 class _Receiver:
     """The draws of what one vehicle receives (module docstring: streams)."""
 
-    def __init__(self, cfg: AcousticNetworkConfig, clock: Clock, seed: int, runs, name: str):
+    def __init__(
+        self, cfg: AcousticNetworkConfig, clock: Clock, seed: int, runs, name: str, leg: str = ""
+    ):
         self.cfg, self.clock = cfg, clock
-        base = ("acoustic", name)
+        base = ("acoustic", name, leg) if leg else ("acoustic", name)
         self._jitter = (
             rng_mod.RunStreams(seed, runs, *base, "jitter") if clock.jitter_s > 0 else None
         )
@@ -339,7 +354,7 @@ class AcousticNetwork:
             )
         if not np.all(np.isfinite(pos)):
             raise ConfigError("network: positions_world_m holds non-finite values")
-        sender, local = schedule(self.cfg, self.vehicles, t[0], t[-1] - self.cfg.horizon_s())
+        sender, local = schedule(self.cfg, self.vehicles, t[0], t[-1] - self.cfg.horizon_s(v))
         if self.cfg.ranging == "twtt":
             return self._twtt(t, pos, sender, local)
         return self._owtt(t, pos, sender, local)
@@ -450,6 +465,13 @@ class AcousticNetwork:
         recvs = [
             _Receiver(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i]) for i in range(v)
         ]
+        pinged = [
+            _Receiver(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i], "ping")
+            for i in range(v)
+        ]
+        # the k-th responder (scene order, the interrogator skipped) waits k staggers more
+        rank = ev_resp - (ev_resp > ev_int)
+        turn = cfg.turnaround_s + rank * cfg.reply_stagger_s
         # leg 1: pings at the responders
         t1, d1, s1, l1, loss1 = (np.empty(shape) for _ in range(5))
         p_reply = np.empty((n, m, 3))
@@ -461,12 +483,12 @@ class AcousticNetwork:
             qe = ev_q[e]
             tr, d, s = self._leg(t, pos, j, p_tx[:, qe], t_tx[:, qe])
             t1[:, e], d1[:, e], s1[:, e] = tr, d, s
-            noise = recvs[j].timestamp_noise(e.size)
+            noise = pinged[j].timestamp_noise(e.size)
             l1[:, e] = self.clocks[j].local(tr) + noise
-            decoded = recvs[j].decoded(s)
+            decoded = pinged[j].decoded(s)
             own = np.flatnonzero(sender == j)
             loss1[:, e] = self._channel(d, tr, decoded, t_tx[:, own])
-            t2[:, e] = self.clocks[j].true_of_local(l1[:, e] + cfg.turnaround_s)
+            t2[:, e] = self.clocks[j].true_of_local(l1[:, e] + turn[e])
             p_reply[:, e] = interpolate_positions(t, pos[j], t2[:, e])
         loss1 = loss1.astype(np.int8)
         replied = loss1 == LOST_OK
@@ -500,7 +522,7 @@ class AcousticNetwork:
         lost = np.where(replied, loss2, loss1).astype(np.int8)
         c = cfg.nominal_sound_speed_m_s
         tx_local = np.broadcast_to(local[ev_q], shape).copy()
-        rng_ = c * (l3 - tx_local - cfg.turnaround_s) / 2
+        rng_ = c * (l3 - tx_local - turn) / 2
         return NetworkRanges(
             self.vehicles,
             "twtt",

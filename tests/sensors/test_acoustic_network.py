@@ -425,3 +425,21 @@ def test_online_device_in_a_rig_ranges_between_the_model_sites_with_the_clock_bi
         assert m.t_arrival_s == pytest.approx(m.t_valid_s + 0.5)
         assert m.payload.broadcast is bc and m.payload.sender == "leader"
     assert rig.lever_arms_body_m["net"] == pytest.approx((0.36, 0.0, 0.166), abs=1e-9)
+
+
+def test_twtt_replies_collide_unless_staggered():
+    # two responders at one range: replies sent together arrive together at the interrogator
+    start = np.array([[0.0, 0.0, -10.0], [300.0, 0.0, -10.0], [0.0, 300.0, -10.0]])
+    still = line_positions(start, np.zeros((3, 3)))
+    clocks = {"f1": ClockConfig(offset_s=0.05), "f2": ClockConfig(offset_s=-0.07)}
+    cfg = AcousticNetworkConfig(ranging="twtt", order=("leader",), clocks=clocks)
+    r = AcousticNetwork(cfg, NAMES, 1, (0,)).exchange(T_GRID, still)
+    assert r.sender.size >= 10 and np.all(r.lost == LOST_COLLISION)
+    # the second responder waits 0.3 s more (more than a packet): both ranges, offsets cancelled
+    staggered = cfg.model_copy(update={"reply_stagger_s": 0.3})
+    r = AcousticNetwork(staggered, NAMES, 1, (0,)).exchange(T_GRID, still)
+    assert r.produced.all()
+    np.testing.assert_allclose(r.range_m, 300.0, rtol=0, atol=1e-9)
+    # f2's reply reaches the leader 0.3 s after f1's: a responder's offset does not delay it
+    # (it times its turnaround on its own clock from its own timestamp)
+    np.testing.assert_allclose(r.t_rx_s[0, 1::2] - r.t_rx_s[0, ::2], 0.3, atol=1e-9)
