@@ -1004,6 +1004,51 @@ ISSUE23 = [
 """Issue 23: the DVL device's lock and mounting, the DVL measurement model, the TRN likelihood,
 bound and particle covariance."""
 
+ISSUE24 = [
+    Mutation(
+        "acoustic-receiver-frozen-during-travel",
+        "own",
+        "correction",
+        "bauv_sim/acoustics/channel.py",
+        "        p = receiver_at(t)\n",
+        "        p = receiver_at(t_tx_s)\n",
+        "the reception time solved with the receiver where it was at the transmit instant",
+        tests=("tests/sensors/test_acoustic_network.py",),
+    ),
+    Mutation(
+        "thorp-kiloyard-coefficient",
+        "own",
+        "unit",
+        "bauv_sim/acoustics/sonar.py",
+        "44.0 * f2 / (4100.0 + f2)",
+        "40.0 * f2 / (4100.0 + f2)",
+        "Thorp's dB/kiloyard coefficient used in the dB/km absorption",
+        tests=("tests/sensors/test_acoustic_sonar.py", "tests/sensors/test_acoustic_network.py"),
+    ),
+    Mutation(
+        "clock-offset-sign",
+        "own",
+        "sign",
+        "bauv_sim/acoustics/clock.py",
+        "return (T - _col(self.offset0_s, T)) / (1.0 + _col(self.drift, T))",
+        "return (T + _col(self.offset0_s, T)) / (1.0 + _col(self.drift, T))",
+        "a clock's offset added instead of removed when the sender transmits on its schedule",
+        tests=("tests/sensors/test_acoustic_clock.py", "tests/sensors/test_acoustic_network.py"),
+    ),
+    Mutation(
+        "acoustic-collisions-ignored",
+        "own",
+        "correction",
+        "bauv_sim/acoustics/network.py",
+        "        lost[collided[:, :M]] = LOST_COLLISION\n",
+        "",
+        "two packets arriving together at a receiver are both decoded",
+        tests=("tests/sensors/test_acoustic_network.py",),
+    ),
+]
+"""Issue 24 (acoustic channel): the moving receiver's reception time, Thorp's absorption, the
+clock's inverse, collisions."""
+
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
     *OWN,
@@ -1012,6 +1057,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_SEED004,
     *ISSUE22_CORE,
     *ISSUE23,
+    *ISSUE24,
 ]
 
 _IGNORE = shutil.ignore_patterns(
