@@ -307,7 +307,7 @@ def _truth(k_t, p, v):
     )
 
 
-def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2):
+def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2, propagation=None):
     """Every vehicle's device, stepped on the straight lines; returns the measurements by
     receiver."""
     from bauv_sim.acoustics.network import AcousticNetworkDevice
@@ -316,7 +316,18 @@ def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2):
     devs = {
         me: AcousticNetworkDevice(
             cfg,
-            DeviceBuild("net", f"{me}/net", seed, run, tick, None, None, me, {"vehicles": NAMES}),
+            DeviceBuild(
+                "net",
+                f"{me}/net",
+                seed,
+                run,
+                tick,
+                None,
+                None,
+                me,
+                {"vehicles": NAMES},
+                propagation,
+            ),
         )
         for me in NAMES
     }
@@ -336,7 +347,8 @@ def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2):
     return got
 
 
-def test_online_device_gives_the_batched_numbers_on_the_same_truth():
+@pytest.mark.parametrize("propagation", [None, Isovelocity(1490.0)])
+def test_online_device_gives_the_batched_numbers_on_the_same_truth(propagation):
     clocks = {
         "leader": ClockConfig(jitter_s=1e-4),
         "f1": ClockConfig(offset_s=0.003, drift_ppm=2.0, offset_sigma_s=0.002, jitter_s=1e-4),
@@ -356,10 +368,10 @@ def test_online_device_gives_the_batched_numbers_on_the_same_truth():
     )
     arm = np.array([0.3, -0.1, 0.05])
     cfg = cfg.model_copy(update={"transducer_body_m": tuple(arm)})
-    batched = AcousticNetwork(cfg, NAMES, 9, (0, 2)).exchange(
+    batched = AcousticNetwork(cfg, NAMES, 9, (0, 2), propagation).exchange(
         T_GRID, line_positions(START + arm, VEL)
     )
-    online = _fly_devices(cfg)
+    online = _fly_devices(cfg, propagation=propagation)
     lost_some = False
     for i, me in enumerate(NAMES):
         e = np.flatnonzero((batched.receiver == i) & batched.produced[1])
