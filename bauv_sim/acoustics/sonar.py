@@ -47,7 +47,6 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import Field
-from scipy.special import ndtr
 
 from bauv_sim.config import Config
 
@@ -158,4 +157,6 @@ def success_probability(
     margin = np.asarray(snr_db_, dtype=float) - detection_threshold_db
     if fading_sigma_db == 0:
         return (margin >= 0).astype(float)
+    from scipy.special import ndtr  # on first use: scipy.special costs ~0.1 s of import
+
     return ndtr(margin / fading_sigma_db)

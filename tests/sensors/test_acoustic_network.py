@@ -455,3 +455,60 @@ def test_twtt_replies_collide_unless_staggered():
     # f2's reply reaches the leader 0.3 s after f1's: a responder's offset does not delay it
     # (it times its turnaround on its own clock from its own timestamp)
     np.testing.assert_allclose(r.t_rx_s[0, 1::2] - r.t_rx_s[0, ::2], 0.3, atol=1e-9)
+
+
+def test_modem_one_way_option_ranges_by_travel_time_and_clocks():
+    import dataclasses
+
+    from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
+    from bauv_sim.sensors.modem import ModemConfig
+    from bauv_sim.sensors.online import Broadcast, Peer
+    from bauv_sim.sensors.rig import SensorRig
+
+    scene = SceneConfig(
+        vehicles=(
+            VehicleSpec(name="leader", east_m=0.0, north_m=0.0, heading_deg=30.0),
+            VehicleSpec(name="f1", east_m=80.0, north_m=-60.0, heading_deg=30.0, depth_m=4.0),
+        )
+    )
+    phys = build_physics(scene, control_tick_s=0.2)
+    site = {v: phys.site_position_world("modem", v) for v in ("leader", "f1")}
+    true_r = float(np.linalg.norm(site["leader"] - site["f1"]))
+    lead = dataclasses.replace(phys.truth("leader"), velocity_world_m_s=np.zeros(3))
+    me = dataclasses.replace(phys.truth("f1"), velocity_world_m_s=np.array([1.0, -0.5, 0.0]))
+    bc = Broadcast("leader", 0.0, np.zeros(3), np.ones(3), np.zeros(2))
+    clocks = {"leader": ClockConfig(offset_s=-0.001), "f1": ClockConfig(offset_s=0.002)}
+    exact = {"sigma_m": 0.0, "bias_m": 0.0}
+
+    def fly(cfg):
+        rig = SensorRig({"modem": cfg}, phys, "f1", 5, 0, "f1", extra={"modem": {}})
+        got = []
+        for k in range(1, 60):
+            t = 0.2 * k
+            peers = {"leader": Peer(dataclasses.replace(lead, t_s=t), bc)}
+            truth = dataclasses.replace(me, t_s=t)  # f1's velocity, its position held
+            got += rig.sense(k, truth, {}, peers=peers).arrived
+        return got
+
+    instant = fly(ModemConfig(range=exact))
+    assert [m.value[0] for m in instant] == pytest.approx([true_r] * 2, abs=1e-12)
+    one_way = fly(ModemConfig(range=exact, ranging="owtt", clocks=clocks))
+    assert len(one_way) == 2
+    for m0, m in zip(instant, one_way, strict=True):
+        T = m0.t_valid_s  # the slot's time
+        t_tx = T + 0.001  # the leader's clock, 1 ms behind, reads T 1 ms late
+        # f1 (held at its tick's position, moving at v from there) receives at t_rx:
+        # |p_leader - (p_f1 + v (t_rx - T))| = c (t_rx - t_tx), solved here as a quadratic
+        d = site["f1"] - site["leader"]
+        v = np.array([1.0, -0.5, 0.0])
+        # |d + v s| = c (s + T - t_tx), s = t_rx - T
+        a = v @ v - C**2
+        b = 2 * (d @ v) - 2 * C**2 * (T - t_tx)
+        c = d @ d - C**2 * (T - t_tx) ** 2
+        s = (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a)
+        t_rx = T + s
+        assert m.t_valid_s == pytest.approx(t_rx, abs=1e-12)
+        assert m.t_arrival_s == pytest.approx(t_rx + 0.5, abs=1e-12)
+        # the range: c (local_f1(t_rx) - T) = c (t_rx - t_tx) + c (0.002 - (-0.001))
+        assert m.value[0] == pytest.approx(C * (t_rx - t_tx) + C * 0.003, abs=1e-9)
+        assert m.payload is bc
