@@ -1,6 +1,7 @@
-"""The acoustic network's channel: the TDMA schedule, the reception time of a moving receiver
-and the arrivals that meet at a receiver (see :mod:`bauv_sim.acoustics.network`, whose module
-docstring states the model; the batched network and the online device both use these)."""
+"""The acoustic network's channel: the TDMA schedule, the reception time of a moving receiver,
+the arrivals that meet at a receiver and the draws of what a vehicle receives (see
+:mod:`bauv_sim.acoustics.network`, whose module docstring states the model; the batched network,
+its online device and the modem's one-way option use these)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from bauv_sim import rng as rng_mod
+from bauv_sim.acoustics.clock import Clock
+from bauv_sim.acoustics.sonar import success_probability
 from bauv_sim.errors import ConfigError
 from nav.acoustics import Propagation
 
@@ -168,3 +172,59 @@ def neighbour_gaps(
         np.put_along_axis(hit, order, near, axis=1)
         out.append(hit & arrivals)
     return out[0], out[1]
+
+
+class ReceiverDraws:
+    """The draws of what one vehicle receives: timestamp noise and packet decoding, from the
+    streams ``("acoustic", <name>[, <leg>], "jitter" | "travel_time" | "packet")`` (see
+    :mod:`bauv_sim.acoustics.network`, streams), one draw per event in the schedule's order.
+
+    Args:
+        cfg: the network.
+        clock: the vehicle's clock (its jitter).
+        seed: batch seed.
+        runs: run indices (n,).
+        name: the vehicle's name.
+        leg: a sub-stream name (TWTT's ``"ping"``), or ``""``.
+    """
+
+    def __init__(
+        self, cfg: AcousticNetworkConfig, clock: Clock, seed: int, runs, name: str, leg: str = ""
+    ):
+        self.cfg, self.clock = cfg, clock
+        base = ("acoustic", name, leg) if leg else ("acoustic", name)
+        self._jitter = (
+            rng_mod.RunStreams(seed, runs, *base, "jitter") if clock.jitter_s > 0 else None
+        )
+        self._tt = (
+            rng_mod.RunStreams(seed, runs, *base, "travel_time")
+            if cfg.travel_time_sigma_s > 0
+            else None
+        )
+        s = cfg.sonar
+        self._packet = (
+            rng_mod.RunStreams(seed, runs, *base, "packet")
+            if s.enabled and s.fading_sigma_db > 0
+            else None
+        )
+        self.n = len(runs)
+
+    def timestamp_noise(self, m: int) -> Array:
+        """Jitter plus detection noise of ``m`` arrivals, shape (n, m), s."""
+        e = np.zeros((self.n, m))
+        if self._jitter is not None:
+            e = e + self.clock.jitter_s * self._jitter.draw("standard_normal", m)
+        if self._tt is not None:
+            e = e + self.cfg.travel_time_sigma_s * self._tt.draw("standard_normal", m)
+        return e
+
+    def decoded(self, snr: Array) -> NDArray[np.bool_]:
+        """Whether each of ``m`` packets with SNR ``snr`` (n, m) is decoded (always when the
+        sonar is off)."""
+        s = self.cfg.sonar
+        if not s.enabled:
+            return np.ones(snr.shape, dtype=bool)
+        p = success_probability(snr, s.detection_threshold_db, s.fading_sigma_db)
+        if self._packet is None:
+            return p >= 1.0
+        return self._packet.draw("random", snr.shape[1]) < p

@@ -93,16 +93,16 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
-from bauv_sim import rng as rng_mod
 from bauv_sim.acoustics.channel import (
+    ReceiverDraws,
     interpolate_positions,
     neighbour_gaps,
     reception_time,
     schedule,
     slot_senders,
 )
-from bauv_sim.acoustics.clock import Clock, ClockConfig, draw_clocks
-from bauv_sim.acoustics.sonar import SonarConfig, snr_db, success_probability
+from bauv_sim.acoustics.clock import ClockConfig, draw_clocks
+from bauv_sim.acoustics.sonar import SonarConfig, snr_db
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 from bauv_sim.frames import R_from_quat_wxyz
@@ -195,6 +195,10 @@ class AcousticNetworkConfig(Config):
 class NetworkRanges:
     """The ranges of one batch (m events, n runs), in schedule order (module docstring).
 
+    Where an event is not produced its values are those of the leg that was computed (a TWTT
+    event whose ping was lost: the ping's reception at the responder, range 0); they are finite
+    but carry no measurement.
+
     Attributes:
         vehicles: the vehicles' names; indices below refer to them.
         kind: ``"owtt"`` or ``"twtt"``.
@@ -239,51 +243,6 @@ class NetworkRanges:
         """Measured travel time ``rx_local - tx_local`` (TWTT: the round trip less the
         turnaround, halved: ``range / c``), shape (n, m), s."""
         return self.range_m / self.sound_speed_m_s
-
-
-class _Receiver:
-    """The draws of what one vehicle receives (module docstring: streams)."""
-
-    def __init__(
-        self, cfg: AcousticNetworkConfig, clock: Clock, seed: int, runs, name: str, leg: str = ""
-    ):
-        self.cfg, self.clock = cfg, clock
-        base = ("acoustic", name, leg) if leg else ("acoustic", name)
-        self._jitter = (
-            rng_mod.RunStreams(seed, runs, *base, "jitter") if clock.jitter_s > 0 else None
-        )
-        self._tt = (
-            rng_mod.RunStreams(seed, runs, *base, "travel_time")
-            if cfg.travel_time_sigma_s > 0
-            else None
-        )
-        s = cfg.sonar
-        self._packet = (
-            rng_mod.RunStreams(seed, runs, *base, "packet")
-            if s.enabled and s.fading_sigma_db > 0
-            else None
-        )
-        self.n = len(runs)
-
-    def timestamp_noise(self, m: int) -> Array:
-        """Jitter plus detection noise of ``m`` arrivals, shape (n, m), s."""
-        e = np.zeros((self.n, m))
-        if self._jitter is not None:
-            e = e + self.clock.jitter_s * self._jitter.draw("standard_normal", m)
-        if self._tt is not None:
-            e = e + self.cfg.travel_time_sigma_s * self._tt.draw("standard_normal", m)
-        return e
-
-    def decoded(self, snr: Array) -> NDArray[np.bool_]:
-        """Whether each of ``m`` packets with SNR ``snr`` (n, m) is decoded (always when the
-        sonar is off)."""
-        s = self.cfg.sonar
-        if not s.enabled:
-            return np.ones(snr.shape, dtype=bool)
-        p = success_probability(snr, s.detection_threshold_db, s.fading_sigma_db)
-        if self._packet is None:
-            return p >= 1.0
-        return self._packet.draw("random", snr.shape[1]) < p
 
 
 class AcousticNetwork:
@@ -400,7 +359,7 @@ class AcousticNetwork:
             if not e.size:
                 continue
             qi = ev_q[e]
-            recv = _Receiver(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i])
+            recv = ReceiverDraws(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i])
             tr, d, s = self._leg(t, pos, i, p_tx[:, qi], t_tx[:, qi])
             t_rx[:, e], dist[:, e], snr[:, e] = tr, d, s
             rx_local[:, e] = self.clocks[i].local(tr) + recv.timestamp_noise(e.size)
@@ -463,10 +422,11 @@ class AcousticNetwork:
         m = ev_q.shape[0]
         shape = (n, m)
         recvs = [
-            _Receiver(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i]) for i in range(v)
+            ReceiverDraws(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i])
+            for i in range(v)
         ]
         pinged = [
-            _Receiver(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i], "ping")
+            ReceiverDraws(cfg, self.clocks[i], self.seed, self.runs, self.vehicles[i], "ping")
             for i in range(v)
         ]
         # the k-th responder (scene order, the interrogator skipped) waits k staggers more
@@ -638,7 +598,7 @@ class AcousticNetworkDevice:
         self.me, self.i = me, self.vehicles.index(me)
         runs = (build.run,)
         self.clocks = [draw_clocks(cfg.clock_of(v), build.seed, runs, v) for v in self.vehicles]
-        self._recv = _Receiver(cfg, self.clocks[self.i], build.seed, runs, me)
+        self._recv = ReceiverDraws(cfg, self.clocks[self.i], build.seed, runs, me)
         self.propagation = (
             build.propagation
             if build.propagation is not None

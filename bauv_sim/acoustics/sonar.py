@@ -54,8 +54,14 @@ Array = NDArray[np.float64]
 
 
 class SonarConfig(Config):
-    """The sonar equation of the modems' link (defaults: a mid-frequency acoustic modem of the
-    WHOI Micro-Modem class; ``enabled = False``: no packet is lost to it)."""
+    """The sonar equation of the modems' link (``enabled = False``, the default: no packet is
+    lost to it).
+
+    The defaults are a mid-frequency modem of the WHOI Micro-Modem class (Freitag et al., "The
+    WHOI Micro-Modem: an acoustic communications and navigation system for multiple platforms",
+    OCEANS 2005: a 25 kHz carrier, 5 kHz band, source level about 185 dB re 1 uPa at 1 m), a
+    10 dB detection threshold, practical spreading and moderate shipping and wind.
+    """
 
     enabled: bool = Field(False, description="lose packets by the sonar equation")
     source_level_db: float = Field(185.0, description="source level, dB re 1 uPa at 1 m")
