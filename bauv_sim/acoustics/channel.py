@@ -1,5 +1,6 @@
 """The acoustic network's channel: the TDMA schedule, the reception time of a moving receiver,
-the arrivals that meet at a receiver and the draws of what a vehicle receives (see
+the arrivals that meet at a receiver, the draws of what a vehicle receives and the payload of a
+range (see
 :mod:`bauv_sim.acoustics.network`, whose module docstring states the model; the batched network,
 its online device and the modem's one-way option use these)."""
 
@@ -7,6 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,6 +22,7 @@ from nav.acoustics import Propagation
 
 if TYPE_CHECKING:
     from bauv_sim.acoustics.network import AcousticNetworkConfig
+    from bauv_sim.sensors.online import Broadcast
 
 Array = NDArray[np.float64]
 
@@ -228,3 +231,32 @@ class ReceiverDraws:
         if self._packet is None:
             return p >= 1.0
         return self._packet.draw("random", snr.shape[1]) < p
+
+
+@dataclass(frozen=True)
+class AcousticRange:
+    """The payload of an acoustic range (:class:`AcousticNetworkDevice`).
+
+    Attributes:
+        sender: the transmitting vehicle's name.
+        receiver: the receiving vehicle's name (the device's own).
+        tx_local_s: scheduled transmit time by the sender's clock, s.
+        rx_local_s: the receiver's timestamp of the arrival, by its clock, s.
+        travel_time_s: measured travel time ``rx_local_s - tx_local_s``, s.
+        range_m: ``nominal_sound_speed_m_s * travel_time_s``, m.
+        snr_db: the sonar equation's SNR at the true range, dB.
+        kind: ``"owtt"`` or ``"twtt"`` (then ``travel_time_s`` is the round trip less the
+            responder's turnaround, halved, and ``sender`` the responder).
+        broadcast: what the sender stated about itself at its transmit tick (its position,
+            covariance and clock estimate), or ``None`` when it broadcasts nothing.
+    """
+
+    sender: str
+    receiver: str
+    tx_local_s: float
+    rx_local_s: float
+    travel_time_s: float
+    range_m: float
+    snr_db: float
+    kind: str
+    broadcast: Broadcast | None = None

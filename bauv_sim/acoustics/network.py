@@ -80,7 +80,8 @@ numbers do not depend on the other receivers, and the online device
 (:class:`AcousticNetworkDevice`), which receives the same events one by one, draws the same numbers.
 
 :class:`AcousticNetwork` is the batched form (positions on a time grid, any number of runs);
-:class:`AcousticNetworkDevice` the online device of a receiver's rig (OWTT).
+:class:`AcousticNetworkDevice` the online device of a receiver's rig (OWTT; TWTT through
+:class:`bauv_sim.acoustics.twtt_online.TwttListener`).
 """
 
 from __future__ import annotations
@@ -94,6 +95,7 @@ from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from bauv_sim.acoustics.channel import (
+    AcousticRange,
     ReceiverDraws,
     interpolate_positions,
     neighbour_gaps,
@@ -103,6 +105,7 @@ from bauv_sim.acoustics.channel import (
 )
 from bauv_sim.acoustics.clock import ClockConfig, draw_clocks
 from bauv_sim.acoustics.sonar import SonarConfig, snr_db
+from bauv_sim.acoustics.twtt_online import TwttListener
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 from bauv_sim.frames import R_from_quat_wxyz
@@ -506,34 +509,6 @@ class AcousticNetwork:
 # The online device
 
 
-@dataclass(frozen=True)
-class AcousticRange:
-    """The payload of an acoustic range (:class:`AcousticNetworkDevice`).
-
-    Attributes:
-        sender: the transmitting vehicle's name.
-        receiver: the receiving vehicle's name (the device's own).
-        tx_local_s: scheduled transmit time by the sender's clock, s.
-        rx_local_s: the receiver's timestamp of the arrival, by its clock, s.
-        travel_time_s: measured travel time ``rx_local_s - tx_local_s``, s.
-        range_m: ``nominal_sound_speed_m_s * travel_time_s``, m.
-        snr_db: the sonar equation's SNR at the true range, dB.
-        kind: ``"owtt"``.
-        broadcast: what the sender stated about itself at its transmit tick (its position,
-            covariance and clock estimate), or ``None`` when it broadcasts nothing.
-    """
-
-    sender: str
-    receiver: str
-    tx_local_s: float
-    rx_local_s: float
-    travel_time_s: float
-    range_m: float
-    snr_db: float
-    kind: str
-    broadcast: Broadcast | None = None
-
-
 @dataclass
 class _Arrival:
     """A transmission heard by the device, waiting until its collisions are known."""
@@ -551,7 +526,7 @@ class _Arrival:
 
 @register_device(AcousticNetworkConfig)
 class AcousticNetworkDevice:
-    """The acoustic network as a receiver's rig hears it (event; OWTT; module docstring).
+    """The acoustic network as a receiver's rig hears it (event; module docstring).
 
     Per-vehicle settings from the mission (``DeviceBuild.extra``): ``vehicles`` (the team's
     names in the scene's order, the schedule's; default the scene's vehicles) and ``me`` (this
@@ -570,9 +545,14 @@ class AcousticNetworkDevice:
     valid at the reception, arriving ``processing_delay_s`` later, value ``(range_m,)``, payload
     :class:`AcousticRange`.
 
+    With ``ranging = "twtt"`` the ranges are this vehicle's, as interrogator, to every
+    responder: the pings of every interrogator are followed at every responder
+    (:class:`~bauv_sim.acoustics.twtt_online.TwttListener`) so that the replies that exist, and
+    the responders' draws, are the batched class's.
+
     Raises:
-        ConfigError: for two-way ranging (the online device ranges one way), a vehicle not in
-            ``vehicles``, or a schedule that does not fit (:func:`slot_senders`).
+        ConfigError: for a vehicle not in ``vehicles``, or a schedule that does not fit
+            (:func:`slot_senders`).
     """
 
     kind = "event"
@@ -581,11 +561,6 @@ class AcousticNetworkDevice:
     def __init__(self, cfg: AcousticNetworkConfig, build: DeviceBuild):
         self.cfg = cfg
         self.name = build.name
-        if cfg.ranging != "owtt":
-            raise ConfigError(
-                f"sensors.{self.name}.ranging = {cfg.ranging!r}: the online device ranges one "
-                "way ('owtt'); two-way ranging is the batched AcousticNetwork's"
-            )
         names = build.extra.get("vehicles")
         self.vehicles = tuple(names if names is not None else build.physics.vehicle_names())
         me = str(build.extra.get("me", build.vehicle))
@@ -614,6 +589,13 @@ class AcousticNetworkDevice:
             self.arms = dict.fromkeys(self.vehicles, arm)
         self.lever_arm_body_m = self.arms[me]
         self.tick_s = build.tick_s
+        self._twtt = None
+        if cfg.ranging == "twtt":
+            pings = [
+                ReceiverDraws(cfg, self.clocks[k], build.seed, runs, v, "ping")
+                for k, v in enumerate(self.vehicles)
+            ]
+            self._twtt = TwttListener(cfg, self.clocks, self._recv, pings, self.propagation, self.i)
         self._cycle = 0
         self._upcoming: list[tuple[int, float, float]] = []  # (sender, local T, true t_tx)
         self._own: list[float] = []  # own true transmit times
@@ -709,11 +691,73 @@ class AcousticNetworkDevice:
             )
         )
 
+    def _movers(self, ctx: TickContext) -> tuple[list, list]:
+        """Each vehicle's transducer extrapolated from this tick by its velocity (``None`` if
+        not in the scene), and each one's broadcast."""
+        movers, bcs = [], []
+        for name in self.vehicles:
+            if name == self.me:
+                vt, bc = ctx.truth, None
+            else:
+                peer = ctx.peers.get(name)
+                vt, bc = (None, None) if peer is None else (peer.truth, peer.broadcast)
+            if vt is None:
+                movers.append(None)
+            else:
+                p0, v0, t0 = self._transducer(vt, name), vt.velocity_world_m_s, ctx.t_s
+                movers.append(lambda tt, p0=p0, v0=v0, t0=t0: p0 + v0 * (tt - t0)[..., None])
+            bcs.append(bc)
+        return movers, bcs
+
+    def _step_twtt(self, ctx: TickContext, horizon: float) -> None:
+        """TWTT: pass this tick's pings to the listener, and turn its resolved events into
+        measurements."""
+        later, movers = [], None
+        for j, T, t_tx in self._upcoming:
+            if t_tx < horizon:
+                if movers is None:
+                    movers, bcs = self._movers(ctx)
+                self._twtt.ping(j, T, t_tx, movers, bcs)
+            else:
+                later.append((j, T, t_tx))
+        self._upcoming = later
+        cfg = self.cfg
+        keep = ctx.t_s - 2 * cfg.horizon_s(len(self.vehicles)) - 4 * cfg.packet_s - self.tick_s
+        c = cfg.nominal_sound_speed_m_s
+        for e in self._twtt.resolve(horizon, keep):
+            if not e.produced:
+                continue
+            travel = (e.rx_local_s - e.tx_local_s - e.turnaround_s) / 2
+            payload = AcousticRange(
+                self.vehicles[e.responder],
+                self.me,
+                e.tx_local_s,
+                e.rx_local_s,
+                travel,
+                c * travel,
+                e.snr_db,
+                "twtt",
+                e.broadcast,
+            )
+            self._ready.append(
+                Measurement(
+                    self.name,
+                    e.t3_s,
+                    e.t3_s + cfg.processing_delay_s,
+                    np.array([c * travel]),
+                    ctx.measured_attitude_rad,
+                    payload,
+                )
+            )
+
     def step(self, ctx: TickContext) -> Measurement | None:
         """Hear the transmissions of this tick, resolve the arrivals whose neighbours are known,
         and hand over the oldest range ready (``None`` if none)."""
         horizon = ctx.t_s + self.tick_s
         self._extend_schedule(horizon)
+        if self._twtt is not None:
+            self._step_twtt(ctx, horizon)
+            return self._ready.pop(0) if self._ready else None
         later = []
         for j, T, t_tx in self._upcoming:
             if t_tx < horizon:

@@ -391,14 +391,50 @@ def test_online_device_gives_the_batched_numbers_on_the_same_truth(propagation):
     assert lost_some  # the sonar's draws were exercised
 
 
-def test_online_device_refuses_two_way_ranging():
-    from bauv_sim.acoustics.network import AcousticNetworkDevice
-    from bauv_sim.sensors.online import DeviceBuild
-
-    cfg = AcousticNetworkConfig(ranging="twtt", transducer_body_m=(0.1, 0.0, 0.0))
-    build = DeviceBuild("net", "net", 1, 0, 0.1, None, None, "f1", {"vehicles": NAMES})
-    with pytest.raises(ConfigError, match="ranging"):
-        AcousticNetworkDevice(cfg, build)
+@pytest.mark.parametrize("stagger", [0.0, 0.3])
+def test_online_twtt_gives_the_batched_numbers_on_the_same_truth(stagger):
+    clocks = {
+        "leader": ClockConfig(offset_s=0.01, jitter_s=1e-4),
+        "f1": ClockConfig(offset_s=-0.02, drift_ppm=3.0, jitter_s=1e-4),
+        "f2": ClockConfig(offset_sigma_s=0.01, drift_sigma_ppm=2.0, jitter_s=1e-4),
+    }
+    sonar = {"enabled": True, "source_level_db": 128.0, "fading_sigma_db": 4.0}
+    cfg = load_config(
+        AcousticNetworkConfig,
+        base={
+            "ranging": "twtt",
+            "clocks": clocks,
+            "sonar": sonar,
+            "travel_time_sigma_s": 2e-4,
+            "period_s": 9.0,
+            "slot_s": 3.0,
+            "reply_stagger_s": stagger,
+            "transducer_body_m": [0.2, 0.0, -0.1],
+        },
+    )
+    arm = np.array([0.2, 0.0, -0.1])
+    batched = AcousticNetwork(cfg, NAMES, 9, (0, 2)).exchange(
+        T_GRID, line_positions(START + arm, VEL)
+    )
+    online = _fly_devices(cfg)
+    counts = np.bincount(batched.lost[1], minlength=5)
+    assert counts[LOST_OK] > 10 and counts[LOST_SONAR] > 0
+    if stagger == 0.0:
+        assert counts[LOST_COLLISION] > 0  # replies arriving together
+    for i, me in enumerate(NAMES):
+        e = np.flatnonzero((batched.receiver == i) & batched.produced[1])
+        ms = [m for m in online[me] if m.payload.tx_local_s <= batched.tx_local_s[1].max()]
+        assert len(ms) == e.size > 3
+        order = np.argsort(batched.t_rx_s[1, e], kind="stable")  # the device emits by arrival
+        for m, ev in zip(sorted(ms, key=lambda m: m.t_valid_s), e[order], strict=True):
+            p = m.payload
+            assert p.kind == "twtt" and p.receiver == me
+            assert p.sender == NAMES[batched.sender[ev]]
+            assert p.tx_local_s == batched.tx_local_s[1, ev]
+            assert p.rx_local_s == pytest.approx(batched.rx_local_s[1, ev], abs=1e-9)
+            assert m.value[0] == pytest.approx(batched.range_m[1, ev], abs=1e-6)
+            assert p.snr_db == pytest.approx(batched.snr_db[1, ev], abs=1e-9)
+            assert m.t_valid_s == pytest.approx(batched.t_rx_s[1, ev], abs=1e-9)
 
 
 def test_online_device_in_a_rig_ranges_between_the_model_sites_with_the_clock_bias():
