@@ -391,8 +391,11 @@ def test_online_device_gives_the_batched_numbers_on_the_same_truth(propagation):
     assert lost_some  # the sonar's draws were exercised
 
 
-@pytest.mark.parametrize("stagger", [0.0, 0.3])
-def test_online_twtt_gives_the_batched_numbers_on_the_same_truth(stagger):
+CROWDED = {"period_s": 3.0, "slot_s": 0.25, "turnaround_s": 0.1, "packet_s": 0.1}
+
+
+@pytest.mark.parametrize("schedule", [{"reply_stagger_s": 0.0}, {"reply_stagger_s": 0.3}, CROWDED])
+def test_online_twtt_gives_the_batched_numbers_on_the_same_truth(schedule):
     clocks = {
         "leader": ClockConfig(offset_s=0.01, jitter_s=1e-4),
         "f1": ClockConfig(offset_s=-0.02, drift_ppm=3.0, jitter_s=1e-4),
@@ -408,8 +411,8 @@ def test_online_twtt_gives_the_batched_numbers_on_the_same_truth(stagger):
             "travel_time_sigma_s": 2e-4,
             "period_s": 9.0,
             "slot_s": 3.0,
-            "reply_stagger_s": stagger,
             "transducer_body_m": [0.2, 0.0, -0.1],
+            **schedule,
         },
     )
     arm = np.array([0.2, 0.0, -0.1])
@@ -419,8 +422,10 @@ def test_online_twtt_gives_the_batched_numbers_on_the_same_truth(stagger):
     online = _fly_devices(cfg)
     counts = np.bincount(batched.lost[1], minlength=5)
     assert counts[LOST_OK] > 10 and counts[LOST_SONAR] > 0
-    if stagger == 0.0:
+    if schedule.get("reply_stagger_s", 0.0) == 0.0:
         assert counts[LOST_COLLISION] > 0  # replies arriving together
+    if schedule is CROWDED:  # slots shorter than an exchange: replies meet the next pings
+        assert counts[LOST_HALF_DUPLEX] > 0
     for i, me in enumerate(NAMES):
         e = np.flatnonzero((batched.receiver == i) & batched.produced[1])
         ms = [m for m in online[me] if m.payload.tx_local_s <= batched.tx_local_s[1].max()]
