@@ -1045,9 +1045,19 @@ ISSUE24 = [
         "two packets arriving together at a receiver are both decoded",
         tests=("tests/sensors/test_acoustic_network.py",),
     ),
+    Mutation(
+        "twtt-online-own-replies-ignored",
+        "own",
+        "correction",
+        "bauv_sim/acoustics/twtt_online.py",
+        "        own += [o.t2_s for o in self._legs if o.responder == me and o.ok]\n",
+        "",
+        "the online interrogator hears replies while it is itself replying (half-duplex lost)",
+        tests=("tests/sensors/test_acoustic_network.py",),
+    ),
 ]
 """Issue 24 (acoustic channel): the moving receiver's reception time, Thorp's absorption, the
-clock's inverse, collisions."""
+clock's inverse, collisions, the online TWTT's half-duplex."""
 
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
