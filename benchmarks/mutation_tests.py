@@ -1065,6 +1065,60 @@ ISSUE24_RAYS = [
 ]
 """Issue 24, part A: the layered medium's eigenray (distance per layer, arrival sign of a
 turning ray), the USBL source traced back, the devices in a profile."""
+ISSUE24 = [
+    Mutation(
+        "acoustic-receiver-frozen-during-travel",
+        "own",
+        "correction",
+        "bauv_sim/acoustics/channel.py",
+        "        p = receiver_at(t)\n",
+        "        p = receiver_at(t_tx_s)\n",
+        "the reception time solved with the receiver where it was at the transmit instant",
+        tests=("tests/sensors/test_acoustic_network.py",),
+    ),
+    Mutation(
+        "thorp-kiloyard-coefficient",
+        "own",
+        "unit",
+        "bauv_sim/acoustics/sonar.py",
+        "44.0 * f2 / (4100.0 + f2)",
+        "40.0 * f2 / (4100.0 + f2)",
+        "Thorp's dB/kiloyard coefficient used in the dB/km absorption",
+        tests=("tests/sensors/test_acoustic_sonar.py", "tests/sensors/test_acoustic_network.py"),
+    ),
+    Mutation(
+        "clock-offset-sign",
+        "own",
+        "sign",
+        "bauv_sim/acoustics/clock.py",
+        "return (T - _col(self.offset0_s, T)) / (1.0 + _col(self.drift, T))",
+        "return (T + _col(self.offset0_s, T)) / (1.0 + _col(self.drift, T))",
+        "a clock's offset added instead of removed when the sender transmits on its schedule",
+        tests=("tests/sensors/test_acoustic_clock.py", "tests/sensors/test_acoustic_network.py"),
+    ),
+    Mutation(
+        "acoustic-collisions-ignored",
+        "own",
+        "correction",
+        "bauv_sim/acoustics/network.py",
+        "        lost[collided[:, :M]] = LOST_COLLISION\n",
+        "",
+        "two packets arriving together at a receiver are both decoded",
+        tests=("tests/sensors/test_acoustic_network.py",),
+    ),
+    Mutation(
+        "twtt-online-own-replies-ignored",
+        "own",
+        "correction",
+        "bauv_sim/acoustics/twtt_online.py",
+        "        own += [o.t2_s for o in self._legs if o.responder == me and o.ok]\n",
+        "",
+        "the online interrogator hears replies while it is itself replying (half-duplex lost)",
+        tests=("tests/sensors/test_acoustic_network.py",),
+    ),
+]
+"""Issue 24 (acoustic channel): the moving receiver's reception time, Thorp's absorption, the
+clock's inverse, collisions, the online TWTT's half-duplex."""
 
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
@@ -1075,6 +1129,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_CORE,
     *ISSUE23,
     *ISSUE24_RAYS,
+    *ISSUE24,
 ]
 
 _IGNORE = shutil.ignore_patterns(

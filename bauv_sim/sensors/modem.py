@@ -48,6 +48,8 @@ from numpy.typing import NDArray
 from pydantic import Field, field_validator
 
 from bauv_sim import rng as rng_mod
+from bauv_sim.acoustics.channel import reception_time
+from bauv_sim.acoustics.clock import ClockConfig, draw_clocks
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 from bauv_sim.frames import R_from_quat_wxyz
@@ -62,7 +64,7 @@ from bauv_sim.sensors.online import (
     register_device,
 )
 from bauv_sim.truth import Truth
-from nav.acoustics import Propagation
+from nav.acoustics import Isovelocity, Propagation
 
 Array = NDArray[np.float64]
 
@@ -109,6 +111,16 @@ class ModemConfig(Config):
         description="the sender sends its navigator's estimate, or its true state (seed 003)",
     )
     send_covariance: bool = Field(True, description="send the sender's stated covariance")
+    ranging: Literal["instant", "owtt"] = Field(
+        "instant",
+        description="'instant': the distance between the transducers at the slot's tick (seed "
+        "003); 'owtt': one-way travel time, the sender transmitting at the slot by its clock "
+        "and the receiver timing the arrival by its own (ModemDevice)",
+    )
+    clocks: dict[str, ClockConfig] = Field(
+        default_factory=dict,
+        description="'owtt': the vehicles' clocks by name (unlisted: a perfect clock)",
+    )
 
     @field_validator("outages_s")
     @classmethod
@@ -292,8 +304,20 @@ class ModemDevice:
     Per-vehicle settings come from the mission through ``DeviceBuild.extra``: ``sender`` (the
     sending vehicle's name, default ``"leader"``), ``slot`` and ``slots`` (default 0 of 1).
 
-    Value: the measured slant range between the transducers, shape (1,), m. Payload: a
-    :class:`~bauv_sim.sensors.online.Broadcast`.
+    Value: the measured slant range between the transducers, shape (1,), m (with the sea's
+    medium, ``DeviceBuild.propagation``: the nominal speed times the eigenray's travel time, as
+    the batched :class:`Modem`). Payload: a :class:`~bauv_sim.sensors.online.Broadcast`.
+
+    With ``ranging = "owtt"`` the range is a one-way travel time, as on the acoustic network
+    (:mod:`bauv_sim.acoustics.network`): the sender transmits when its clock reads the slot's
+    time ``T`` (true ``t_tx``, its transducer moved from the tick by its velocity), the sound
+    reaches the receiver at ``t_rx`` (the fixed point of
+    :func:`bauv_sim.acoustics.channel.reception_time` through the sea's medium,
+    ``DeviceBuild.propagation``, or isovelocity at ``sound_speed_m_s``; the receiver moved by its
+    velocity), which stamps it by its clock: the range ``sound_speed_m_s * (local(t_rx) - T)``
+    then takes the error model and the limits (``max_range_m`` on that range); valid at
+    ``t_rx``, arriving ``processing_delay_s`` later. Clocks from ``clocks``, drawn from the
+    vehicles' streams ``("clock", <name>)``.
 
     Raises:
         ConfigError: if the sender is not in the scene, the slot is out of range, or the slots do
@@ -326,7 +350,25 @@ class ModemDevice:
             if configured == (0.0, 0.0, 0.0)
             else self.lever_arm_body_m
         )
-        self._modem = Modem(cfg, build.seed, (build.run,), build.stream)
+        self._modem = Modem(cfg, build.seed, (build.run,), build.stream, build.propagation)
+        if cfg.ranging == "owtt":
+            names = build.physics.vehicle_names()
+            for name in cfg.clocks:
+                if name not in names:
+                    raise ConfigError(
+                        f"sensors.{self.name}.clocks: {name!r} is not a vehicle of the scene "
+                        f"(vehicles: {', '.join(names)})"
+                    )
+            runs = (build.run,)
+            self._clock_rx, self._clock_tx = (
+                draw_clocks(cfg.clocks.get(v, ClockConfig()), build.seed, runs, v)
+                for v in (build.vehicle, self.sender)
+            )
+            self._medium = (
+                build.propagation
+                if build.propagation is not None
+                else Isovelocity(cfg.sound_speed_m_s)
+            )
 
     def due(self, k: int) -> bool:
         """Whether tick ``k`` is one of this receiver's slots."""
@@ -342,8 +384,17 @@ class ModemDevice:
         me, other = ctx.truth, peer.truth
         p_me = me.position_world_m + R_from_quat_wxyz(me.quat_wxyz) @ self.lever_arm_body_m
         p_other = other.position_world_m + R_from_quat_wxyz(other.quat_wxyz) @ self.sender_arm
-        true_r = math.dist(p_me, p_other)
-        meas, produced, t_arr = self._modem.measure(np.array([[true_r]]), ctx.tt)
+        if self.cfg.ranging == "owtt":
+            meas, produced, t_valid, t_arrival = self._one_way(ctx, p_me, p_other, peer)
+        else:
+            true_r = math.dist(p_me, p_other)
+            travel = None
+            if self._modem.propagation is not None:
+                # the range a modem reports: the nominal speed times the eigenray's travel time
+                travel = self._modem.propagation.eigenray(p_other, p_me).travel_time_s
+                travel = np.array([[float(travel)]])
+            meas, produced, t_arr = self._modem.measure(np.array([[true_r]]), ctx.tt, travel)
+            t_valid, t_arrival = ctx.t_s, float(t_arr[0, 0])
         if not produced[0, 0]:
             return None
         if self.cfg.broadcast == "truth":
@@ -364,9 +415,28 @@ class ModemDevice:
                 payload = dataclasses.replace(payload, covariance_m2=None)
         return Measurement(
             self.name,
-            ctx.t_s,
-            float(t_arr[0, 0]),
+            t_valid,
+            t_arrival,
             meas[0],
             ctx.measured_attitude_rad,
             payload,
         )
+
+    def _one_way(self, ctx: TickContext, p_me, p_other, peer) -> tuple:
+        """The one-way range of this slot (class docstring): ``(range (1, 1), produced (1, 1),
+        t_valid_s, t_arrival_s)``."""
+        T = ctx.t_s
+        t_tx = float(self._clock_tx.true_of_local(np.array([T]))[0])
+        p_src = p_other + peer.truth.velocity_world_m_s * (t_tx - T)
+        v_me = ctx.truth.velocity_world_m_s
+        t_rx, _ = reception_time(
+            self._medium,
+            p_src[None],
+            np.array([t_tx]),
+            lambda tt: p_me + v_me * (tt - T)[..., None],
+        )
+        t_rx_s = float(t_rx[0])
+        local = float(self._clock_rx.local(np.array([t_rx_s]))[0])
+        r = self.cfg.sound_speed_m_s * (local - T)
+        meas, produced, _ = self._modem.measure(np.array([[r]]), ctx.tt)
+        return meas, produced, t_rx_s, t_rx_s + self.cfg.processing_delay_s
