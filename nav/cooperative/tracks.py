@@ -218,8 +218,8 @@ class _DrNoise:
         a = np.clip(np.searchsorted(t, lo, side="right") - 1, 0, k - 2)
         b = np.clip(np.searchsorted(t, hi, side="right") - 1, 0, k - 2)
         dt = np.diff(t)
-        acc = self.acc[self.rows, vehicle]
-        step = self.step[self.rows, vehicle]
+        acc = self.acc[:, vehicle]
+        step = self.step[:, vehicle]
         frac_a = np.clip((lo - t[a]) / dt[a], 0.0, 1.0)
         frac_b = np.clip((hi - t[b]) / dt[b], 0.0, 1.0)
         rows = self.rows
