@@ -92,3 +92,31 @@ def test_options_refuse_bad_values_with_the_field_named():
         from nav.cooperative import ClockOptions
 
         CoopOptions(clock=ClockOptions(estimate_drift=False))
+
+
+_PER_RUN = (
+    "dr_step_m",
+    "dr_step_cov_m2",
+    "depth_m",
+    "start_m",
+    "start_cov_m2",
+    "fix_m",
+    "fix_cov_m2",
+    "fix_present",
+    "range_m",
+    "range_tx_local_s",
+    "range_rx_local_s",
+    "range_present",
+)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_run_has_the_same_numbers_whatever_its_batch(lossy, method):
+    # fixes lost at random too, so that the runs' stated covariances differ
+    _, rec = lossy
+    rng = np.random.default_rng(23)
+    rec = _with(rec, fix_present=rng.uniform(size=rec.fix_present.shape) > 0.4)
+    full = team_tracks(rec, method)
+    part = team_tracks(_with(rec, **{f: getattr(rec, f)[7:12] for f in _PER_RUN}), method)
+    for name in ("position_m", "cov_m2", "clock_offset_s", "ranges_used"):
+        assert np.array_equal(getattr(full, name)[7:12], getattr(part, name)), name
