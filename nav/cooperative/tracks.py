@@ -23,7 +23,14 @@ state moved back by its DR velocity over ``t_q - t_rx`` and the sender's at the 
 state moved back by its DR displacement since ``t_tx`` (centralised), or its broadcast made at
 the transmission (decentralised: the sender's estimate at the sample at or before the
 transmission, moved ahead by its velocity). True instants come from the stamps with the filter's
-clock estimates, ``t = local - b`` (a filter without clocks takes ``b = 0``).
+clock estimates, ``t = local - b`` (a filter without clocks takes ``b = 0``). The dead
+reckoning's noise over those lags (in the state, not in the range) is added to the range's
+variance (``extra_var_m2`` of the range models). With ``CoopOptions.relay`` a vehicle's broadcast
+carries the one-way ranges it received since its last transmission, each with its estimate at
+the reception, and the original sender fuses them too (:mod:`nav.cooperative.decentralised`).
+
+Every method is batched over the runs and gives a run the same numbers whatever the other runs
+of its batch (seed 003's EKF takes scalar sigmas: the runs are grouped by their own values).
 """
 
 from __future__ import annotations
