@@ -377,6 +377,11 @@ class CoopNavigator:
             own_scale, peer_scale = 1.0 / w, 1.0 / (1.0 - w)
         Pj = np.zeros((n, s + 3, s + 3))
         Pj[:, :s, :s] = self.P * own_scale[:, None, None]
+        if kind == "twtt":
+            # clocks that play no part in the range and are uncorrelated with the position (two-way
+            # ranges only) are independent of the update: left out of CI's bound, not widened
+            apart = np.all(self.P[:, :2, 2:] == 0, axis=(1, 2))
+            Pj[apart, 2:s, 2:s] = self.P[apart, 2:, 2:]
         Pj[:, s:, s:] = peer.cov_m2 * peer_scale[:, None, None]
         xj, Pj, info = ekf.update_with(xj, Pj, model, z, pres, self.gate_probability)
         used = info.applied
