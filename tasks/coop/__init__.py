@@ -1,0 +1,1 @@
+"""Cooperative navigation of a team on kinematic truth (issue 24)."""
