@@ -1004,6 +1004,40 @@ ISSUE23 = [
 """Issue 23: the DVL device's lock and mounting, the DVL measurement model, the TRN likelihood,
 bound and particle covariance."""
 
+ISSUE24_COOP_KINEMATIC = [
+    Mutation(
+        "team-second-turn-wrong-side",
+        "own",
+        "sign",
+        "bauv_sim/kinematic/team.py",
+        "    c2 = p2 - L * fwd - R * side  # centre of the second turn\n",
+        "    c2 = p2 - L * fwd + R * side  # centre of the second turn\n",
+        "the racetrack's second half circle turns about a centre on the wrong side",
+        ("tests/bauv_sim/test_kinematic_team.py",),
+    ),
+    Mutation(
+        "team-current-not-removed",
+        "own",
+        "correction",
+        "bauv_sim/kinematic/team.py",
+        "    vw = vg - cur\n",
+        "    vw = vg\n",
+        "the team's velocity through the water forgets the current (logs see ground speed)",
+        ("tests/bauv_sim/test_kinematic_team.py", "tests/tasks/test_coop.py"),
+    ),
+    Mutation(
+        "coop-range-applied-before-reception",
+        "own",
+        "default",
+        "tasks/coop/run.py",
+        "    rx = np.ceil(ranges.t_rx_s.max(axis=0, initial=-math.inf) / dt - 1e-9)",
+        "    rx = np.floor(ranges.t_rx_s.max(axis=0, initial=-math.inf) / dt - 1e-9)",
+        "the kinematic team applies a range at the sample before it was received",
+        ("tests/tasks/test_coop.py",),
+    ),
+]
+"""Issue 24, the kinematic team: its truth's geometry and current, and the adapter's ticks."""
+
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
     *OWN,
@@ -1012,6 +1046,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_SEED004,
     *ISSUE22_CORE,
     *ISSUE23,
+    *ISSUE24_COOP_KINEMATIC,
 ]
 
 _IGNORE = shutil.ignore_patterns(

@@ -9,7 +9,6 @@ vehicles, and a sensitivity setting that changes only the acoustics keeps every 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +18,7 @@ from bauv_sim.errors import ConfigError
 from bauv_sim.kinematic.team import TeamTruth
 from bauv_sim.sensors import Compass, ErrorProcess, LengthErrorConfig, Log, Pressure, Usbl
 from bauv_sim.sensors.base import periodic_indices
+from nav.acoustics import Propagation
 from nav.models import UsblMeasurement
 from nav.relative.motion import dr_increment, dr_increment_covariance
 from tasks.coop.scenario import CoopScenario
@@ -78,7 +78,8 @@ def own_measurements(
     scn: CoopScenario, truth: TeamTruth, seed: int, runs: tuple[int, ...]
 ) -> OwnMeasurements:
     """Sample every vehicle's compass, log and pressure sensor, the leader's GPS start and USBL
-    fixes, and the followers' starts, for some runs (module docstring).
+    fixes (through the scenario's ``sound``), and the followers' starts, for some runs (module
+    docstring).
 
     Returns:
         The measurements, as the filters receive them.
@@ -118,23 +119,7 @@ def own_measurements(
             true0 = np.broadcast_to(tr.pos_world_m[:, 0, axis], (n, 1))
             start[:, i, axis] = proc.apply(np.ascontiguousarray(true0), tr.t_s[:1])[0][:, 0]
         start_cov[:, i] = sigma**2 * np.eye(2)
-    u = s.usbl
-    every = round(u.period_s / dt)
-    fix_tick = periodic_indices(k, every)
-    transceiver = np.asarray(s.usbl_transceiver_m, float)
-    sam = Usbl(u, transceiver, seed, runs, f"{truth.names[0]}/usbl").sample(
-        truth.vehicles[0], fix_tick
-    )
-    model = UsblMeasurement(
-        transceiver,
-        u.range.to_model().noise_std,
-        u.azimuth.to_model().noise_std,
-        u.elevation.to_model().noise_std,
-    )
-    fix = model.invert(sam.values)[..., :2]
-    fix_cov = model.fix_covariance(sam.values)[..., :2, :2]
-    if not math.isfinite(float(np.abs(fix).max(initial=0.0))):
-        raise ConfigError("sensors.usbl: a fix is not finite")
+    fix_tick, fix, fix_cov, present = usbl_fixes(scn, truth, seed, runs, scn.sound.propagation())
     return OwnMeasurements(
         dr_step_m=dr,
         dr_step_cov_m2=dr_cov,
@@ -144,5 +129,43 @@ def own_measurements(
         fix_tick=fix_tick,
         fix_m=fix,
         fix_cov_m2=fix_cov,
-        fix_present=sam.produced,
+        fix_present=present,
     )
+
+
+def usbl_fixes(
+    scn: CoopScenario,
+    truth: TeamTruth,
+    seed: int,
+    runs: tuple[int, ...],
+    propagation: Propagation | None,
+) -> tuple[NDArray[np.intp], Array, Array, NDArray[np.bool_]]:
+    """The leader's USBL fixes through the sea's true medium (:class:`bauv_sim.sensors.Usbl`:
+    with a medium, the range is the nominal speed times the travel time and the elevation the
+    bent ray's arrival), turned into horizontal positions along the straight line at the
+    nominal speed with the first-order covariance of the device's stated noise
+    (:meth:`nav.models.UsblMeasurement.invert`, :meth:`~nav.models.UsblMeasurement.
+    fix_covariance`): what a USBL that assumes its nominal speed reports.
+
+    Returns:
+        ``fix_tick (f,)``, ``fix_m (n, f, 2)`` m, ``fix_cov_m2 (n, f, 2, 2)`` m^2, ``present
+        (n, f)``.
+    """
+    s = scn.sensors
+    u = s.usbl
+    every = round(u.period_s / scn.team.tick_s)
+    fix_tick = periodic_indices(len(truth.t_s), every)
+    transceiver = np.asarray(s.usbl_transceiver_m, float)
+    usbl = Usbl(u, transceiver, seed, runs, f"{truth.names[0]}/usbl", propagation=propagation)
+    sam = usbl.sample(truth.vehicles[0], fix_tick)
+    model = UsblMeasurement(
+        transceiver,
+        u.range.to_model().noise_std,
+        u.azimuth.to_model().noise_std,
+        u.elevation.to_model().noise_std,
+    )
+    fix = model.invert(sam.values)[..., :2]
+    fix_cov = model.fix_covariance(sam.values)[..., :2, :2]
+    if not np.isfinite(fix).all():
+        raise ConfigError("sensors.usbl: a fix is not finite (the leader in a shadow zone?)")
+    return fix_tick, fix, fix_cov, sam.produced

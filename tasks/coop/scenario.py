@@ -21,10 +21,16 @@ Readings where the issue is silent (documented in the fields):
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field, model_validator
 
+from bauv_sim.acoustics.clock import ClockConfig
+from bauv_sim.acoustics.network import AcousticNetworkConfig
+from bauv_sim.acoustics.sonar import SonarConfig
+from bauv_sim.acoustics.sound import SoundSpeedConfig
 from bauv_sim.config import Config
-from bauv_sim.kinematic.team import TeamConfig
+from bauv_sim.kinematic.team import LEADER, TeamConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
     CompassConfig,
@@ -39,6 +45,21 @@ from bauv_sim.sensors import (
 
 METHODS = ("dr", "ga2", "leader-ekf", "decentralised", "central")
 """Every method of :func:`nav.cooperative.team_tracks`, in the report's order."""
+
+LABELS = {
+    "dr": "DR",
+    "ga2": "GA2",
+    "leader-ekf": "EKF",
+    "decentralised": "decentralised",
+    "central": "central",
+}
+"""Each method's name in tables and figures (the looks declared by :mod:`tasks.coop`)."""
+
+LEADER_ONLY = ("ga2", "leader-ekf")
+"""The methods that position a follower on its ranges to the leader alone (seed 003)."""
+
+CLOCKED = ("decentralised", "central")
+"""The methods with the clock offsets in their state."""
 
 
 class SensorsConfig(Config):
@@ -91,6 +112,19 @@ class SensorsConfig(Config):
     )
 
 
+def _network() -> AcousticNetworkConfig:
+    return AcousticNetworkConfig(
+        period_s=8.0,
+        slot_s=2.0,
+        start_s=2.0,
+        travel_time_sigma_s=1e-4,
+        max_range_m=1000.0,
+        sonar=SonarConfig(fading_sigma_db=3.0),
+        clock=ClockConfig(offset_sigma_s=1e-3, drift_sigma_ppm=1.0, jitter_s=2e-5),
+        clocks={LEADER: ClockConfig(offset_sigma_s=1e-6, drift_sigma_ppm=1e-3, jitter_s=2e-5)},
+    )
+
+
 class FiltersConfig(Config):
     """What the navigation is told beyond the devices' white noise."""
 
@@ -104,6 +138,17 @@ class FiltersConfig(Config):
     correlation_s: float = Field(120.0, gt=0, le=36_000, description="its correlation time, s")
     sigma_range_m: float = Field(
         0.3, gt=0, le=100, description="the ranges' standard deviation the filters assume, m"
+    )
+    clock_offset_sigma_ms: float = Field(
+        1.0, gt=0, le=1e4, description="a follower's initial clock offset, ms, 1 sigma"
+    )
+    clock_drift_sigma_ppm: float = Field(
+        1.0, gt=0, le=1e4, description="a follower's initial clock drift, ppm, 1 sigma"
+    )
+    estimate_drift: bool = Field(True, description="the clock drifts in the state")
+    fusion: Literal["ci", "naive"] = Field(
+        "ci",
+        description="decentralised fusion: covariance intersection, or naive (double counting)",
     )
 
 
@@ -120,6 +165,12 @@ class SweepConfig(Config):
         default_factory=list,
         max_length=20,
         description="the sea's true (isovelocity) sound speed against the nominal 1500 m/s",
+    )
+    sound_profile: list[Literal["munk"]] = Field(
+        default_factory=list,
+        max_length=1,
+        description="the sea's true profile (munk: Munk's 1974 thermocline, 1548.5 m/s at the "
+        "surface) against the nominal 1500 m/s",
     )
     source_level_db: list[float] = Field(
         default_factory=list,
@@ -165,6 +216,16 @@ class CoopScenario(Config):
 
     team: TeamConfig = Field(default_factory=TeamConfig)
     sensors: SensorsConfig = Field(default_factory=SensorsConfig)
+    sound: SoundSpeedConfig = Field(
+        default_factory=SoundSpeedConfig,
+        description="the sea's true sound speed (default: the devices' nominal 1500 m/s)",
+    )
+    network: AcousticNetworkConfig = Field(
+        default_factory=_network,
+        description="OWTT in TDMA slots of 2 s (a cycle of 8 s for the four vehicles), arrival "
+        "noise 0.1 ms, followers' clocks: 1 ms and 1 ppm (TCXO) per run, the leader's "
+        "GPS-disciplined; the sonar equation off",
+    )
     filters: FiltersConfig = Field(default_factory=FiltersConfig)
     methods: list[str] = Field(
         default_factory=lambda: list(METHODS),
@@ -200,5 +261,6 @@ class CoopScenario(Config):
         s = self.sweep
         out += [(f"drift {v:g} ppm", "drift_ppm", v) for v in s.drift_ppm]
         out += [(f"sound {v:g} m/s", "sound_speed_m_s", v) for v in s.sound_speed_m_s]
+        out += [(f"sound profile {v}", "sound_profile", None) for v in s.sound_profile]
         out += [(f"source level {v:g} dB", "source_level_db", v) for v in s.source_level_db]
         return out

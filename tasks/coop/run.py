@@ -1,0 +1,185 @@
+"""A block of ``coop/team`` runs: the team's truth, every vehicle's measurements, the acoustic
+network, the :class:`nav.cooperative.TeamRecord` and every method's tracks, reduced.
+
+Per block (its runs batched; each run draws from its own streams, :mod:`bauv_sim.rng`, so the
+numbers of run ``i`` do not depend on its block or worker):
+
+1. the truth (:func:`bauv_sim.kinematic.team.team_truth`), the same for every run;
+2. every vehicle's own measurements (:func:`tasks.coop.measure.own_measurements`): the same in
+   every sensitivity setting (but the leader's USBL fixes in a setting of the sea's sound, which
+   the USBL hears too);
+3. per setting, the acoustic network (:class:`bauv_sim.acoustics.AcousticNetwork`: TDMA
+   broadcasts, every other vehicle receives, clocks, sonar equation, collisions) on the true
+   positions, through the true medium of the setting;
+4. the adapter (:func:`team_record`): ranges and stamps with the sample at or before the
+   transmission and at or after the reception (over every run of the block);
+5. every method (:func:`nav.cooperative.team_tracks`) on that record, the same draws;
+6. per run, vehicle and method: the horizontal error's mean over the samples and its final value,
+   the RMS error of the clock-offset estimate, the ranges used; pooled over the block: the sums of
+   the NEES (2 dof) and of the squared error on the curves' grid.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bauv_sim.acoustics.clock import draw_clocks
+from bauv_sim.acoustics.network import AcousticNetwork, NetworkRanges
+from bauv_sim.errors import ConfigError
+from bauv_sim.kinematic.team import TeamTruth, team_truth
+from nav.cooperative import TeamRecord, team_tracks
+from nav.errors import NavInputError
+from nav.metrics import nees
+from tasks.coop.measure import OwnMeasurements, own_measurements, usbl_fixes
+from tasks.coop.scenario import CoopScenario
+from tasks.coop.setting import coop_options, network_config, propagation
+
+Array = NDArray[np.float64]
+
+LOSS_CAUSES = ("received", "range", "sonar", "collision", "half-duplex")
+"""The network's codes of a lost range (:class:`bauv_sim.acoustics.NetworkRanges`), 0 first."""
+
+
+def team_record(
+    own: OwnMeasurements, ranges: NetworkRanges, t_s: Array, sound_speed_m_s: float, sigma_m: float
+) -> TeamRecord:
+    """The adapter: a block's own measurements and network events -> :class:`TeamRecord`.
+
+    The tick of a range is the sample at or before its transmission (``floor(t_tx / dt)``, the
+    earliest over the runs) and the one at or after its reception (``ceil(t_rx / dt)``, the
+    latest over the runs), so both hold in every run of the block. A range is present where the
+    network produced it.
+    """
+    dt = float(t_s[1] - t_s[0])
+    k = len(t_s)
+    tx = np.floor(ranges.t_tx_s.min(axis=0, initial=math.inf) / dt + 1e-9).astype(np.intp)
+    rx = np.ceil(ranges.t_rx_s.max(axis=0, initial=-math.inf) / dt - 1e-9).astype(np.intp)
+    keep = rx <= k - 1  # a reception after the last sample is never applied
+    tx = np.clip(tx, 0, k - 1)
+    return TeamRecord(
+        t_s=t_s,
+        dr_step_m=own.dr_step_m,
+        dr_step_cov_m2=own.dr_step_cov_m2,
+        depth_m=own.depth_m,
+        start_m=own.start_m,
+        start_cov_m2=own.start_cov_m2,
+        fix_tick=own.fix_tick,
+        fix_vehicle=np.zeros(len(own.fix_tick), np.intp),
+        fix_m=own.fix_m,
+        fix_cov_m2=own.fix_cov_m2,
+        fix_present=own.fix_present,
+        range_sender=np.asarray(ranges.sender, np.intp)[keep],
+        range_receiver=np.asarray(ranges.receiver, np.intp)[keep],
+        range_tx_tick=tx[keep],
+        range_rx_tick=rx[keep],
+        range_m=ranges.range_m[:, keep],
+        range_tx_local_s=ranges.tx_local_s[:, keep],
+        range_rx_local_s=ranges.rx_local_s[:, keep],
+        range_present=ranges.produced[:, keep],
+        kind=ranges.kind,
+        sound_speed_m_s=sound_speed_m_s,
+        sigma_range_m=sigma_m,
+    )
+
+
+def true_offsets(scn: CoopScenario, what: str, value, truth: TeamTruth, seed, runs) -> Array:
+    """Every vehicle's true clock offset on the sample grid, (n, v, k), s: the clocks the
+    network draws (:func:`bauv_sim.acoustics.draw_clocks`, same streams)."""
+    cfg = network_config(scn, what, value)
+    out = np.empty((len(runs), len(truth.names), len(truth.t_s)))
+    for i, name in enumerate(truth.names):
+        clock = draw_clocks(cfg.clock_of(name), seed, runs, name)
+        out[:, i] = clock.offset(truth.t_s[None, :])
+    return out
+
+
+def check(scn: CoopScenario) -> None:
+    """Build the filters' options once (their own validation), so that bad options are refused
+    before a batch starts."""
+    coop_options(scn)
+
+
+def curve_ticks(scn: CoopScenario) -> NDArray[np.intp]:
+    """Sample indices of the error curves against time (every ``report.curve_every_s``)."""
+    every = max(1, round(scn.report.curve_every_s / scn.team.tick_s))
+    return np.arange(0, scn.team.n_ticks, every, dtype=np.intp)
+
+
+def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, Array]:
+    """A block of runs, every setting and method (module docstring).
+
+    Returns:
+        per run (n, S, M, v): ``mean_m``, ``final_m`` horizontal error, m; ``clock_rms_s`` RMS
+        error of the clock-offset estimate over the samples, s (0 for a method without clocks);
+        ``ranges_used``; summed over the block's runs: ``nees_sum`` (S, M, v) over every sample
+        but the start, ``nees_count`` (S, M, v), ``sq_err_sum`` (S, M, v, C) m^2 on the curves'
+        grid; per run (n, S): ``produced``, ``scheduled`` range events; ``lost`` (n, S, 5) by
+        cause (:class:`bauv_sim.acoustics.NetworkRanges`).
+    """
+    truth = team_truth(scn.team)
+    own = own_measurements(scn, truth, seed, runs)
+    n, v, k = len(runs), len(truth.names), len(truth.t_s)
+    settings = scn.settings()
+    methods = scn.methods
+    S, M = len(settings), len(methods)
+    cticks = curve_ticks(scn)
+    out = {
+        "runs": np.asarray(runs, np.int64),
+        "mean_m": np.zeros((n, S, M, v)),
+        "final_m": np.zeros((n, S, M, v)),
+        "clock_rms_s": np.zeros((n, S, M, v)),
+        "ranges_used": np.zeros((n, S, M, v), np.int64),
+        "nees_sum": np.zeros((S, M, v)),
+        "nees_count": np.zeros((S, M, v), np.int64),
+        "nees_t_sum": np.zeros((S, M, v, len(cticks))),
+        "sq_err_sum": np.zeros((S, M, v, len(cticks))),
+        "produced": np.zeros((n, S), np.int64),
+        "scheduled": np.zeros((n, S), np.int64),
+        "lost": np.zeros((n, S, 5), np.int64),
+    }
+    pos = truth.positions_world_m  # (v, 1, k, 3)
+    pos_n = np.broadcast_to(pos, (v, n, k, 3))
+    true_en = pos[:, 0, :, :2]  # (v, k, 2)
+    for s, (_, what, value) in enumerate(settings):
+        cfg = network_config(scn, what, value)
+        medium = propagation(scn, what, value)
+        net = AcousticNetwork(cfg, truth.names, seed, runs, medium)
+        ranges = net.exchange(truth.t_s, pos_n)
+        out["produced"][:, s] = ranges.produced.sum(axis=1)
+        out["scheduled"][:, s] = ranges.produced.shape[1]
+        for code in range(1, 5):
+            out["lost"][:, s, code] = (ranges.lost == code).sum(axis=1)
+        meas = own
+        if what in ("sound_speed_m_s", "sound_profile"):  # the USBL hears the same sea
+            tick, fix, cov, present = usbl_fixes(scn, truth, seed, runs, medium)
+            meas = replace(own, fix_tick=tick, fix_m=fix, fix_cov_m2=cov, fix_present=present)
+        record = team_record(
+            meas, ranges, truth.t_s, cfg.nominal_sound_speed_m_s, scn.filters.sigma_range_m
+        )
+        offsets = true_offsets(scn, what, value, truth, seed, runs)
+        options = coop_options(scn, what, value)
+        for m, method in enumerate(methods):
+            try:
+                tr = team_tracks(record, method, options)
+            except NavInputError as exc:
+                raise ConfigError(f"{method}: {exc}") from None
+            e = tr.position_m - true_en[None]  # (n, v, k, 2)
+            err = np.hypot(e[..., 0], e[..., 1])
+            out["mean_m"][:, s, m] = err[..., 1:].mean(axis=-1)
+            out["final_m"][:, s, m] = err[..., -1]
+            out["sq_err_sum"][s, m] = (err[..., cticks] ** 2).sum(axis=0)
+            nees_k = nees(e, tr.cov_m2)
+            out["nees_t_sum"][s, m] = nees_k[..., cticks].sum(axis=0)
+            nees_k = nees_k[..., 1:]
+            ok = np.isfinite(nees_k)
+            out["nees_sum"][s, m] = np.where(ok, nees_k, 0.0).sum(axis=(0, 2))
+            out["nees_count"][s, m] = ok.sum(axis=(0, 2))
+            if tr.has_clock:
+                c = tr.clock_offset_s - offsets
+                out["clock_rms_s"][:, s, m] = np.sqrt((c**2).mean(axis=-1))
+            out["ranges_used"][:, s, m] = tr.ranges_used
+    return out
