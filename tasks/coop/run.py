@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from bauv_sim.acoustics.clock import draw_clocks
 from bauv_sim.acoustics.network import AcousticNetwork, NetworkRanges
-from bauv_sim.errors import ConfigError
+from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.kinematic.team import TeamTruth, team_truth
 from nav.cooperative import TeamRecord, team_tracks
 from nav.errors import NavInputError
@@ -167,6 +167,13 @@ def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, 
                 tr = team_tracks(record, method, options)
             except NavInputError as exc:
                 raise ConfigError(f"{method}: {exc}") from None
+            bad = ~(np.isfinite(tr.position_m).all(axis=(1, 2, 3)))
+            bad |= ~np.isfinite(tr.cov_m2).all(axis=(1, 2, 3, 4))
+            if bad.any():  # NaN never reaches an output: the block fails, --resume retries it
+                raise BauvSimError(
+                    f"{method}: run {runs[int(np.argmax(bad))]} ({settings[s][0]}) gave a "
+                    "non-finite estimate"
+                )
             e = tr.position_m - true_en[None]  # (n, v, k, 2)
             err = np.hypot(e[..., 0], e[..., 1])
             out["mean_m"][:, s, m] = err[..., 1:].mean(axis=-1)

@@ -247,3 +247,27 @@ def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, setting, pattern
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
     assert not out.exists()
+
+
+def test_a_non_finite_estimate_fails_the_block(monkeypatch):
+    """NaN never reaches an output: a method whose estimate is not finite in one run fails its
+    block, naming the method, the run and the setting (the runner keeps the other blocks)."""
+    import dataclasses
+
+    import tasks.coop.run as coop_run
+    from bauv_sim.errors import BauvSimError
+
+    real = coop_run.team_tracks
+
+    def broken(record, method, options):
+        tr = real(record, method, options)
+        if method != "central":
+            return tr
+        pos = tr.position_m.copy()
+        pos[1, 2, 7] = np.nan
+        return dataclasses.replace(tr, position_m=pos)
+
+    monkeypatch.setattr(coop_run, "team_tracks", broken)
+    scn = load_config(CoopScenario, overrides=["team.duration_s=20"])
+    with pytest.raises(BauvSimError, match=r"central: run 5 \(base\) gave a non-finite"):
+        run_block(scn, 1, (4, 5))
