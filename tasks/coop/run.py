@@ -1,8 +1,12 @@
 """A block of ``coop/team`` runs: the team's truth, every vehicle's measurements, the acoustic
 network, the :class:`nav.cooperative.TeamRecord` and every method's tracks, reduced.
 
-Per block (its runs batched; each run draws from its own streams, :mod:`bauv_sim.rng`, so the
-numbers of run ``i`` do not depend on its block or worker):
+Per block (its runs batched; each run draws from its own streams, :mod:`bauv_sim.rng`, and its
+range ticks come from the scenario alone, so the measurements of run ``i`` do not depend on its
+block or worker; of the methods, seed 003's leader-only range EKF of
+:func:`nav.cooperative.team_tracks` pools the leader's stated sigma and the start sigma over the
+block's runs, which moves a run's track by about 1e-4 m with its block: the block size is the
+scenario's, so the numbers stay the same whatever the workers):
 
 1. the truth (:func:`bauv_sim.kinematic.team.team_truth`), the same for every run;
 2. every vehicle's own measurements (:func:`tasks.coop.measure.own_measurements`): the same in
@@ -12,7 +16,8 @@ numbers of run ``i`` do not depend on its block or worker):
    broadcasts, every other vehicle receives, clocks, sonar equation, collisions) on the true
    positions, through the true medium of the setting;
 4. the adapter (:func:`team_record`): ranges and stamps with the sample at or before the
-   transmission and at or after the reception (over every run of the block);
+   transmission and at or after the reception, from the clock-free instants widened by the
+   clocks' bound (the same ticks for every run, whatever the block);
 5. every method (:func:`nav.cooperative.team_tracks`) on that record, the same draws;
 6. per run, vehicle and method: the horizontal error's mean over the samples and its final value,
    the RMS error of the clock-offset estimate, the ranges used; pooled over the block: the sums of
@@ -21,16 +26,16 @@ numbers of run ``i`` do not depend on its block or worker):
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
-from bauv_sim.acoustics.clock import draw_clocks
-from bauv_sim.acoustics.network import AcousticNetwork, NetworkRanges
+from bauv_sim.acoustics.clock import ClockConfig, draw_clocks
+from bauv_sim.acoustics.network import AcousticNetwork, AcousticNetworkConfig, NetworkRanges
 from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.kinematic.team import TeamTruth, team_truth
+from nav.acoustics import Propagation
 from nav.cooperative import TeamRecord, team_tracks
 from nav.errors import NavInputError
 from nav.metrics import nees
@@ -44,21 +49,72 @@ LOSS_CAUSES = ("received", "range", "sonar", "collision", "half-duplex")
 """The network's codes of a lost range (:class:`bauv_sim.acoustics.NetworkRanges`), 0 first."""
 
 
+GUARD_SIGMAS = 5.0
+"""How many standard deviations of the clocks' per-run spread :func:`clock_guard_s` allows."""
+
+
+def clock_guard_s(
+    cfg: AcousticNetworkConfig, vehicles: tuple[str, ...], duration_s: float
+) -> float:
+    """A bound on how far any vehicle's transmission or stamped reception can be from its clock-free
+    instant over a run, s: the largest ``|offset| + G offset_sigma + (|drift| + G drift_sigma)
+    duration + G (jitter + travel_time_sigma)`` over the vehicles' clocks (``G`` =
+    :data:`GUARD_SIGMAS`). A function of the scenario only."""
+    out = 0.0
+    for name in vehicles:
+        c = cfg.clock_of(name)
+        drift = (abs(c.drift_ppm) + GUARD_SIGMAS * c.drift_sigma_ppm) * 1e-6
+        out = max(
+            out,
+            abs(c.offset_s)
+            + GUARD_SIGMAS * (c.offset_sigma_s + c.jitter_s + cfg.travel_time_sigma_s)
+            + drift * duration_s,
+        )
+    return out
+
+
+def nominal_times(
+    cfg: AcousticNetworkConfig,
+    vehicles: tuple[str, ...],
+    medium: Propagation | None,
+    t_s: Array,
+    positions_world_m: Array,
+) -> tuple[Array, Array]:
+    """The network's events as perfect clocks would time them (no offset, drift, jitter or
+    detection noise; the same schedule, truth and medium): true transmission and reception
+    instants per event, ``(t_tx (m,), t_rx (m,))``, s. The truth is shared by the runs, so these
+    are the same for every run and every block."""
+    quiet = cfg.model_copy(
+        update={"clock": ClockConfig(), "clocks": {}, "travel_time_sigma_s": 0.0}
+    )
+    r = AcousticNetwork(quiet, vehicles, 0, (0,), medium).exchange(t_s, positions_world_m[:, :1])
+    return r.t_tx_s[0], r.t_rx_s[0]
+
+
 def team_record(
-    own: OwnMeasurements, ranges: NetworkRanges, t_s: Array, sound_speed_m_s: float, sigma_m: float
+    own: OwnMeasurements,
+    ranges: NetworkRanges,
+    t_s: Array,
+    nominal_s: tuple[Array, Array],
+    guard_s: float,
+    sigma_m: float,
 ) -> TeamRecord:
     """The adapter: a block's own measurements and network events -> :class:`TeamRecord`.
 
-    The tick of a range is the sample at or before its transmission (``floor(t_tx / dt)``, the
-    earliest over the runs) and the one at or after its reception (``ceil(t_rx / dt)``, the
-    latest over the runs), so both hold in every run of the block. A range is present where the
-    network produced it.
+    A range's ticks are shared by the runs (:class:`nav.cooperative.TeamRecord`), so they come
+    from the clock-free instants of its event (:func:`nominal_times`) widened by the clocks'
+    bound (:func:`clock_guard_s`): the sample at or before ``t_tx - guard`` and the one at or
+    after ``t_rx + guard``. They then bracket the true transmission and reception in every run
+    (but for a clock beyond the bound's sigmas) and never depend on which runs share the block.
+    A range is present where the network produced it; one received after the last sample is
+    left out.
     """
     dt = float(t_s[1] - t_s[0])
     k = len(t_s)
-    tx = np.floor(ranges.t_tx_s.min(axis=0, initial=math.inf) / dt + 1e-9).astype(np.intp)
-    rx = np.ceil(ranges.t_rx_s.max(axis=0, initial=-math.inf) / dt - 1e-9).astype(np.intp)
-    keep = rx <= k - 1  # a reception after the last sample is never applied
+    t_tx, t_rx = nominal_s
+    tx = np.floor((t_tx - guard_s) / dt + 1e-9).astype(np.intp)
+    rx = np.ceil((t_rx + guard_s) / dt - 1e-9).astype(np.intp)
+    keep = rx <= k - 1
     tx = np.clip(tx, 0, k - 1)
     return TeamRecord(
         t_s=t_s,
@@ -81,7 +137,7 @@ def team_record(
         range_rx_local_s=ranges.rx_local_s[:, keep],
         range_present=ranges.produced[:, keep],
         kind=ranges.kind,
-        sound_speed_m_s=sound_speed_m_s,
+        sound_speed_m_s=ranges.sound_speed_m_s,
         sigma_range_m=sigma_m,
     )
 
@@ -157,9 +213,9 @@ def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, 
         if what in ("sound_speed_m_s", "sound_profile"):  # the USBL hears the same sea
             tick, fix, cov, present = usbl_fixes(scn, truth, seed, runs, medium)
             meas = replace(own, fix_tick=tick, fix_m=fix, fix_cov_m2=cov, fix_present=present)
-        record = team_record(
-            meas, ranges, truth.t_s, cfg.nominal_sound_speed_m_s, scn.filters.sigma_range_m
-        )
+        nominal = nominal_times(cfg, truth.names, medium, truth.t_s, pos)
+        guard = clock_guard_s(cfg, truth.names, scn.team.duration_s)
+        record = team_record(meas, ranges, truth.t_s, nominal, guard, scn.filters.sigma_range_m)
         offsets = true_offsets(scn, what, value, truth, seed, runs)
         options = coop_options(scn, what, value)
         for m, method in enumerate(methods):
