@@ -645,6 +645,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "Seed004Experiment",
         "TrnExperiment",
         "TrnReliefExperiment",
+        "CoopExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
