@@ -87,7 +87,7 @@ class CoopMetrics(BaseModel):
 
 
 PER_RUN = ("mean_m", "final_m", "clock_rms_s", "ranges_used", "produced", "scheduled", "lost")
-SUMMED = ("nees_sum", "nees_count", "nees_t_sum", "sq_err_sum")
+SUMMED = ("nees_sum", "nees_count", "nees_t_sum", "nees_t_count", "sq_err_sum")
 
 
 @dataclass(frozen=True)
@@ -105,6 +105,7 @@ class Pooled:
     nees_sum: Array  # (S, M, v)
     nees_count: NDArray[np.int64]
     nees_t_sum: Array  # (S, M, v, C)
+    nees_t_count: NDArray[np.int64]
     sq_err_sum: Array  # (S, M, v, C)
 
     @classmethod
@@ -133,8 +134,9 @@ def vehicle_stats(
     nees = nees_in = None
     if p.nees_count[s, m, i] > 0:
         nees = float(p.nees_sum[s, m, i] / p.nees_count[s, m, i])
-        avg = p.nees_t_sum[s, m, i, 1:] / n
-        nees_in = float(np.mean((avg >= band[0]) & (avg <= band[1])))
+        c = p.nees_t_count[s, m, i, 1:]
+        avg = p.nees_t_sum[s, m, i, 1:][c > 0] / c[c > 0]
+        nees_in = float(np.mean((avg >= band[0]) & (avg <= band[1]))) if avg.size else None
     clock = None
     if has_clock:
         clock = float(np.sqrt(np.mean(p.clock_rms_s[:, s, m, i] ** 2)) * 1e3)

@@ -37,8 +37,8 @@ from bauv_sim.errors import BauvSimError, ConfigError
 from bauv_sim.kinematic.team import TeamTruth, team_truth
 from nav.acoustics import Propagation
 from nav.cooperative import TeamRecord, team_tracks
+from nav.cooperative.metrics import horizontal_errors, position_nees
 from nav.errors import NavInputError
-from nav.metrics import nees
 from tasks.coop.measure import OwnMeasurements, own_measurements, usbl_fixes
 from tasks.coop.scenario import CoopScenario
 from tasks.coop.setting import coop_options, network_config, propagation
@@ -172,9 +172,11 @@ def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, 
         per run (n, S, M, v): ``mean_m``, ``final_m`` horizontal error, m; ``clock_rms_s`` RMS
         error of the clock-offset estimate over the samples, s (0 for a method without clocks);
         ``ranges_used``; summed over the block's runs: ``nees_sum`` (S, M, v) over every sample
-        but the start, ``nees_count`` (S, M, v), ``sq_err_sum`` (S, M, v, C) m^2 on the curves'
-        grid; per run (n, S): ``produced``, ``scheduled`` range events; ``lost`` (n, S, 5) by
-        cause (:class:`bauv_sim.acoustics.NetworkRanges`).
+        but the start and ``nees_count`` (S, M, v) of the samples with a positive-definite
+        covariance (:func:`nav.cooperative.metrics.position_nees`), ``nees_t_sum`` and
+        ``nees_t_count`` (S, M, v, C) on the curves' grid, ``sq_err_sum`` (S, M, v, C) m^2;
+        per run (n, S): ``produced``, ``scheduled`` range events; ``lost`` (n, S, 5) by cause
+        (:class:`bauv_sim.acoustics.network.NetworkRanges`).
     """
     truth = team_truth(scn.team)
     own = own_measurements(scn, truth, seed, runs)
@@ -192,6 +194,7 @@ def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, 
         "nees_sum": np.zeros((S, M, v)),
         "nees_count": np.zeros((S, M, v), np.int64),
         "nees_t_sum": np.zeros((S, M, v, len(cticks))),
+        "nees_t_count": np.zeros((S, M, v, len(cticks)), np.int64),
         "sq_err_sum": np.zeros((S, M, v, len(cticks))),
         "produced": np.zeros((n, S), np.int64),
         "scheduled": np.zeros((n, S), np.int64),
@@ -199,7 +202,7 @@ def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, 
     }
     pos = truth.positions_world_m  # (v, 1, k, 3)
     pos_n = np.broadcast_to(pos, (v, n, k, 3))
-    true_en = pos[:, 0, :, :2]  # (v, k, 2)
+    truth_n = np.broadcast_to(pos[None, :, 0, :, :2], (n, v, k, 2))
     for s, (_, what, value) in enumerate(settings):
         cfg = network_config(scn, what, value)
         medium = propagation(scn, what, value)
@@ -230,17 +233,16 @@ def run_block(scn: CoopScenario, seed: int, runs: tuple[int, ...]) -> dict[str, 
                     f"{method}: run {runs[int(np.argmax(bad))]} ({settings[s][0]}) gave a "
                     "non-finite estimate"
                 )
-            e = tr.position_m - true_en[None]  # (n, v, k, 2)
-            err = np.hypot(e[..., 0], e[..., 1])
+            err = horizontal_errors(tr, truth_n)  # (n, v, k)
             out["mean_m"][:, s, m] = err[..., 1:].mean(axis=-1)
             out["final_m"][:, s, m] = err[..., -1]
             out["sq_err_sum"][s, m] = (err[..., cticks] ** 2).sum(axis=0)
-            nees_k = nees(e, tr.cov_m2)
+            nees_k, ok = position_nees(tr, truth_n)
+            nees_k = np.where(ok, nees_k, 0.0)
             out["nees_t_sum"][s, m] = nees_k[..., cticks].sum(axis=0)
-            nees_k = nees_k[..., 1:]
-            ok = np.isfinite(nees_k)
-            out["nees_sum"][s, m] = np.where(ok, nees_k, 0.0).sum(axis=(0, 2))
-            out["nees_count"][s, m] = ok.sum(axis=(0, 2))
+            out["nees_t_count"][s, m] = ok[..., cticks].sum(axis=0)
+            out["nees_sum"][s, m] = nees_k[..., 1:].sum(axis=(0, 2))
+            out["nees_count"][s, m] = ok[..., 1:].sum(axis=(0, 2))
             if tr.has_clock:
                 c = tr.clock_offset_s - offsets
                 out["clock_rms_s"][:, s, m] = np.sqrt((c**2).mean(axis=-1))
