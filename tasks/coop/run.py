@@ -2,11 +2,8 @@
 network, the :class:`nav.cooperative.TeamRecord` and every method's tracks, reduced.
 
 Per block (its runs batched; each run draws from its own streams, :mod:`bauv_sim.rng`, and its
-range ticks come from the scenario alone, so the measurements of run ``i`` do not depend on its
-block or worker; of the methods, seed 003's leader-only range EKF of
-:func:`nav.cooperative.team_tracks` pools the leader's stated sigma and the start sigma over the
-block's runs, which moves a run's track by about 1e-4 m with its block: the block size is the
-scenario's, so the numbers stay the same whatever the workers):
+range ticks come from the scenario alone, so the numbers of run ``i`` do not depend on its block
+or worker, bit for bit):
 
 1. the truth (:func:`bauv_sim.kinematic.team.team_truth`), the same for every run;
 2. every vehicle's own measurements (:func:`tasks.coop.measure.own_measurements`): the same in

@@ -299,3 +299,12 @@ def test_clock_drift_costs_the_leader_only_methods_not_the_clocked_filters():
     err = b["mean_m"][:, :, :, 1:].mean(axis=(0, 3))  # (settings, methods): followers, runs
     assert err[1, 0] > 3 * err[0, 0], err
     assert err[1, 1] < 1.25 * err[0, 1], err
+
+
+def test_a_runs_numbers_do_not_depend_on_its_block():
+    """Run 7 alone and beside run 6 (a setting with packets lost): every per-run number the
+    same bit for bit, every method."""
+    scn = load_config(CoopScenario, overrides=["team.duration_s=60", "sweep.source_level_db=[115]"])
+    alone, pair = run_block(scn, 1, (7,)), run_block(scn, 1, (6, 7))
+    for key in ("mean_m", "final_m", "clock_rms_s", "ranges_used", "produced", "lost"):
+        np.testing.assert_array_equal(alone[key][0], pair[key][1], err_msg=key)
