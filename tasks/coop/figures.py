@@ -19,9 +19,9 @@ if TYPE_CHECKING:
 Array = NDArray[np.float64]
 
 SWEEPS = {
-    "drift_ppm": ("clock drift", "followers' drift sigma", "ppm"),
-    "sound_speed_m_s": ("sound-speed mismatch", "true speed, nominal 1500 m/s", "m/s"),
-    "source_level_db": ("packet loss", "source level, sonar equation on", "dB re 1 uPa"),
+    "drift_ppm": ("clock drift", "drift sigma", "ppm"),
+    "sound_speed_m_s": ("sound-speed mismatch", "true speed, nominal 1500", "m/s"),
+    "source_level_db": ("packet loss", "source level, sonar equation", "dB re 1 uPa"),
 }
 """Each sensitivity list's panel title, axis label and unit."""
 
