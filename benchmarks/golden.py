@@ -59,6 +59,8 @@ RUNS: dict[str, list[str]] = {
     # issue 23: the DVL and TRN (recorded when they landed)
     "mission_trn": ["mission/trn", "--runs", "2", "--seed", "1"],
     "trn_relief": ["trn/relief", "--runs", "2", "--seed", "1"],
+    # issue 24: the kinematic team (recorded when it landed)
+    "coop_team": ["coop/team", "--runs", "4", "--seed", "1"],
 }
 
 

@@ -1151,9 +1151,40 @@ ISSUE24_COOP = [
         "covariance intersection without its scaled priors: the peer's estimate double counted",
         tests=("tests/nav/test_coop_team.py",),
     ),
+    # part D (coop-kinematic): the kinematic team's truth and the adapter's ticks
+    Mutation(
+        "team-second-turn-wrong-side",
+        "own",
+        "sign",
+        "bauv_sim/kinematic/team.py",
+        "    c2 = p2 - L * fwd - R * side  # centre of the second turn\n",
+        "    c2 = p2 - L * fwd + R * side  # centre of the second turn\n",
+        "the racetrack's second half circle turns about a centre on the wrong side",
+        ("tests/bauv_sim/test_kinematic_team.py",),
+    ),
+    Mutation(
+        "team-current-not-removed",
+        "own",
+        "correction",
+        "bauv_sim/kinematic/team.py",
+        "    vw = vg - cur\n",
+        "    vw = vg\n",
+        "the team's velocity through the water forgets the current (logs see ground speed)",
+        ("tests/bauv_sim/test_kinematic_team.py", "tests/tasks/test_coop.py"),
+    ),
+    Mutation(
+        "coop-range-applied-before-reception",
+        "own",
+        "default",
+        "tasks/coop/run.py",
+        "    rx = np.ceil((t_rx + guard_s) / dt - 1e-9)",
+        "    rx = np.floor((t_rx + guard_s) / dt - 1e-9)",
+        "the kinematic team applies a range at the sample before it was received",
+        ("tests/tasks/test_coop.py",),
+    ),
 ]
 """Issue 24: the cooperative filters (part C): the OWTT clock term, the clock prediction, the CI
-bound."""
+bound; the kinematic team (part D): its truth's geometry and current, the adapter's ticks."""
 
 MUTATIONS: list[Mutation] = [
     *ISSUE21,

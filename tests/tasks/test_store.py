@@ -590,6 +590,13 @@ def test_acoustics_sound_speed_block():
     same(roundtrip(block).value, block)
 
 
+def test_coop_team_block():
+    block = _block("coop/team", (3, 4), "team.duration_s=20")
+    assert block["mean_m"].shape == (2, 1, 5, 4) and block["sq_err_sum"].shape == (1, 5, 4, 5)
+    assert block["lost"].dtype == np.int64 and block["nees_count"].dtype == np.int64
+    same(roundtrip(block).value, block)
+
+
 def test_accuracy_block():
     assert _block("paper-000/accuracy", (0,)) is None
     assert roundtrip(None).value is None
@@ -649,6 +656,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "TrnExperiment",
         "TrnReliefExperiment",
         "SoundSpeedExperiment",
+        "CoopExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
