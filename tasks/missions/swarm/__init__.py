@@ -2,8 +2,11 @@
 one acoustic range every 5 s (Naus & Piskur 2022).
 
 The package: :mod:`~tasks.missions.swarm.scenario` (the scenario and its sections),
-:mod:`~tasks.missions.swarm.parts` (the leader's broadcast, the followers' navigation adapters
-to :class:`nav.navigator.BroadcastRangeNavigator`, station keeping, the mission's design),
+:mod:`~tasks.missions.swarm.leader` (the leader's broadcast),
+:mod:`~tasks.missions.swarm.follower` (a follower's navigation: the adapter of its rig to
+:class:`nav.navigator.BroadcastRangeNavigator`), :mod:`~tasks.missions.swarm.station` (station
+keeping), :mod:`~tasks.missions.swarm.design` (the mission's design: the scene, the vehicles and
+their parts),
 :mod:`~tasks.missions.swarm.run` (one run's flights and metrics) and
 :mod:`~tasks.missions.swarm.report` (tables, figure, recording); this module registers the
 experiment.
@@ -73,14 +76,9 @@ from dataclasses import dataclass
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.core.registry import ReportContext, ReportSummary, register
-from tasks.missions.swarm.parts import (
-    EN,
-    FOLLOWER_COLUMNS,
-    FollowerNavigation,
-    LeaderNavigation,
-    StationGuidance,
-    SwarmMission,
-)
+from tasks.missions.swarm.design import SwarmMission
+from tasks.missions.swarm.follower import EN, FOLLOWER_COLUMNS, FollowerNavigation
+from tasks.missions.swarm.leader import LeaderNavigation
 from tasks.missions.swarm.report import (
     FollowerRow,
     SwarmMetrics,
@@ -116,6 +114,7 @@ from tasks.missions.swarm.scenario import (
     racetrack,
     station_offsets,
 )
+from tasks.missions.swarm.station import StationGuidance
 
 __all__ = [
     "DEFAULT_STATIONS",

@@ -12,7 +12,7 @@ from nav.metrics import first_exceedance
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.world import fly
 from tasks.core import store
-from tasks.missions.swarm.parts import SwarmMission
+from tasks.missions.swarm.design import SwarmMission
 from tasks.missions.swarm.scenario import (
     FOLLOWERS,
     LEADER,

@@ -1,0 +1,52 @@
+"""The leader's part of ``mission/swarm``: the standard EKF and what it broadcasts at every tick
+(:mod:`tasks.missions.swarm`)."""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bauv_sim.frames import R_from_roll_pitch_heading, unit_vector_scalar
+from bauv_sim.sensors.online import Broadcast
+from bauv_sim.sensors.rig import RigTick
+from tasks.closed_loop.navigation import EkfNavigation, NavOutput
+from tasks.missions.swarm.scenario import LEADER
+
+Array = NDArray[np.float64]
+
+
+class LeaderNavigation:
+    """The standard navigation part, and the leader's broadcast at every tick.
+
+    Args:
+        ekf: the standard navigation part.
+        transducer_body_m: the leader's modem transducer, body FLU, m.
+        window_ticks: the broadcast velocity is averaged over this many ticks.
+    """
+
+    def __init__(self, ekf: EkfNavigation, transducer_body_m: Array, window_ticks: int):
+        self.ekf = ekf
+        self.arm = np.asarray(transducer_body_m, dtype=float)
+        self._v: collections.deque[tuple[float, float]] = collections.deque(maxlen=window_ticks)
+
+    def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
+        out = self.ekf.step(tick, initial)
+        e, n = unit_vector_scalar(out.heading_rad)
+        self._v.append((out.speed_m_s * e, out.speed_m_s * n))
+        v = np.mean(self._v, axis=0)
+        if out.current_m_s is not None:
+            v = v + out.current_m_s
+        roll, pitch = out.ins[0], out.ins[1]
+        x = out.estimate.x
+        R = R_from_roll_pitch_heading(roll, pitch, out.heading_rad)
+        cur = None if out.current_m_s is None else np.asarray(out.current_m_s, dtype=float).copy()
+        P = out.estimate.P[:2, :2].copy()
+        b = Broadcast(LEADER, out.t_s, x.copy(), x + R @ self.arm, v, P, cur)
+        return dataclasses.replace(out, broadcast=b)
+
+    def outcome(self) -> dict[str, Any]:
+        return self.ekf.outcome()
