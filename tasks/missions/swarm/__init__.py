@@ -11,7 +11,9 @@ their parts),
 :mod:`~tasks.missions.swarm.report` (tables, figure, recording); this module registers the
 experiment.
 
-One sea, one MuJoCo model, up to five vehicles namespaced ``leader``, ``f1`` .. ``f4``:
+One sea, one MuJoCo model, a leader and up to 12 followers namespaced ``leader``, ``f1``,
+``f2`` ... (``followers.count``; the modem's five-second period holds six slots, more need a
+longer ``followers.sensors.modem.period_s``):
 
 * **The leader** flies a way-point pattern (a racetrack, :func:`racetrack`: 230 m north, a half
   circle of 50 m radius, 230 m south, about 10 minutes at 1 m/s) on the standard navigation
@@ -36,7 +38,9 @@ One sea, one MuJoCo model, up to five vehicles namespaced ``leader``, ``f1`` .. 
   0.2 m/s cross current, which the paper's DR model lacks, drags every method's estimate along
   the track within minutes (measured; see :class:`FollowerNavigation`).
 * **Station keeping** (:class:`StationGuidance`): the station is a point at
-  ``followers.stations[i]`` (relative bearing clockwise from the leader's course, distance) from
+  ``followers.stations[i]`` (relative bearing clockwise from the leader's course, distance; for
+  the followers beyond the list, rings of three stations, abeam to starboard, abeam to port and
+  astern, at 10, 20, 30 ... m: :func:`generated_station`, whose first four are the defaults) from
   the leader's position dead-reckoned from its last message with its stated velocity. The
   follower asks for the leader's velocity plus a proportional-integral correction towards the
   station computed from its own estimate (the integral takes up the current the follower cannot
@@ -71,11 +75,12 @@ run`` exits with status 1.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import MissionExperiment
-from tasks.core.registry import ReportContext, ReportSummary, register
+from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 from tasks.missions.swarm.design import SwarmMission
 from tasks.missions.swarm.follower import EN, FOLLOWER_COLUMNS, FollowerNavigation
 from tasks.missions.swarm.leader import LeaderNavigation
@@ -100,7 +105,9 @@ from tasks.missions.swarm.scenario import (
     DEPTH_SIGMA_M,
     FOLLOWERS,
     LEADER,
+    MAX_FOLLOWERS,
     METHODS,
+    MIN_STATION_SEPARATION_M,
     REFUSAL_CODES,
     REFUSALS,
     FollowerNavigationConfig,
@@ -111,8 +118,10 @@ from tasks.missions.swarm.scenario import (
     StationConfig,
     StationGuidanceConfig,
     SwarmScenario,
+    generated_station,
     racetrack,
     station_offsets,
+    station_point_m,
 )
 from tasks.missions.swarm.station import StationGuidance
 
@@ -123,7 +132,9 @@ __all__ = [
     "FOLLOWERS",
     "FOLLOWER_COLUMNS",
     "LEADER",
+    "MAX_FOLLOWERS",
     "METHODS",
+    "MIN_STATION_SEPARATION_M",
     "REFUSALS",
     "REFUSAL_CODES",
     "FollowerNavigation",
@@ -146,12 +157,14 @@ __all__ = [
     "flight_warnings",
     "fly_run",
     "follower_metrics",
+    "generated_station",
     "leader_course_true",
     "leader_metrics",
     "racetrack",
     "record_swarm",
     "report_swarm",
     "station_offsets",
+    "station_point_m",
     "swarm_figure",
 ]
 
@@ -173,6 +186,19 @@ class SwarmExperiment(MissionExperiment):
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
             )
+
+    def memory(self, scenario: SwarmScenario, n_runs: int) -> list[MemoryTerm]:
+        """The mission's estimate (:meth:`MissionExperiment.memory`, one vehicle's per-tick
+        columns) with the per-tick terms for every vehicle of every flight of a run: (1 +
+        ``followers.count``) vehicles x the methods flown (measured: 2.4 kB per tick for a
+        leader and 4 followers, 480 B per vehicle, against 500 B for one)."""
+        k = (1 + scenario.followers.count) * len(scenario.methods())
+        terms = super().memory(scenario, n_runs)
+        what = f" x {k} vehicles x methods (followers.count, navigation.methods)"
+        scaled = [
+            dataclasses.replace(t, bytes=k * t.bytes, fields=t.fields + what) for t in terms[:2]
+        ]
+        return scaled + terms[2:]
 
     def run_block(self, scenario: SwarmScenario, seed: int, runs: tuple[int, ...]):
         return [fly_run(scenario, seed, r) for r in runs]

@@ -86,6 +86,7 @@ class SwarmMission:
         plan = Broadcast(f"{LEADER} (plan)", 0.0, p_plan, p_plan, v_plan, None)
         vehicles: list[VehicleParts] = [lead]
         fc = scn.followers
+        stations = station_offsets(scn)
         names = self.vehicle_names(scn)[1:]
         for i, (name, (_, e, n)) in enumerate(zip(names, self._nominal(scn)[1:], strict=True)):
             start = StartConfig(
@@ -127,7 +128,7 @@ class SwarmMission:
                 tick,
             )
             guidance = StationGuidance(
-                scn.station, fc.stations[i], tick, lambda g=leader_guidance: g.done
+                scn.station, stations[i], tick, lambda g=leader_guidance: g.done
             )
             vehicles.append(
                 VehicleParts(name, rig, nav, guidance, fc.autopilot, table, FOLLOWER_COLUMNS)

@@ -3,6 +3,7 @@ run (:mod:`tasks.missions.swarm`)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any, Literal
 
@@ -202,8 +203,32 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
     return ReportSummary(text, tuple(files), tuple(failures), tuple(diverged))
 
 
-COLORS_V = [(0, 0, 0), (0, 114, 178), (213, 94, 0), (0, 158, 115), (230, 159, 0)]
-"""Recording colours of the leader and f1 .. f4 (the figure style's Okabe-Ito colours)."""
+VEHICLE_COLORS = (
+    "black",
+    "blue",
+    "vermillion",
+    "bluish_green",
+    "orange",
+    "sky_blue",
+    "reddish_purple",
+    "olive",
+    "wine",
+    "grey",
+)
+"""The figure style's colours of the leader, f1, f2 ... (repeated beyond ten vehicles)."""
+COLORS_V = [
+    (0, 0, 0),
+    (0, 114, 178),
+    (213, 94, 0),
+    (0, 158, 115),
+    (230, 159, 0),
+    (86, 180, 233),
+    (204, 121, 167),
+    (153, 153, 51),
+    (136, 34, 85),
+    (127, 127, 127),
+]
+"""Recording colours of the leader, f1, f2 ... (:data:`VEHICLE_COLORS` as RGB)."""
 
 
 def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out) -> list[str]:
@@ -218,7 +243,7 @@ def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, ou
 
 def _draw_swarm(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out, style):
     pal = style.PALETTE
-    vehicle_colors = [pal[k] for k in ("black", "blue", "vermillion", "bluish_green", "orange")]
+    vehicle_colors = itertools.cycle([pal[k] for k in VEHICLE_COLORS])
     method_names = {"ga1": "GA1", "ga2": "GA2", "ekf": "EKF", "dr": "DR"}
     fig, axs = style.subplots("page", 3.8, 1, 2)
     flight = rec.flights[methods[0]]
@@ -287,7 +312,7 @@ def record_swarm(name: str, scn: SwarmScenario, run: MissionRun, method: str, ou
     rec.point("transceiver", tx, (0, 0, 0), "USBL transceiver")
     stations = dict(zip(FOLLOWERS, station_offsets(scn), strict=False))
     plots = []
-    for (vn, v), color in zip(run.vehicles.items(), COLORS_V, strict=False):
+    for (vn, v), color in zip(run.vehicles.items(), itertools.cycle(COLORS_V)):
         t = v["t"]
         r.send_columns(
             f"world/{vn}/vehicle",

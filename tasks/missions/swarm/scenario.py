@@ -43,8 +43,16 @@ from tasks.closed_loop.scenario import (
 Array = NDArray[np.float64]
 Method = Literal["ga1", "ga2", "ekf", "dr"]
 METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr")
-FOLLOWERS = ("f1", "f2", "f3", "f4")
+MAX_FOLLOWERS = 12
+"""The most followers a scenario may have (``followers.count``)."""
+FOLLOWERS = tuple(f"f{i}" for i in range(1, MAX_FOLLOWERS + 1))
+"""The followers' names in the scene, in order (``f1`` .. ``f12``; a flight has the first
+``followers.count``)."""
 LEADER = "leader"
+MIN_STATION_SEPARATION_M = 2.5
+"""Smallest distance between two followers' station points (and, through
+:attr:`StationConfig.distance_m`, between a station and the leader), m: about one and a half
+hull lengths (1.6 m to the caudal-fin hinge)."""
 REFUSALS = ("ok", "dr", "no range", "range below minimum", "gate", "no fix", "no direction")
 """Codes of the modem fix table's ``refusal`` column (index = code); ``"degenerate"`` (a slant
 range shorter than the depth difference) is the last one."""
@@ -95,13 +103,40 @@ class StationConfig(Config):
     distance_m: float = Field(10.0, gt=2.5, le=200, description="distance from the leader, m")
 
 
-DEFAULT_STATIONS = (
-    StationConfig(relative_bearing_deg=90.0, distance_m=10.0),
-    StationConfig(relative_bearing_deg=270.0, distance_m=10.0),
-    StationConfig(relative_bearing_deg=180.0, distance_m=10.0),
-    StationConfig(relative_bearing_deg=90.0, distance_m=20.0),
-)
-"""Four stations: abeam to starboard and to port at 10 m, astern at 10 m, starboard at 20 m."""
+STATION_RING_M = 10.0
+"""Distance between the rings of generated stations, m (:func:`generated_station`)."""
+STATION_RING_BEARINGS_DEG = (90.0, 270.0, 180.0)
+"""Relative bearings of a ring of generated stations: abeam to starboard, to port, astern."""
+
+
+def generated_station(index: int) -> StationConfig:
+    """The station of follower ``index`` (0-based) when the scenario gives none for it: rings of
+    three stations (abeam to starboard, abeam to port, astern) at 10, 20, 30 ... m,
+
+        relative bearing = (90, 270, 180)[index mod 3] deg,
+        distance = 10 * (index div 3 + 1) m.
+
+    The four default stations are the first four of this sequence (:data:`DEFAULT_STATIONS`).
+
+    Args:
+        index: the follower's index, >= 0 (``f1`` is 0).
+    """
+    ring, k = divmod(index, len(STATION_RING_BEARINGS_DEG))
+    return StationConfig(
+        relative_bearing_deg=STATION_RING_BEARINGS_DEG[k], distance_m=STATION_RING_M * (ring + 1)
+    )
+
+
+DEFAULT_STATIONS = tuple(generated_station(i) for i in range(4))
+"""Four stations: abeam to starboard and to port at 10 m, astern at 10 m, starboard at 20 m (the
+first four of :func:`generated_station`)."""
+
+
+def station_point_m(station: StationConfig, course_rad: float = 0.0) -> Array:
+    """A station's offset from the leader (east, north), shape (2,), m, for the leader's course
+    (rad clockwise from north)."""
+    b = course_rad + math.radians(station.relative_bearing_deg)
+    return station.distance_m * np.array(unit_vector_scalar(b))
 
 
 class FollowerSensors(Config):
@@ -146,9 +181,19 @@ class FollowerSensors(Config):
 class FollowersConfig(Config):
     """The followers."""
 
-    count: int = Field(1, ge=1, le=4, description="number of followers (f1 .. f4)")
+    count: int = Field(
+        1,
+        ge=1,
+        le=MAX_FOLLOWERS,
+        description=f"number of followers (f1 .. f{MAX_FOLLOWERS}); beyond 6, the modem's "
+        "slots need a longer period (followers.sensors.modem.period_s)",
+    )
     stations: tuple[StationConfig, ...] = Field(
-        DEFAULT_STATIONS, min_length=1, max_length=4, description="station of f1, f2, ..."
+        DEFAULT_STATIONS,
+        min_length=1,
+        max_length=MAX_FOLLOWERS,
+        description="station of f1, f2, ...; followers beyond the list get generated stations "
+        "(rings of starboard, port, astern at 10, 20, 30 ... m: generated_station)",
     )
     position_sigma_m: float = Field(
         0.5, ge=0, description="scatter of the true start about the station, per axis, m"
@@ -158,10 +203,25 @@ class FollowersConfig(Config):
     autopilot: AutopilotConfig = Field(default_factory=AutopilotConfig)
 
     @model_validator(mode="after")
-    def _count(self) -> FollowersConfig:
-        if self.count > len(self.stations):
-            raise ValueError(f"count = {self.count}: only {len(self.stations)} stations are given")
+    def _separation(self) -> FollowersConfig:
+        pts = [station_point_m(s) for s in self.station_list()]
+        for j in range(len(pts)):
+            for i in range(j):
+                d = float(np.hypot(*(pts[j] - pts[i])))
+                if d < MIN_STATION_SEPARATION_M:
+                    how = "given" if j < len(self.stations) else "generated"
+                    raise ValueError(
+                        f"stations: f{j + 1}'s station ({how}) is {d:.2f} m from f{i + 1}'s; "
+                        f"stations must be at least {MIN_STATION_SEPARATION_M:g} m apart "
+                        "(give a station for every follower)"
+                    )
         return self
+
+    def station_list(self) -> list[StationConfig]:
+        """The stations of the ``count`` followers, in order: those given, then generated
+        (:func:`generated_station`) for the followers beyond the list."""
+        given = list(self.stations[: self.count])
+        return given + [generated_station(i) for i in range(len(given), self.count)]
 
 
 def _leader_sensors() -> MissionSensors:
@@ -331,5 +391,6 @@ class SwarmScenario(Config):
 
 
 def station_offsets(scn: SwarmScenario) -> list[StationConfig]:
-    """The stations of the scenario's followers, in order."""
-    return list(scn.followers.stations[: scn.followers.count])
+    """The stations of the scenario's followers, in order (those given, then generated:
+    :meth:`FollowersConfig.station_list`)."""
+    return scn.followers.station_list()
