@@ -2,14 +2,15 @@
 one acoustic range every 5 s (Naus & Piskur 2022).
 
 The package: :mod:`~tasks.missions.swarm.scenario` (the scenario and its sections),
+:mod:`~tasks.missions.swarm.formation` (the leader's pattern, the followers' stations),
 :mod:`~tasks.missions.swarm.leader` (the leader's broadcast),
 :mod:`~tasks.missions.swarm.follower` (a follower's navigation: the adapter of its rig to
 :class:`nav.navigator.BroadcastRangeNavigator`), :mod:`~tasks.missions.swarm.station` (station
 keeping), :mod:`~tasks.missions.swarm.design` (the mission's design: the scene, the vehicles and
 their parts),
 :mod:`~tasks.missions.swarm.run` (one run's flights and metrics) and
-:mod:`~tasks.missions.swarm.report` (tables, figure, recording); this module registers the
-experiment.
+:mod:`~tasks.missions.swarm.report` (tables, ``metrics.json``) with
+:mod:`~tasks.missions.swarm.figures` (figure, recording); this module registers the experiment.
 
 One sea, one MuJoCo model, a leader and up to 12 followers namespaced ``leader``, ``f1``,
 ``f2`` ... (``followers.count``; the modem's five-second period holds six slots, more need a
@@ -82,15 +83,18 @@ from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 from tasks.missions.swarm.design import SwarmMission
+from tasks.missions.swarm.figures import record_swarm, swarm_figure
 from tasks.missions.swarm.follower import EN, FOLLOWER_COLUMNS, FollowerNavigation
-from tasks.missions.swarm.leader import LeaderNavigation
-from tasks.missions.swarm.report import (
-    FollowerRow,
-    SwarmMetrics,
-    record_swarm,
-    report_swarm,
-    swarm_figure,
+from tasks.missions.swarm.formation import (
+    DEFAULT_STATIONS,
+    MIN_STATION_SEPARATION_M,
+    StationConfig,
+    generated_station,
+    racetrack,
+    station_point_m,
 )
+from tasks.missions.swarm.leader import LeaderNavigation
+from tasks.missions.swarm.report import FollowerRow, SwarmMetrics, report_swarm
 from tasks.missions.swarm.run import (
     SwarmRunResult,
     divergences,
@@ -101,13 +105,11 @@ from tasks.missions.swarm.run import (
     leader_metrics,
 )
 from tasks.missions.swarm.scenario import (
-    DEFAULT_STATIONS,
     DEPTH_SIGMA_M,
     FOLLOWERS,
     LEADER,
     MAX_FOLLOWERS,
     METHODS,
-    MIN_STATION_SEPARATION_M,
     REFUSAL_CODES,
     REFUSALS,
     FollowerNavigationConfig,
@@ -115,13 +117,9 @@ from tasks.missions.swarm.scenario import (
     FollowerSensors,
     LeaderConfig,
     Method,
-    StationConfig,
     StationGuidanceConfig,
     SwarmScenario,
-    generated_station,
-    racetrack,
     station_offsets,
-    station_point_m,
 )
 from tasks.missions.swarm.station import StationGuidance
 
