@@ -17,10 +17,11 @@ the solution of
 
 (the receiver moves while the sound travels; ``tau`` the true medium's travel time,
 :class:`nav.acoustics.Propagation`), found by fixed-point iteration from ``t_rx = t_tx``: the
-map contracts by ``|v_i| / c`` (about 1e-3) per iteration, so :data:`FIXED_POINT_ITERATIONS`
-iterations leave ``(1e-3)^6`` of the first guess's error (the guess is off by ``tau |v_i| / c``,
-below 1 ms at 1 km and 2 m/s). The receiver stamps the arrival with its clock, ``L = local_i(t_rx)
-+ jitter_i * z1 + travel_time_sigma_s * z2`` (timestamp jitter of the receiver's clock and the
+map contracts by ``|v_i| / c`` (about 1e-3) per iteration, so
+:data:`~bauv_sim.acoustics.channel.FIXED_POINT_ITERATIONS` iterations leave ``(1e-3)^6`` of
+the first guess's error (the guess is off by ``tau |v_i| / c``, below 1 ms at 1 km and 2 m/s).
+The receiver stamps the arrival with its clock, ``L = local_i(t_rx) + jitter_i * z1 +
+travel_time_sigma_s * z2`` (timestamp jitter of the receiver's clock and the
 detection's noise, ``z`` standard normal), and knowing ``T`` (the schedule) measures the travel
 time ``L - T`` and the range
 
@@ -79,8 +80,7 @@ same events one by one, draws the same numbers.
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -89,16 +89,29 @@ from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from bauv_sim import rng as rng_mod
+from bauv_sim.acoustics.channel import (
+    interpolate_positions,
+    neighbour_gaps,
+    reception_time,
+    schedule,
+    slot_senders,
+)
 from bauv_sim.acoustics.clock import Clock, ClockConfig, draw_clocks
 from bauv_sim.acoustics.sonar import SonarConfig, snr_db, success_probability
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
+from bauv_sim.frames import R_from_quat_wxyz
+from bauv_sim.sensors.online import (
+    Broadcast,
+    DeviceBuild,
+    Measurement,
+    TickContext,
+    lever_arm_from_site,
+    register_device,
+)
 from nav.acoustics import Isovelocity, Propagation
 
 Array = NDArray[np.float64]
-
-FIXED_POINT_ITERATIONS = 6
-"""Iterations of the reception time's fixed point (module docstring)."""
 
 LOST_OK, LOST_RANGE, LOST_SONAR, LOST_COLLISION, LOST_HALF_DUPLEX = 0, 1, 2, 3, 4
 """Codes of :attr:`NetworkRanges.lost`."""
@@ -139,6 +152,11 @@ class AcousticNetworkConfig(Config):
     processing_delay_s: float = Field(
         0.5, ge=0, description="from reception to the range reaching the navigator, s"
     )
+    transducer_body_m: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0),
+        description="online device: transducer relative to the reference point, m, body FLU "
+        "(zero: each vehicle model's 'modem' site); the same on every vehicle",
+    )
 
     @model_validator(mode="after")
     def _slots(self) -> AcousticNetworkConfig:
@@ -158,118 +176,6 @@ class AcousticNetworkConfig(Config):
         if self.ranging == "twtt":
             return 2 * leg + self.turnaround_s + self.packet_s
         return leg + self.packet_s
-
-
-def slot_senders(cfg: AcousticNetworkConfig, vehicles: Sequence[str]) -> list[list[int]]:
-    """The senders of each slot, as indices into ``vehicles`` (module docstring: schedule).
-
-    Raises:
-        ConfigError: naming ``order`` for an unknown or repeated vehicle, ``slot_s`` when the
-            slots do not fit in the cycle, ``clocks`` for a clock of an unknown vehicle.
-    """
-    names = list(vehicles)
-    if len(set(names)) != len(names) or len(names) < 2:
-        raise ConfigError(f"network: vehicles {names}: need two or more distinct names")
-    for name in cfg.clocks:
-        if name not in names:
-            raise ConfigError(
-                f"network.clocks: {name!r} is not a vehicle (vehicles: {', '.join(names)})"
-            )
-    entries = cfg.order or tuple(names)
-    slots, seen = [], set()
-    for entry in entries:
-        group = []
-        for name in entry.split("+"):
-            if name not in names:
-                raise ConfigError(
-                    f"network.order: {name!r} is not a vehicle (vehicles: {', '.join(names)})"
-                )
-            if name in seen:
-                raise ConfigError(f"network.order: {name!r} has more than one slot")
-            seen.add(name)
-            group.append(names.index(name))
-        slots.append(group)
-    if len(slots) * cfg.slot_s > cfg.period_s + 1e-9:
-        raise ConfigError(
-            f"network.slot_s = {cfg.slot_s:g}: {len(slots)} slots of it do not fit in "
-            f"period_s = {cfg.period_s:g}"
-        )
-    return slots
-
-
-def schedule(
-    cfg: AcousticNetworkConfig, vehicles: Sequence[str], first_s: float, last_s: float
-) -> tuple[NDArray[np.intp], Array]:
-    """The transmissions with a local time in ``[first_s, last_s]``, in schedule order.
-
-    Returns:
-        ``(sender, local_s)``: sender indices into ``vehicles`` and local transmit times (s),
-        shape (q,) each, ordered by time, then by the sender's place in its slot.
-    """
-    slots = slot_senders(cfg, vehicles)
-    senders, times = [], []
-    c = max(0, math.floor((first_s - cfg.start_s) / cfg.period_s))
-    while True:
-        t0 = cfg.start_s + c * cfg.period_s
-        if t0 > last_s:
-            break
-        for s, group in enumerate(slots):
-            T = t0 + s * cfg.slot_s
-            if first_s <= T <= last_s:
-                senders += group
-                times += [T] * len(group)
-        c += 1
-    return np.asarray(senders, dtype=np.intp), np.asarray(times, dtype=float)
-
-
-def reception_time(
-    propagation: Propagation,
-    source_world_m: Array,
-    t_tx_s: Array,
-    receiver_at: Callable[[Array], Array],
-) -> tuple[Array, Array]:
-    """Solve ``t_rx = t_tx + tau(source, receiver(t_rx))`` by fixed-point iteration (module
-    docstring).
-
-    Args:
-        propagation: the true medium.
-        source_world_m: transmitter position at ``t_tx_s``, shape (..., 3), m, world ENU.
-        t_tx_s: true transmit times, shape (...), s.
-        receiver_at: the receiver's position (shape (..., 3), m) at true times (shape (...)).
-
-    Returns:
-        ``(t_rx_s, receiver_world_m)``: the reception time (s) and the receiver's position there
-        (m), shapes (...) and (..., 3).
-    """
-    t = t_tx_s
-    for _ in range(FIXED_POINT_ITERATIONS):
-        p = receiver_at(t)
-        t = t_tx_s + propagation.eigenray(source_world_m, p).travel_time_s
-    return t, receiver_at(t)
-
-
-def interpolate_positions(t_grid_s: Array, positions_world_m: Array, t_s: Array) -> Array:
-    """Positions at any times, linear between grid samples (extrapolated from the end segments).
-
-    Args:
-        t_grid_s: sample times, shape (k,), s, increasing, k >= 2.
-        positions_world_m: positions, shape (n or 1, k, 3), m.
-        t_s: query times, shape (n, M), s.
-
-    Returns:
-        Positions, shape (n, M, 3), m.
-    """
-    n = t_s.shape[0]
-    pos = positions_world_m
-    if pos.shape[0] != n:
-        pos = np.broadcast_to(pos, (n, *pos.shape[1:]))
-    k = t_grid_s.shape[0]
-    idx = np.clip(np.searchsorted(t_grid_s, t_s, side="right") - 1, 0, k - 2)
-    t0 = t_grid_s[idx]
-    w = (t_s - t0) / (t_grid_s[idx + 1] - t0)
-    p0 = np.take_along_axis(pos, idx[..., None], axis=1)
-    p1 = np.take_along_axis(pos, idx[..., None] + 1, axis=1)
-    return p0 + w[..., None] * (p1 - p0)
 
 
 @dataclass(frozen=True)
@@ -320,41 +226,6 @@ class NetworkRanges:
         """Measured travel time ``rx_local - tx_local`` (TWTT: the round trip less the
         turnaround, halved: ``range / c``), shape (n, m), s."""
         return self.range_m / self.sound_speed_m_s
-
-
-def neighbour_gaps(
-    times: Array, arrivals: NDArray[np.bool_], own: NDArray[np.bool_], packet_s: float
-) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-    """Which arrivals at one receiver collide, and which meet the receiver's own transmission.
-
-    Args:
-        times: arrival and own transmission start times, shape (n, M), s (any order).
-        arrivals: the columns that are arrivals that interfere, shape (n, M).
-        own: the columns that are the receiver's own transmissions, shape (n, M).
-        packet_s: packet duration, s.
-
-    Returns:
-        ``(collided, half_duplex)``, shape (n, M): an arrival with another arrival closer than
-        ``packet_s``; an arrival closer than ``packet_s`` to an own transmission (their
-        intervals of ``packet_s`` overlap). False elsewhere.
-    """
-    order = np.argsort(times, axis=1, kind="stable")
-    st = np.take_along_axis(times, order, axis=1)
-    out = []
-    for mask in (arrivals, own):
-        # an infinite time (a packet never sent) is never near anything: inf - inf is NaN
-        sm = np.take_along_axis(mask, order, axis=1)
-        before = np.maximum.accumulate(np.where(sm, st, -np.inf), axis=1)
-        after = np.minimum.accumulate(np.where(sm, st, np.inf)[:, ::-1], axis=1)[:, ::-1]
-        inf = np.full((st.shape[0], 1), np.inf)
-        prev = np.concatenate([-inf, before[:, :-1]], axis=1)
-        nxt = np.concatenate([after[:, 1:], inf], axis=1)
-        with np.errstate(invalid="ignore"):
-            near = ((st - prev) < packet_s) | ((nxt - st) < packet_s)
-        hit = np.empty_like(near)
-        np.put_along_axis(hit, order, near, axis=1)
-        out.append(hit & arrivals)
-    return out[0], out[1]
 
 
 class _Receiver:
@@ -647,3 +518,240 @@ class AcousticNetwork:
             lost,
             np.where(replied, t3, t1) + cfg.processing_delay_s,
         )
+
+
+# ----------------------------------------------------------------------------------------------
+# The online device
+
+
+@dataclass(frozen=True)
+class AcousticRange:
+    """The payload of an acoustic range (:class:`AcousticNetworkDevice`).
+
+    Attributes:
+        sender: the transmitting vehicle's name.
+        receiver: the receiving vehicle's name (the device's own).
+        tx_local_s: scheduled transmit time by the sender's clock, s.
+        rx_local_s: the receiver's timestamp of the arrival, by its clock, s.
+        travel_time_s: measured travel time ``rx_local_s - tx_local_s``, s.
+        range_m: ``nominal_sound_speed_m_s * travel_time_s``, m.
+        snr_db: the sonar equation's SNR at the true range, dB.
+        kind: ``"owtt"``.
+        broadcast: what the sender stated about itself at its transmit tick (its position,
+            covariance and clock estimate), or ``None`` when it broadcasts nothing.
+    """
+
+    sender: str
+    receiver: str
+    tx_local_s: float
+    rx_local_s: float
+    travel_time_s: float
+    range_m: float
+    snr_db: float
+    kind: str
+    broadcast: Broadcast | None = None
+
+
+@dataclass
+class _Arrival:
+    """A transmission heard by the device, waiting until its collisions are known."""
+
+    sender: int
+    tx_local_s: float
+    t_tx_s: float
+    t_rx_s: float
+    distance_m: float
+    snr_db: float
+    rx_local_s: float
+    decoded: bool
+    broadcast: Broadcast | None
+
+
+@register_device(AcousticNetworkConfig)
+class AcousticNetworkDevice:
+    """The acoustic network as a receiver's rig hears it (event; OWTT; module docstring).
+
+    Per-vehicle settings from the mission (``DeviceBuild.extra``): ``vehicles`` (the team's
+    names in the scene's order, the schedule's; default the scene's vehicles) and ``me`` (this
+    vehicle's name; default the rig's vehicle).
+
+    At the tick at or before each scheduled transmission's true instant (the senders' clocks are
+    drawn from the same streams as :class:`AcousticNetwork`'s) the device takes the sender's
+    transducer at that tick, moved by the sender's velocity to the transmit instant, and solves
+    the reception time with this vehicle's transducer moved by its velocity from the tick (the
+    rotation of the lever arms during the travel is neglected); it draws the event's noise and
+    sonar loss from this vehicle's streams, in the schedule's order, as the batched class does,
+    so that the same truth gives the same numbers (up to the interpolation against the
+    extrapolation: equal on straight lines). Once no later packet can arrive within
+    ``packet_s`` it applies the range, half-duplex, collision and sonar losses and emits a
+    :class:`~bauv_sim.sensors.online.Measurement` (at most one per tick, the others next ticks)
+    valid at the reception, arriving ``processing_delay_s`` later, value ``(range_m,)``, payload
+    :class:`AcousticRange`.
+
+    Raises:
+        ConfigError: for two-way ranging (the online device ranges one way), a vehicle not in
+            ``vehicles``, or a schedule that does not fit (:func:`slot_senders`).
+    """
+
+    kind = "event"
+    every = 1
+
+    def __init__(self, cfg: AcousticNetworkConfig, build: DeviceBuild):
+        self.cfg = cfg
+        self.name = build.name
+        if cfg.ranging != "owtt":
+            raise ConfigError(
+                f"sensors.{self.name}.ranging = {cfg.ranging!r}: the online device ranges one "
+                "way ('owtt'); two-way ranging is the batched AcousticNetwork's"
+            )
+        names = build.extra.get("vehicles")
+        self.vehicles = tuple(names if names is not None else build.physics.vehicle_names())
+        me = str(build.extra.get("me", build.vehicle))
+        if me not in self.vehicles:
+            raise ConfigError(
+                f"sensors.{self.name}: vehicle {me!r} is not in the network "
+                f"({', '.join(self.vehicles)})"
+            )
+        slot_senders(cfg, self.vehicles)
+        self.me, self.i = me, self.vehicles.index(me)
+        runs = (build.run,)
+        self.clocks = [draw_clocks(cfg.clock_of(v), build.seed, runs, v) for v in self.vehicles]
+        self._recv = _Receiver(cfg, self.clocks[self.i], build.seed, runs, me)
+        self.propagation = (
+            build.propagation
+            if build.propagation is not None
+            else Isovelocity(cfg.nominal_sound_speed_m_s)
+        )
+        if cfg.transducer_body_m == (0.0, 0.0, 0.0):
+            self.arms = {
+                v: np.asarray(lever_arm_from_site(build.physics, "modem", v), dtype=float)
+                for v in self.vehicles
+            }
+        else:
+            arm = np.asarray(cfg.transducer_body_m, dtype=float)
+            self.arms = dict.fromkeys(self.vehicles, arm)
+        self.lever_arm_body_m = self.arms[me]
+        self.tick_s = build.tick_s
+        self._cycle = 0
+        self._upcoming: list[tuple[int, float, float]] = []  # (sender, local T, true t_tx)
+        self._own: list[float] = []  # own true transmit times
+        self._arrivals: list[_Arrival] = []  # heard, in range, recent (for collisions)
+        self._waiting: list[_Arrival] = []  # not yet resolved
+        self._ready: list[Measurement] = []
+
+    def _extend_schedule(self, until_s: float) -> None:
+        """Schedule cycles until one starts (by true time, every sender) after ``until_s``."""
+        cfg = self.cfg
+        while True:
+            first = cfg.start_s + self._cycle * cfg.period_s
+            sender, local = schedule(cfg, self.vehicles, first, first + cfg.period_s * (1 - 1e-12))
+            self._cycle += 1
+            t_tx = [
+                float(self.clocks[j].true_of_local(np.array([T]))[0])
+                for j, T in zip(sender, local, strict=True)
+            ]
+            self._upcoming += [
+                (int(j), float(T), t) for j, T, t in zip(sender, local, t_tx, strict=True)
+            ]
+            if t_tx and min(t_tx) > until_s + cfg.period_s:
+                return
+            if not t_tx and first > until_s + cfg.period_s:
+                return
+
+    def _transducer(self, vt, name: str) -> Array:
+        return vt.position_world_m + R_from_quat_wxyz(vt.quat_wxyz) @ self.arms[name]
+
+    def _hear(self, ctx: TickContext, j: int, T: float, t_tx: float) -> None:
+        """The arrival of sender ``j``'s transmission at local ``T`` (true ``t_tx``)."""
+        name = self.vehicles[j]
+        peer = ctx.peers.get(name)
+        noise = self._recv.timestamp_noise(1)
+        dt = t_tx - ctx.t_s
+        if peer is None:  # not in the scene: nothing arrives (the draws are kept in step)
+            self._recv.decoded(np.zeros((1, 1)))
+            return
+        p_src = self._transducer(peer.truth, name) + peer.truth.velocity_world_m_s * dt
+        p0 = self._transducer(ctx.truth, self.me)
+        v0 = ctx.truth.velocity_world_m_s
+        t0 = ctx.t_s
+        t_rx, p_rx = reception_time(
+            self.propagation,
+            p_src[None],
+            np.array([t_tx]),
+            lambda tt: p0 + v0 * (tt - t0)[..., None],
+        )
+        dist = np.linalg.norm(p_rx - p_src[None], axis=-1)
+        snr = snr_db(dist, self.cfg.sonar)
+        decoded = bool(self._recv.decoded(snr[None])[0, 0])
+        t_rx_s = float(t_rx[0])
+        local = float(self.clocks[self.i].local(np.array([t_rx_s]))[0] + noise[0, 0])
+        a = _Arrival(
+            j, T, t_tx, t_rx_s, float(dist[0]), float(snr[0]), local, decoded, peer.broadcast
+        )
+        self._waiting.append(a)
+        if a.distance_m <= self.cfg.max_range_m:
+            self._arrivals.append(a)
+
+    def _resolve(self, a: _Arrival, ctx: TickContext) -> None:
+        cfg = self.cfg
+        if a.distance_m > cfg.max_range_m:
+            return
+        p = cfg.packet_s
+        if any(abs(t - a.t_rx_s) < p for t in self._own):
+            return
+        if any(b is not a and abs(b.t_rx_s - a.t_rx_s) < p for b in self._arrivals):
+            return
+        if not a.decoded:
+            return
+        c = cfg.nominal_sound_speed_m_s
+        travel = a.rx_local_s - a.tx_local_s
+        payload = AcousticRange(
+            self.vehicles[a.sender],
+            self.me,
+            a.tx_local_s,
+            a.rx_local_s,
+            travel,
+            c * travel,
+            a.snr_db,
+            "owtt",
+            a.broadcast,
+        )
+        self._ready.append(
+            Measurement(
+                self.name,
+                a.t_rx_s,
+                a.t_rx_s + cfg.processing_delay_s,
+                np.array([c * travel]),
+                ctx.measured_attitude_rad,
+                payload,
+            )
+        )
+
+    def step(self, ctx: TickContext) -> Measurement | None:
+        """Hear the transmissions of this tick, resolve the arrivals whose neighbours are known,
+        and hand over the oldest range ready (``None`` if none)."""
+        horizon = ctx.t_s + self.tick_s
+        self._extend_schedule(horizon)
+        later = []
+        for j, T, t_tx in self._upcoming:
+            if t_tx < horizon:
+                if j == self.i:
+                    self._own.append(t_tx)
+                else:
+                    self._hear(ctx, j, T, t_tx)
+            else:
+                later.append((j, T, t_tx))
+        self._upcoming = later
+        p = self.cfg.packet_s
+        waiting = []
+        for a in self._waiting:
+            if a.t_rx_s + p < horizon:
+                self._resolve(a, ctx)
+            else:
+                waiting.append(a)
+        self._waiting = waiting
+        old = ctx.t_s - 2 * p - self.tick_s
+        self._own = [t for t in self._own if t > old - p]
+        keep_from = min([a.t_rx_s for a in self._waiting], default=ctx.t_s) - 2 * p
+        self._arrivals = [a for a in self._arrivals if a.t_rx_s > min(old, keep_from)]
+        return self._ready.pop(0) if self._ready else None

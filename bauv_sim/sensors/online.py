@@ -69,6 +69,9 @@ class Broadcast:
             m^2, or ``None`` when none is sent (a true position has none).
         current_world_m_s: the water current at the sender as it estimates it (east, north),
             shape (2,), m/s, or ``None``.
+        clock_offset_s: the sender's estimate of its clock's offset (local minus true time) at
+            ``t_s``, s, or ``None`` when it estimates none.
+        clock_offset_var_s2: the variance of that estimate, s^2, or ``None``.
     """
 
     sender: str
@@ -78,6 +81,8 @@ class Broadcast:
     velocity_world_m_s: Array
     covariance_m2: Array | None = None
     current_world_m_s: Array | None = None
+    clock_offset_s: float | None = None
+    clock_offset_var_s2: float | None = None
 
 
 @dataclass(frozen=True)

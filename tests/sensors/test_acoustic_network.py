@@ -285,3 +285,143 @@ def test_a_schedule_that_does_not_fit_names_the_field(base, field):
 def test_bad_packet_names_the_field():
     with pytest.raises(ConfigError, match="packet_s"):
         load_config(AcousticNetworkConfig, overrides=["packet_s=3.0"])
+
+
+# ----------------------------------------------------------------------------------------------
+# The online device
+
+
+def _truth(k_t, p, v):
+    from bauv_sim.physics_state import VehicleTruth
+
+    return VehicleTruth(
+        t_s=k_t,
+        position_world_m=p,
+        quat_wxyz=np.array([1.0, 0.0, 0.0, 0.0]),
+        roll_pitch_heading_rad=np.zeros(3),
+        depth_m=-p[2],
+        velocity_world_m_s=v,
+        velocity_through_water_world_m_s=v,
+        current_world_m_s=np.zeros(3),
+        angular_velocity_body_rad_s=np.zeros(3),
+    )
+
+
+def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2):
+    """Every vehicle's device, stepped on the straight lines; returns the measurements by
+    receiver."""
+    from bauv_sim.acoustics.network import AcousticNetworkDevice
+    from bauv_sim.sensors.online import Broadcast, DeviceBuild, Peer, TickContext
+
+    devs = {
+        me: AcousticNetworkDevice(
+            cfg,
+            DeviceBuild("net", f"{me}/net", seed, run, tick, None, None, me, {"vehicles": NAMES}),
+        )
+        for me in NAMES
+    }
+    got = {me: [] for me in NAMES}
+    for k in range(1, round(t_end / tick) + 1):
+        t = k * tick
+        truths = {v: _truth(t, START[n] + VEL[n] * t, VEL[n]) for n, v in enumerate(NAMES)}
+        for me in NAMES:
+            peers = {
+                v: Peer(truths[v], Broadcast(v, t, truths[v].position_world_m, None, VEL[0, :2]))
+                for v in NAMES
+                if v != me
+            }
+            m = devs[me].step(TickContext(k, t, truths[me], {}, {}, peers))
+            if m is not None:
+                got[me].append(m)
+    return got
+
+
+def test_online_device_gives_the_batched_numbers_on_the_same_truth():
+    clocks = {
+        "leader": ClockConfig(jitter_s=1e-4),
+        "f1": ClockConfig(offset_s=0.003, drift_ppm=2.0, offset_sigma_s=0.002, jitter_s=1e-4),
+        "f2": ClockConfig(offset_s=-0.004, drift_sigma_ppm=1.0, jitter_s=1e-4),
+    }
+    sonar = {"enabled": True, "source_level_db": 126.0, "fading_sigma_db": 4.0}
+    cfg = load_config(
+        AcousticNetworkConfig,
+        base={
+            "clocks": clocks,
+            "sonar": sonar,
+            "travel_time_sigma_s": 2e-4,
+            "period_s": 9.0,
+            "slot_s": 3.0,
+            "transducer_body_m": [0.0, 0.0, 0.0],
+        },
+    )
+    arm = np.array([0.3, -0.1, 0.05])
+    cfg = cfg.model_copy(update={"transducer_body_m": tuple(arm)})
+    batched = AcousticNetwork(cfg, NAMES, 9, (0, 2)).exchange(
+        T_GRID, line_positions(START + arm, VEL)
+    )
+    online = _fly_devices(cfg)
+    lost_some = False
+    for i, me in enumerate(NAMES):
+        e = np.flatnonzero((batched.receiver == i) & batched.produced[1])
+        lost_some |= bool((~batched.produced[1][batched.receiver == i]).any())
+        ms = [m for m in online[me] if m.payload.tx_local_s <= batched.tx_local_s[1].max()]
+        assert len(ms) == e.size > 5
+        for m, ev in zip(ms, e, strict=True):
+            p = m.payload
+            assert p.sender == NAMES[batched.sender[ev]] and p.receiver == me
+            assert p.tx_local_s == batched.tx_local_s[1, ev]
+            assert p.rx_local_s == pytest.approx(batched.rx_local_s[1, ev], abs=1e-9)
+            assert m.value[0] == pytest.approx(batched.range_m[1, ev], abs=1e-6)
+            assert p.snr_db == pytest.approx(batched.snr_db[1, ev], abs=1e-9)
+            assert m.t_valid_s == pytest.approx(batched.t_rx_s[1, ev], abs=1e-9)
+            assert m.t_arrival_s == pytest.approx(batched.t_available_s[1, ev], abs=1e-9)
+            assert p.broadcast.sender == p.sender
+    assert lost_some  # the sonar's draws were exercised
+
+
+def test_online_device_refuses_two_way_ranging():
+    from bauv_sim.acoustics.network import AcousticNetworkDevice
+    from bauv_sim.sensors.online import DeviceBuild
+
+    cfg = AcousticNetworkConfig(ranging="twtt", transducer_body_m=(0.1, 0.0, 0.0))
+    build = DeviceBuild("net", "net", 1, 0, 0.1, None, None, "f1", {"vehicles": NAMES})
+    with pytest.raises(ConfigError, match="ranging"):
+        AcousticNetworkDevice(cfg, build)
+
+
+def test_online_device_in_a_rig_ranges_between_the_model_sites_with_the_clock_bias():
+    import dataclasses
+
+    from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
+    from bauv_sim.sensors.online import Broadcast, Peer
+    from bauv_sim.sensors.rig import SensorRig
+
+    scene = SceneConfig(
+        vehicles=(
+            VehicleSpec(name="leader", east_m=0.0, north_m=0.0, heading_deg=30.0),
+            VehicleSpec(name="f1", east_m=80.0, north_m=-60.0, heading_deg=30.0, depth_m=4.0),
+        )
+    )
+    phys = build_physics(scene, control_tick_s=0.2)
+    cfg = AcousticNetworkConfig(clocks={"f1": ClockConfig(offset_s=0.002)}, start_s=2.0)
+    rig = SensorRig({"net": cfg}, phys, "f1", 5, 0, "f1")
+    site = {v: phys.site_position_world("modem", v) for v in ("leader", "f1")}
+    true_r = float(np.linalg.norm(site["leader"] - site["f1"]))
+    lead, me = phys.truth("leader"), phys.truth("f1")
+    lead = dataclasses.replace(lead, velocity_world_m_s=np.zeros(3))
+    me = dataclasses.replace(me, velocity_world_m_s=np.zeros(3))
+    bc = Broadcast("leader", 0.0, np.zeros(3), np.ones(3), np.zeros(2), clock_offset_s=1e-4)
+    got = []
+    for k in range(1, 100):
+        t = 0.2 * k
+        peers = {"leader": Peer(dataclasses.replace(lead, t_s=t), bc)}
+        got += rig.sense(k, dataclasses.replace(me, t_s=t), {}, peers=peers).arrived
+    # the leader transmits at 2, 12 s (slot 0); f1's own slot (2 s later) is not heard by f1
+    assert [round(m.payload.tx_local_s, 9) for m in got] == [2.0, 12.0]
+    for m in got:
+        # the range is the true one plus c x (f1's offset - the leader's): +3 m
+        assert m.value[0] == pytest.approx(true_r + C * 0.002, abs=1e-9)
+        assert m.t_valid_s == pytest.approx(m.payload.tx_local_s + true_r / C, abs=1e-12)
+        assert m.t_arrival_s == pytest.approx(m.t_valid_s + 0.5)
+        assert m.payload.broadcast is bc and m.payload.sender == "leader"
+    assert rig.lever_arms_body_m["net"] == pytest.approx((0.36, 0.0, 0.166), abs=1e-9)
