@@ -13,12 +13,16 @@ navigate together. One module per responsibility:
 * :mod:`nav.cooperative.tracks`: every method over a :class:`TeamRecord` (:func:`team_tracks`);
 * :mod:`nav.cooperative.metrics`: per-vehicle error and consistency (:func:`team_metrics`).
 
+Beyond the design: ``CoopOptions.relay`` (a broadcast carries the one-way ranges its sender
+received, so the decentralised filters see both directions of a pair and separate the clocks).
+
 Every Kalman update goes through :mod:`nav.ekf`. Arrays carry a leading run axis n; positions are
 (east, north) in m, clock offsets in s (local minus the team's time, the leader's clock).
 """
 
 from nav.cooperative.clock import ClockOptions, true_time_of_local
 from nav.cooperative.decentralised import CoopNavigator, PeerEstimate, ci_weight
+from nav.cooperative.metrics import VehicleMetrics, horizontal_errors, position_nees, team_metrics
 from nav.cooperative.ranging import OwttRangeMeasurement, PositionFix, TwttRangeMeasurement
 from nav.cooperative.record import TeamRecord
 from nav.cooperative.team import LEADER_CLOCK, CoopOptions, TeamEkf
@@ -37,7 +41,11 @@ __all__ = [
     "TeamRecord",
     "TeamTracks",
     "TwttRangeMeasurement",
+    "VehicleMetrics",
     "ci_weight",
+    "horizontal_errors",
+    "position_nees",
+    "team_metrics",
     "team_tracks",
     "true_time_of_local",
 ]

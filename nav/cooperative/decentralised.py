@@ -99,7 +99,7 @@ class PeerEstimate:
         return np.concatenate([self.position_m, self.clock_offset_s[:, None]], axis=1)
 
 
-def _posterior_position_det(P_own: Array, g: Array, a: Array, b: Array, r: float, w: Array):
+def _posterior_position_det(P_own: Array, g: Array, a: Array, b: Array, r, w: Array):
     """Determinant of the receiver's posterior position covariance for CI weights ``w``
     (n, G): prior ``P_own / w``, innovation variance ``S = a / w + b / (1 - w) + r`` with
     ``a = h_i P_i h_i^T``, ``b = h_j P_j h_j^T``, and ``g = P_i h_i^T``: the posterior position
@@ -113,7 +113,7 @@ def _posterior_position_det(P_own: Array, g: Array, a: Array, b: Array, r: float
     return m00 * m11 - m01 * m01
 
 
-def _posterior_state_log_det(P_own: Array, g: Array, a: Array, b: Array, r: float, w: Array):
+def _posterior_state_log_det(P_own: Array, g: Array, a: Array, b: Array, r, w: Array):
     """``log det`` of the receiver's whole posterior block (up to a constant) for CI weights
     ``w`` (n, G): by the matrix determinant lemma ``det(P / w - g g^T / (w^2 S)) = det(P) w^-s
     (1 - a / (w S))``, and ``1 - a / (w S) = w c / (a + w c)`` with ``c = b / (1 - w) + r``."""
@@ -143,7 +143,7 @@ def ci_weight(
         P_peer: the peer's covariance, shape (n, 3, 3).
         h_own: the measurement's Jacobian on the receiver's block, shape (n, s).
         h_peer: on the peer's block, shape (n, 3).
-        r_m2: the measurement's noise variance, m^2.
+        r_m2: the measurement's noise variance, m^2, scalar or (n,).
         grid: grid points.
         iterations: golden-section steps.
         criterion: ``"position"`` (the determinant of the posterior position block) or
@@ -157,6 +157,7 @@ def ci_weight(
     Pp = np.asarray(P_peer, dtype=float)
     ho = np.asarray(h_own, dtype=float)
     hp = np.asarray(h_peer, dtype=float)
+    r_m2 = np.broadcast_to(np.asarray(r_m2, dtype=float), (Po.shape[0],))[:, None]
     g = np.einsum("nij,nj->ni", Po, ho)
     a = np.einsum("ni,ni->n", ho, g)
     b = np.einsum("ni,nij,nj->n", hp, Pp, hp)
@@ -305,6 +306,7 @@ class CoopNavigator:
         velocity_m_s: ArrayLike | None = None,
         present: ArrayLike | None = None,
         sent_by_me: bool = False,
+        extra_var_m2: ArrayLike | None = None,
     ) -> tuple[UpdateInfo, Array]:
         """Fuse one range with the peer's broadcast (the module's CI update).
 
@@ -325,6 +327,7 @@ class CoopNavigator:
             sent_by_me: the range was transmitted by this vehicle and received by the peer, which
                 relays it in its broadcast (OWTT: ``h = r + c_nom (b_peer - b_me)``; with the
                 direct range of the pair it separates the clocks from the distance).
+            extra_var_m2: variance added to the range's (the DR noise over the lags), (n,), m^2.
 
         Returns:
             ``(info, w)``: the update's diagnostics and the CI weight of each run (1 for
@@ -340,6 +343,7 @@ class CoopNavigator:
             f"{me}_at": 0,
             f"{other}_at": s,
             "sigma_m": sigma_m,
+            "extra_var_m2": extra_var_m2,
             "dz_m": -dz if sent_by_me else dz,
             f"{me}_lag_s": lag_s,
             f"{me}_velocity_m_s": velocity_m_s,
@@ -365,7 +369,7 @@ class CoopNavigator:
                 peer.cov_m2,
                 H[:, :s],
                 H[:, s:],
-                sigma_m**2,
+                model.R()[..., 0, 0],
                 self.ci_grid,
                 self.ci_iterations,
                 self.ci_criterion,

@@ -66,6 +66,7 @@ class _Geometry:
     sender_lag_s: ArrayLike = 0.0
     receiver_velocity_m_s: ArrayLike | None = None
     sender_velocity_m_s: ArrayLike | None = None
+    extra_var_m2: ArrayLike | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.sigma_m) and self.sigma_m > 0):
@@ -101,8 +102,11 @@ class _Geometry:
         return H
 
     def R(self) -> Array:
-        """Noise, shape (1, 1), m^2."""
-        return np.array([[self.sigma_m**2]])
+        """Noise ``sigma_m^2`` (+ ``extra_var_m2`` per run), shape (1, 1) or (n, 1, 1), m^2."""
+        if self.extra_var_m2 is None:
+            return np.array([[self.sigma_m**2]])
+        extra = np.asarray(self.extra_var_m2, dtype=float)
+        return (self.sigma_m**2 + extra)[:, None, None]
 
     def residual(self, z: Array, hx: Array) -> Array:
         """``z - h(x)``, shape (n, 1), m."""
@@ -134,6 +138,10 @@ class OwttRangeMeasurement(_Geometry):
             its transmission, e.g. its broadcast).
         receiver_velocity_m_s: receiver's horizontal velocity, shape (n, 2) or None (zero), m/s.
         sender_velocity_m_s: sender's horizontal velocity, shape (n, 2) or None, m/s.
+        extra_var_m2: variance added to the range's, shape (n,), m^2, or ``None``: the dead
+            reckoning's noise over the lags (the positions moved back by the DR displacement
+            are not the state's: the DR error since the instant is in the state but not in the
+            range), an approximation of the delayed measurement without augmenting the state.
         sound_speed_m_s: the nominal sound speed ``c_nom`` that made the range, m/s.
         receiver_drift: whether the receiver's block holds a drift (at ``receiver_at + 3``).
         sender_drift: whether the sender's block holds a drift.
@@ -195,6 +203,7 @@ class TwttRangeMeasurement(_Geometry):
         dz_m: interrogator depth minus responder depth, m.
         receiver_lag_s, sender_lag_s: ``t_k`` minus the exchange's mid-time, s.
         receiver_velocity_m_s, sender_velocity_m_s: horizontal velocities, (n, 2), m/s.
+        extra_var_m2: variance added to the range's, (n,), m^2, or ``None``.
     """
 
     def h(self, x: Array) -> Array:

@@ -226,6 +226,7 @@ class TeamEkf:
         receiver_velocity_m_s: ArrayLike | None = None,
         sender_velocity_m_s: ArrayLike | None = None,
         present: ArrayLike | None = None,
+        extra_var_m2: ArrayLike | None = None,
     ) -> UpdateInfo:
         """Correct with one range between two vehicles of the team (:func:`nav.ekf.update_with`
         with :class:`OwttRangeMeasurement` or :class:`TwttRangeMeasurement`).
@@ -243,6 +244,7 @@ class TeamEkf:
             receiver_velocity_m_s, sender_velocity_m_s: horizontal velocities, (n, 2), m/s.
             present: runs with the range, shape (n,). Ranges below ``min_range_m`` or not
                 finite are left out.
+            extra_var_m2: variance added to the range's (the DR noise over the lags), (n,), m^2.
 
         Returns:
             The update's diagnostics.
@@ -260,6 +262,7 @@ class TeamEkf:
             sender_lag_s=sender_lag_s,
             receiver_velocity_m_s=receiver_velocity_m_s,
             sender_velocity_m_s=sender_velocity_m_s,
+            extra_var_m2=extra_var_m2,
         )
         if kind == "owtt":
             drift = self.options.estimate_drift

@@ -196,6 +196,45 @@ def _motion_since(
     return lag, np.where(moving[:, None], moved / np.where(moving, lag, 1.0)[:, None], 0.0)
 
 
+class _DrNoise:
+    """The dead reckoning's noise between an instant and a sample, per vehicle: the variance per
+    axis (half the trace) of the DR covariance accumulated over that time, the part of a step
+    taken in proportion to its time."""
+
+    def __init__(self, record: TeamRecord):
+        n, v, k = record.n_runs, record.n_vehicles, record.n_samples
+        cov = _dr_tracks(record).cov_m2.reshape(n, v, k, 2, 2)
+        self.acc = 0.5 * (cov[..., 0, 0] + cov[..., 1, 1])  # (n, v, k)
+        step = record.dr_step_cov_m2
+        self.step = 0.5 * (step[..., 0, 0] + step[..., 1, 1])  # (n, v, k - 1)
+        self.t = record.t_s
+        self.rows = np.arange(n)
+
+    def between(self, vehicle: int, instant_s: Array, q: int) -> Array:
+        """Variance per axis of the DR noise from ``instant_s`` (n,) to sample q (either order),
+        shape (n,), m^2."""
+        t, k = self.t, len(self.t)
+        lo, hi = np.minimum(instant_s, t[q]), np.maximum(instant_s, t[q])
+        a = np.clip(np.searchsorted(t, lo, side="right") - 1, 0, k - 2)
+        b = np.clip(np.searchsorted(t, hi, side="right") - 1, 0, k - 2)
+        dt = np.diff(t)
+        acc = self.acc[self.rows, vehicle]
+        step = self.step[self.rows, vehicle]
+        frac_a = np.clip((lo - t[a]) / dt[a], 0.0, 1.0)
+        frac_b = np.clip((hi - t[b]) / dt[b], 0.0, 1.0)
+        rows = self.rows
+        total = acc[rows, b] - acc[rows, a] + step[rows, b] * frac_b - step[rows, a] * frac_a
+        return np.maximum(total, 0.0)
+
+
+def _widened(peer: PeerEstimate, var_m2: Array) -> PeerEstimate:
+    """A broadcast with ``var_m2`` (n,) added to its position variances (its extrapolation)."""
+    cov = peer.cov_m2.copy()
+    cov[:, 0, 0] += var_m2
+    cov[:, 1, 1] += var_m2
+    return PeerEstimate(peer.position_m, peer.clock_offset_s, cov)
+
+
 def _central(record: TeamRecord, opts: CoopOptions) -> TeamTracks:
     n, v, k = record.n_runs, record.n_vehicles, record.n_samples
     sched = _Schedule(record)
@@ -203,6 +242,7 @@ def _central(record: TeamRecord, opts: CoopOptions) -> TeamTracks:
     vel = record.velocity_m_s()
     dr = _dr_tracks(record).position_m.reshape(n, v, k, 2)
     team = TeamEkf(record.start_m, record.start_cov_m2, opts)
+    noise = _DrNoise(record)
     out = _Outputs(n, v, k)
     for q in range(k):
         if q > 0:
@@ -240,6 +280,7 @@ def _central(record: TeamRecord, opts: CoopOptions) -> TeamTracks:
                 receiver_velocity_m_s=vel[:, i, max(q - 1, 0)],
                 sender_velocity_m_s=sender_velocity,
                 present=record.range_present[:, e],
+                extra_var_m2=noise.between(i, t_rx, q) + noise.between(j, t_tx, q),
             )
             out.used[:, i] += info.applied
         for i in range(v):
@@ -269,6 +310,7 @@ def _run_navigators(
     relay = owtt and opts.relay
     relays: dict[tuple[int, int], list[tuple[int, PeerEstimate]]] = {}
     dr = _dr_tracks(record).position_m.reshape(n, record.n_vehicles, k, 2)
+    noise = _DrNoise(record)
     for q in range(k):
         if q > 0:
             for i, nav in navs.items():
@@ -292,7 +334,8 @@ def _run_navigators(
                 b_i = navs[i].clock_offset if i in navs else 0.0
                 t_tx = 0.5 * (T + L) - b_i
             ahead = np.where(record.range_present[:, e], t_tx - t[q], 0.0)
-            sent[e] = navs[j].broadcast(ahead, vel[:, j, _step_index(q, k)])
+            made = navs[j].broadcast(ahead, vel[:, j, _step_index(q, k)])
+            sent[e] = _widened(made, noise.between(j, t[q] + ahead, q))
         for e in sched.rx[q] if use_ranges else ():
             i, j = int(record.range_receiver[e]), int(record.range_sender[e])
             if i not in navs or e not in sent:
@@ -318,13 +361,15 @@ def _run_navigators(
                     velocity_m_s=velocity,
                     present=record.range_present[:, e0] & record.range_present[:, e],
                     sent_by_me=True,
+                    extra_var_m2=noise.between(i, t[q] - lag, q),
                 )
                 out.used[:, vehicles.index(i)] += info.applied
             t_rx = L - nav.clock_offset if owtt else 0.5 * (T + L) - nav.clock_offset
             if relay and j in navs:  # i's estimate at the reception, before it uses the range
                 ahead = np.where(record.range_present[:, e], t_rx - t[q], 0.0)
+                made = nav.broadcast(ahead, vel[:, i, max(q - 1, 0)])
                 relays.setdefault((i, j), []).append(
-                    (e, nav.broadcast(ahead, vel[:, i, max(q - 1, 0)]))
+                    (e, _widened(made, noise.between(i, t[q] + ahead, q)))
                 )
             info, _ = nav.fuse_range(
                 record.range_m[:, e],
@@ -337,6 +382,7 @@ def _run_navigators(
                 lag_s=t[q] - t_rx,
                 velocity_m_s=vel[:, i, max(q - 1, 0)],
                 present=record.range_present[:, e],
+                extra_var_m2=noise.between(i, t_rx, q),
             )
             out.used[:, vehicles.index(i)] += info.applied
         for a, i in enumerate(vehicles):

@@ -84,8 +84,10 @@ def make_team(
     # fixes
     every = round(fix_every_s / dt_s)
     ticks = np.arange(every, k, every)
-    fix_tick = np.concatenate([ticks for _ in fix_vehicles])
-    fix_vehicle = np.concatenate([np.full(len(ticks), i) for i in fix_vehicles])
+    fix_tick = np.concatenate([ticks for _ in fix_vehicles] + [np.zeros(0, int)])
+    fix_vehicle = np.concatenate(
+        [np.full(len(ticks), i) for i in fix_vehicles] + [np.zeros(0, int)]
+    )
     fix_m = truth_m[:, fix_vehicle, fix_tick] + rng.normal(0, fix_sigma_m, (n, len(fix_tick), 2))
     fix_cov = np.broadcast_to(np.eye(2) * fix_sigma_m**2, (n, len(fix_tick), 2, 2)).copy()
     # clocks: local(t) = t + b0 + d t
