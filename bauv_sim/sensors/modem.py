@@ -62,6 +62,7 @@ from bauv_sim.sensors.online import (
     register_device,
 )
 from bauv_sim.truth import Truth
+from nav.acoustics import Propagation
 
 Array = NDArray[np.float64]
 
@@ -179,10 +180,24 @@ class Modem:
         seed: batch seed.
         runs: run indices of the rows.
         name: stream name of this link (e.g. ``"f1/modem"``): each link draws its own errors.
+        propagation: the sea's true medium (:class:`nav.acoustics.Propagation`), or ``None``:
+            straight rays at ``sound_speed_m_s`` (the numbers before sound-speed profiles, bit
+            for bit). With a medium, :meth:`sample` measures the nominal speed times the one-way
+            travel time along the eigenray from the sender to the receiver (the range a modem
+            reports), the range reaches the receiver after the true travel time, and no range is
+            produced where no direct ray reaches the receiver (a shadow zone).
     """
 
-    def __init__(self, cfg: ModemConfig, seed: int, runs: tuple[int, ...], name: str = "modem"):
+    def __init__(
+        self,
+        cfg: ModemConfig,
+        seed: int,
+        runs: tuple[int, ...],
+        name: str = "modem",
+        propagation: Propagation | None = None,
+    ):
         self.cfg = cfg
+        self.propagation = propagation
         self.n = len(runs)
         base = ("sensor", name)
         self._err = ErrorProcess(cfg.range.to_model(), seed, runs, (*base, "range"))
@@ -192,12 +207,18 @@ class Modem:
             else None
         )
 
-    def measure(self, true_range_m: Array, t_s: Array) -> tuple[Array, NDArray[np.bool_], Array]:
+    def measure(
+        self, true_range_m: Array, t_s: Array, travel_time_s: Array | None = None
+    ) -> tuple[Array, NDArray[np.bool_], Array]:
         """Measure true slant ranges.
 
         Args:
             true_range_m: true ranges between the transducers, shape (n, k), m.
             t_s: times of validity, shape (k,), s.
+            travel_time_s: one-way travel times along the eigenrays, shape (n, k), s (NaN: no
+                direct ray), or ``None``: straight at ``sound_speed_m_s``. With them, the range
+                before its errors is ``sound_speed_m_s * travel_time_s`` and the latency the
+                travel time.
 
         Returns:
             ``(range_m, produced, t_arrival_s)``, each shape (n, k): the measured range (m,
@@ -207,6 +228,8 @@ class Modem:
         c = self.cfg
         r = np.asarray(true_range_m, dtype=float)
         t = np.asarray(t_s, dtype=float)
+        if travel_time_s is not None:
+            return self._measure_travel(r, t, np.asarray(travel_time_s, dtype=float))
         meas, produced = self._err.apply(r, t)
         produced = produced & (r <= c.max_range_m) & (meas > c.min_range_m)
         produced &= np.isfinite(meas)
@@ -217,6 +240,25 @@ class Modem:
             lost = self._drop.draw("random", k) < c.dropout_probability
             produced &= ~lost
         t_arr = t[None, :] + r / c.sound_speed_m_s + c.processing_delay_s
+        return meas, produced, t_arr
+
+    def _measure_travel(
+        self, r: Array, t: Array, travel: Array
+    ) -> tuple[Array, NDArray[np.bool_], Array]:
+        """:meth:`measure` from travel times: the same errors, streams and losses, applied to
+        the nominal speed times the travel time."""
+        c = self.cfg
+        reached = np.isfinite(travel)
+        travel = np.where(reached, travel, r / c.sound_speed_m_s)
+        meas, produced = self._err.apply(c.sound_speed_m_s * travel, t)
+        produced = produced & reached & (r <= c.max_range_m) & (meas > c.min_range_m)
+        produced &= np.isfinite(meas)
+        for a, b in c.outages_s:
+            produced &= ~((t >= a) & (t < b))[None, :]
+        if self._drop is not None:
+            lost = self._drop.draw("random", r.shape[1]) < c.dropout_probability
+            produced &= ~lost
+        t_arr = t[None, :] + travel + c.processing_delay_s
         return meas, produced, t_arr
 
     def sample(self, sender: Truth, receiver: Truth, index: NDArray[np.intp]) -> SensorSamples:
@@ -235,7 +277,10 @@ class Modem:
         pa = broadcast_runs(point_world(a, arm), self.n)
         pb = broadcast_runs(point_world(b, arm), self.n)
         true_r = np.linalg.norm(pa - pb, axis=-1)
-        meas, produced, t_arr = self.measure(true_r, a.t_s)
+        travel = None
+        if self.propagation is not None:
+            travel = self.propagation.eigenray(pa, pb).travel_time_s
+        meas, produced, t_arr = self.measure(true_r, a.t_s, travel)
         return SensorSamples(a.t_s, meas, produced, t_arr)
 
 

@@ -12,6 +12,16 @@ Besides the per-component errors (:mod:`bauv_sim.sensors.errors`), a fix is not 
 ``max_range_m``, outside the transceiver's field of view (``min_elevation_deg``), or with
 ``dropout_probability``; it reaches the vehicle after the acoustic travel time plus a processing
 delay (the fix is valid for the moment of the reply).
+
+**The sea's medium.** Given the true medium (``propagation``, a :class:`nav.acoustics.Propagation`
+such as a layered sound-speed profile), the fix is what a USBL measures in it: the slant range is
+the nominal speed (``sound_speed_m_s``) times the one-way travel time of the reply along the
+eigenray, the elevation is the direction the reply arrives from at the transceiver's array (the
+bent ray's tangent), the azimuth is the straight line's (a stratified sea bends rays only in the
+vertical plane); the field of view is judged on the arrival elevation; the fix reaches the
+vehicle after the true travel time. No fix where no direct ray reaches the transceiver (a shadow
+zone of the profile). Without a medium (``None``, the default) the sound travels straight at
+``sound_speed_m_s``: the numbers are those before sound-speed profiles, bit for bit.
 """
 
 from __future__ import annotations
@@ -27,6 +37,7 @@ from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess, LengthErrorConfig
 from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
 from bauv_sim.truth import Truth
+from nav.acoustics import Propagation
 
 
 class UsblConfig(Config):
@@ -73,6 +84,8 @@ class Usbl:
         seed: batch seed.
         runs: run indices of the rows.
         name: stream name of this device.
+        propagation: the sea's true medium, or ``None`` (straight rays at ``sound_speed_m_s``;
+            module docstring).
     """
 
     def __init__(
@@ -82,8 +95,10 @@ class Usbl:
         seed: int,
         runs: tuple[int, ...],
         name: str = "usbl",
+        propagation: Propagation | None = None,
     ):
         self.cfg = cfg
+        self.propagation = propagation
         self.transceiver_world_m = np.asarray(transceiver_world_m, dtype=float)
         self.n = len(runs)
         base = ("sensor", name)
@@ -109,6 +124,8 @@ class Usbl:
         tr = truth.take(index)
         pos = broadcast_runs(point_world(tr, self.cfg.transponder_body_m), self.n)
         true_rae = range_azimuth_elevation(pos - self.transceiver_world_m)
+        if self.propagation is not None:
+            return self._sample_in_medium(tr.t_s, pos, true_rae)
         k = len(index)
         comps, produced = [], np.ones((self.n, k), dtype=bool)
         for j, err in enumerate(self._errs):
@@ -128,6 +145,41 @@ class Usbl:
         t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
         return SensorSamples(tr.t_s, meas, produced, t_arr)
 
+    def _sample_in_medium(
+        self, t_s: NDArray[np.float64], pos: NDArray[np.float64], true_rae: NDArray[np.float64]
+    ) -> SensorSamples:
+        """Fixes through the true medium: range = nominal speed x travel time of the reply,
+        elevation = arrival elevation at the transceiver (module docstring)."""
+        assert self.propagation is not None
+        ray = self.propagation.eigenray(pos, np.broadcast_to(self.transceiver_world_m, pos.shape))
+        reached = np.isfinite(ray.travel_time_s)
+        travel = np.where(reached, ray.travel_time_s, true_rae[..., 0] / self.cfg.sound_speed_m_s)
+        acoustic = np.stack(
+            [
+                self.cfg.sound_speed_m_s * travel,
+                true_rae[..., 1],
+                np.where(reached, ray.arrival_elevation_rad, true_rae[..., 2]),
+            ],
+            axis=-1,
+        )
+        k = len(t_s)
+        comps, produced = [], reached.copy()
+        for j, err in enumerate(self._errs):
+            ref = acoustic[..., 1] if err.model.needs_reference() else None
+            v, ok = err.apply(acoustic[..., j], t_s, reference_rad=ref)
+            comps.append(v)
+            produced &= ok
+        meas = np.stack(comps, axis=-1)
+        meas[..., 0] = np.abs(meas[..., 0])
+        meas[..., 1], meas[..., 2] = fold_azimuth_elevation(meas[..., 1], meas[..., 2])
+        produced &= true_rae[..., 0] <= self.cfg.max_range_m
+        produced &= acoustic[..., 2] >= np.radians(self.cfg.min_elevation_deg)
+        if self._drop is not None:
+            lost = self._drop.draw("random", k) < self.cfg.dropout_probability
+            produced &= ~lost
+        t_arr = t_s + travel + self.cfg.processing_delay_s
+        return SensorSamples(t_s, meas, produced, t_arr)
+
 
 @register_device(UsblConfig)
 class UsblDevice:
@@ -136,6 +188,8 @@ class UsblDevice:
 
     The transponder's lever arm is the configured one, or the model's site when it is zero.
     Value: ``(range m, azimuth rad, elevation rad)`` from the scene's transceiver, shape (3,).
+    With the sea's medium (``build.propagation``) the fix is the one through it (module
+    docstring).
     """
 
     kind = "event"
@@ -146,7 +200,14 @@ class UsblDevice:
         self.transceiver_world_m = build.physics.transceiver_world()
         self.name = build.name
         self.every = build.every(cfg.period_s)
-        self._usbl = Usbl(cfg, self.transceiver_world_m, build.seed, (build.run,), build.stream)
+        self._usbl = Usbl(
+            cfg,
+            self.transceiver_world_m,
+            build.seed,
+            (build.run,),
+            build.stream,
+            propagation=build.propagation,
+        )
 
     def step(self, ctx: TickContext) -> Measurement | None:
         """A fix at the USBL's ticks (``None`` when none is produced)."""

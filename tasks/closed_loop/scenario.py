@@ -10,6 +10,7 @@ from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
+from bauv_sim.acoustics import SoundSpeedConfig
 from bauv_sim.autopilot import AutopilotConfig
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
@@ -221,6 +222,11 @@ class MissionScenario(Config):
         default_factory=lambda: UniformCurrentConfig(speed_m_s=0.25, direction_deg=60.0)
     )
     sensors: MissionSensors = Field(default_factory=MissionSensors)
+    sound: SoundSpeedConfig = Field(
+        default_factory=SoundSpeedConfig,
+        description="the sea's true sound-speed profile for the acoustic devices (default: "
+        "none, each device's own sound_speed_m_s)",
+    )
     navigation: NavigationConfig = Field(default_factory=NavigationConfig)
     guidance: GuidanceConfig = Field(
         default_factory=lambda: GuidanceConfig(waypoints=(WaypointConfig(east_m=0, north_m=50),))

@@ -43,6 +43,7 @@ from bauv_sim.frames import unit_vector_scalar
 from bauv_sim.sea import Sea
 from bauv_sim.sensors.online import Peer
 from bauv_sim.sensors.rig import SensorRig
+from nav.acoustics import Propagation
 from nav.errors import NavError
 from nav.guidance import Waypoint, WaypointGuidance
 from tasks.closed_loop import parts as P
@@ -90,6 +91,7 @@ def standard_vehicle(
     prefix: str = "",
     guidance: P.Guidance | None = None,
     speed_table: Any = None,
+    propagation: Propagation | str | None = "scenario",
 ) -> P.VehicleParts:
     """One vehicle's parts from the standard scenario sections (``start``, ``sensors``,
     ``navigation``, ``guidance``, ``autopilot``): it is placed, its rig reads its lever arms from
@@ -106,7 +108,12 @@ def standard_vehicle(
         guidance: a guidance part of the mission's own (default: :class:`~tasks.closed_loop.
             parts.WaypointSteering` on ``scn.guidance``).
         speed_table: the speed calibration (default: the model's).
+        propagation: the sea's true acoustic medium for the rig's acoustic devices; by default
+            (``"scenario"``) the ``sound`` section of a :class:`MissionScenario` (``None`` for
+            its default and for other section types: each device's own sound speed).
     """
+    if isinstance(propagation, str):
+        propagation = scn.sound.propagation() if isinstance(scn, MissionScenario) else None
     table = speed_table if speed_table is not None else load_speed_table()
     pos = place_vehicle(physics, scn.start, seed, run, vehicle, prefix)
     s = scn.sensors
@@ -120,7 +127,14 @@ def standard_vehicle(
     if s.use_dvl:
         devices["dvl"] = s.dvl
     rig = SensorRig(
-        devices, physics, vehicle, seed, run, prefix, extra={"odometry": {"speed_table": table}}
+        devices,
+        physics,
+        vehicle,
+        seed,
+        run,
+        prefix,
+        extra={"odometry": {"speed_table": table}},
+        propagation=propagation,  # type: ignore[arg-type]
     )
     n = scn.navigation
     P0 = initial_covariance(n)

@@ -580,6 +580,16 @@ def test_trn_relief_block():
     same(roundtrip(block).value, block)
 
 
+def test_acoustics_sound_speed_block():
+    block = _block(
+        "acoustics/sound-speed", (3, 4), "usbl.fixes=5", "modem.horizontal_ranges_m=[300]"
+    )
+    assert block["usbl_horizontal_m"].shape == (2, 5, 2)
+    assert block["modem_error_m"].shape == (2, 3, 2)
+    assert block["usbl_present"].dtype == bool
+    same(roundtrip(block).value, block)
+
+
 def test_accuracy_block():
     assert _block("paper-000/accuracy", (0,)) is None
     assert roundtrip(None).value is None
@@ -638,6 +648,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "Seed004Experiment",
         "TrnExperiment",
         "TrnReliefExperiment",
+        "SoundSpeedExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
