@@ -11,7 +11,7 @@ import pytest
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.world import fly
 from tasks.core.runner import plan_batch
-from tasks.missions.swarm import LEADER, SwarmMission, station_offsets
+from tasks.missions.swarm import LEADER, SwarmMission, fly_run, station_offsets
 
 NAME = "mission/swarm"
 
@@ -97,3 +97,133 @@ def test_the_memory_estimate_counts_every_vehicle_of_every_flight():
     assert b[0].bytes == pytest.approx(a[0].bytes * 14 / 2)
     assert b[1].bytes == pytest.approx(a[1].bytes * 14 / 2)
     assert b[2:] == a[2:]
+
+
+# ---------------------------------------------------------------------------------------------
+# The acoustic network (issue 24)
+
+C_NOM = 1500.0
+F1_OFFSET_S = 0.002
+
+
+@pytest.fixture(scope="module")
+def networked():
+    """Three followers and the leader on the acoustic network for 26 s (ranges from 5 s, one
+    transmission per vehicle every 5 s); f1's clock runs 2 ms ahead of the others'."""
+    scn = scenario(
+        "timing.max_duration_s=26",
+        "followers.count=3",
+        "followers.network.enabled=true",
+        f"followers.network.clocks={{f1={{offset_s={F1_OFFSET_S}}}}}",
+        "navigation.method=ekf",
+    )
+    return scn, fly_run(scn, 5, 0)
+
+
+MODEM_SITE_M = np.array([0.36, 0.0, 0.166])
+"""The modem transducer in the hull model (models/bauv/bauv.xml, site ``modem``), body FLU, m."""
+
+
+def _at(v, t_s):
+    """A vehicle's true transducer position (east, north, up) at time ``t_s``: its reference
+    point linear between ticks, the lever arm rotated by the attitude of the nearest tick."""
+    from bauv_sim.frames import R_from_quat_wxyz
+
+    p = np.array([np.interp(t_s, v["t"], v["truth_pos"][:, a]) for a in range(3)])
+    q = int(np.argmin(np.abs(v["t"] - t_s)))
+    return p + R_from_quat_wxyz(v["truth_quat_wxyz"][q]) @ MODEM_SITE_M
+
+
+def test_every_vehicle_hears_every_other_with_its_clock_bias(networked):
+    """Each vehicle receives every other vehicle's transmissions (the cycles from 5 s); a range
+    is the true distance between the transmitter at its transmission and the receiver at the
+    reception plus c x (receiver's offset - sender's offset): +3 m for what f1 hears, -3 m for
+    what f1 sends, 0 otherwise (within 0.15 m: the device moves the sender from the tick before
+    its transmission with that tick's velocity, the hull swinging with the tail beat, and this
+    test interpolates between ticks)."""
+    _, res = networked
+    flight = res.flights["ekf"]
+    team = ("leader", "f1", "f2", "f3")
+    offset = {"leader": 0.0, "f1": F1_OFFSET_S, "f2": 0.0, "f3": 0.0}
+    for i, name in enumerate(team):
+        tab = flight.vehicles[name].fixes["network"]
+        senders = tab["sender"].values
+        others = [j for j in range(4) if j != i]
+        assert set(senders.tolist()) == set(others), name
+        assert all(4 <= (senders == j).sum() <= 5 for j in others), name  # cycles at 5 .. 25 s
+        for row, j in enumerate(senders):
+            sender = team[j]
+            t_tx = tab["tx_local"].values[row] - offset[sender]
+            p_tx = _at(flight.vehicles[sender], t_tx)
+            p_rx = _at(flight.vehicles[name], tab["t_valid"].values[row])
+            bias = C_NOM * (offset[name] - offset[sender])
+            true = float(np.linalg.norm(p_tx - p_rx))
+            assert tab["range"].values[row] - true == pytest.approx(bias, abs=0.15), (name, j)
+        assert np.all(tab["t_arrival"].values - tab["t_valid"].values == pytest.approx(0.5))
+
+
+def test_the_team_record_is_the_flights_measurements(networked):
+    """The record built after the flight holds every range each vehicle received (sender,
+    receiver, stamps, range), the leader's USBL fixes, and the dead-reckoned steps the
+    followers' EKF predicted with: between two ticks without a range its estimate moves by the
+    record's step exactly."""
+    from tasks.missions.swarm.team import team_record
+
+    scn, res = networked
+    flight = res.flights["ekf"]
+    rec = team_record(scn, flight)
+    team = ("leader", "f1", "f2", "f3")
+    for i, name in enumerate(team):
+        tab = flight.vehicles[name].fixes["network"]
+        mine = rec.range_receiver == i
+        assert mine.sum() == len(tab["range"].values)
+        np.testing.assert_array_equal(rec.range_m[0, mine], tab["range"].values)
+        np.testing.assert_array_equal(rec.range_sender[mine], tab["sender"].values)
+        np.testing.assert_array_equal(rec.range_rx_local_s[0, mine], tab["rx_local"].values)
+        t = rec.t_s
+        assert np.all(t[rec.range_rx_tick[mine]] >= tab["rx_local"].values - 1e-9)
+        tx = rec.range_tx_tick[mine]  # the sample at or before the scheduled transmission
+        assert np.all(t[tx] <= tab["tx_local"].values + 1e-9)
+        assert np.all(t[tx + 1] > tab["tx_local"].values + 1e-9)
+    usbl = flight.vehicles["leader"].fixes["usbl"]
+    np.testing.assert_array_equal(rec.fix_m[0], usbl["position"].values[:, :2])
+    for i, name in enumerate(team[1:], start=1):
+        v = flight.vehicles[name]
+        moved = np.diff(v["ekf_pos"][:, :2], axis=0)
+        quiet = ~v["fix_event"][1:].astype(bool)
+        assert quiet.sum() > 100
+        np.testing.assert_allclose(moved[quiet], rec.dr_step_m[0, i][quiet], atol=1e-9)
+        # over ground = the pure compass + log track through water + the current it held
+        through_water = np.diff(v["dr_pos"][:, :2], axis=0)
+        dt = np.diff(v["t"])[:, None]
+        held = v["current_est"][:-1]
+        assert np.abs(held).max() > 0.05  # the leader's current reached it
+        np.testing.assert_allclose(rec.dr_step_m[0, i], through_water + dt * held, atol=1e-9)
+
+
+def test_usbl_fix_covariance_is_the_noise_through_the_inverse_geometry():
+    """``H^-1 R H^-T`` against the covariance of positions inverted from measurements with the
+    stated noise, by finite differences of the inversion (range r along (azimuth, elevation))."""
+    from tasks.missions.swarm.team import usbl_fix_covariance
+
+    z = np.array([[80.0, 0.7, -0.2], [30.0, 4.0, -0.6]])
+    sig = (0.2, np.radians(1.0), np.radians(1.0))
+
+    def invert(m):
+        r, az, el = m
+        return np.array([r * np.cos(el) * np.sin(az), r * np.cos(el) * np.cos(az)])
+
+    for row, cov in zip(z, usbl_fix_covariance(z, sig), strict=True):
+        J = np.column_stack([(invert(row + h) - invert(row - h)) / 2e-6 for h in 1e-6 * np.eye(3)])
+        np.testing.assert_allclose(cov, J @ np.diag(np.square(sig)) @ J.T, rtol=1e-6)
+
+
+def test_the_network_changes_nothing_when_off():
+    """Off (the default), the followers keep the modem (no network device, no network table,
+    no team comparison, no ``team`` key in metrics.json; the golden mission_swarm is the check
+    bit for bit)."""
+    scn = scenario("timing.max_duration_s=12")
+    res = fly_run(scn, 1, 0)
+    assert res.team == {}
+    for v in res.flights["ekf"].vehicles.values():
+        assert "network" not in v.fixes and "network" not in v.outcome

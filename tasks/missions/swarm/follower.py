@@ -4,6 +4,7 @@ broadcast), and the per-tick columns a follower adds (:mod:`tasks.missions.swarm
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -16,8 +17,10 @@ from bauv_sim.sensors.rig import RigTick
 from nav.navigator import BroadcastRangeNavigator, FollowerOptions
 from nav.relative import GaOptions
 from tasks.closed_loop.navigation import FixRecord, NavOutput
+from tasks.missions.swarm.network import NETWORK, NetworkLog
 from tasks.missions.swarm.scenario import (
     DEPTH_SIGMA_M,
+    LEADER,
     REFUSAL_CODES,
     REFUSALS,
     FollowerNavigationConfig,
@@ -41,6 +44,11 @@ class FollowerNavigation:
         period_s: the modem period (the HDOP of the current geometry takes the estimate one
             period ago as the start of the DR segment), s.
         tick_s: control tick, s.
+        network: on the acoustic network (issue 24), where the ranges it receives are kept
+            (:class:`~tasks.missions.swarm.network.NetworkLog`), or ``None`` (the modem). On the
+            network the method uses the ranges from the leader alone, with the leader's
+            broadcast its packet carries, as the modem's: the clocks' offsets are not modelled
+            (they bias the range by the sound speed times their difference).
 
     The output's ``report`` is a :class:`nav.navigator.FollowerReport` (the leader's latest
     message and its position now, its course, the HDOP, the time since the last accepted range,
@@ -68,6 +76,7 @@ class FollowerNavigation:
         plan: Broadcast,
         period_s: float,
         tick_s: float,
+        network: NetworkLog | None = None,
     ):
         self.cfg = cfg
         self.method = method
@@ -92,6 +101,7 @@ class FollowerNavigation:
             depth_sigma_m=DEPTH_SIGMA_M,
         )
         self.arm = np.asarray(transducer_body_m, dtype=float)
+        self.network = network
         self.nav = BroadcastRangeNavigator(options, x0, plan, max(1, round(period_s / tick_s)))
 
     def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
@@ -102,10 +112,17 @@ class FollowerNavigation:
         nav.advance(t, heading, log_speed, tick.value("pressure"), initial)
         fixes, accepted_now = [], False
         for m in tick.arrived:
-            if m.device == "modem":
-                rec = self._range(t, m)
-                fixes.append(rec)
-                accepted_now |= rec.accepted
+            if m.device == NETWORK and self.network is not None:
+                self.network.add(m)
+                a = m.payload
+                if a.sender != LEADER or a.broadcast is None:
+                    continue
+                m = dataclasses.replace(m, t_valid_s=a.rx_local_s, payload=at_transmission(a))
+            elif m.device != "modem":
+                continue
+            rec = self._range(t, m)
+            fixes.append(rec)
+            accepted_now |= rec.accepted
         est, report = nav.end_tick(t, accepted_now)
         return NavOutput(
             t_s=t,
@@ -146,12 +163,13 @@ class FollowerNavigation:
         """Fix counts by outcome, the mean HDOP of accepted fixes, and the intervals without an
         accepted range longer than ``dr_warning_s`` (the last one still open at the end)."""
         nav = self.nav
-        return {
+        out = {
             "method": self.method,
             "fix_counts": dict(nav.counts),
             "mean_fix_hdop": nav.mean_fix_hdop,
             "dr_gaps_s": [list(g) for g in nav.dr_gaps_s()],
         }
+        return out if self.network is None else {**out, **self.network.outcome()}
 
 
 EN = ("east", "north")
@@ -176,3 +194,19 @@ FOLLOWER_COLUMNS = {
     "current_est": ("current", "m/s", "the follower's current estimate (zero: none)", EN, False),
 }
 """The per-tick columns a follower adds (see :class:`~tasks.closed_loop.parts.VehicleParts`)."""
+
+
+def at_transmission(a) -> Broadcast:
+    """The leader's broadcast a network packet carries (made at the tick at or before the
+    transmission) moved on with its stated velocity to the transmission's scheduled time, the
+    leader's clock being the team's time (``a``: an
+    :class:`~bauv_sim.acoustics.network.AcousticRange`)."""
+    b = a.broadcast
+    dt = a.tx_local_s - b.t_s
+    move = np.array([*(b.velocity_world_m_s * dt), 0.0])
+    return dataclasses.replace(
+        b,
+        t_s=a.tx_local_s,
+        position_world_m=b.position_world_m + move,
+        transducer_world_m=b.transducer_world_m + move,
+    )

@@ -14,6 +14,7 @@ from bauv_sim.frames import R_from_roll_pitch_heading, unit_vector_scalar
 from bauv_sim.sensors.online import Broadcast
 from bauv_sim.sensors.rig import RigTick
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput
+from tasks.missions.swarm.network import NETWORK, NetworkLog
 from tasks.missions.swarm.scenario import LEADER
 
 Array = NDArray[np.float64]
@@ -26,12 +27,27 @@ class LeaderNavigation:
         ekf: the standard navigation part.
         transducer_body_m: the leader's modem transducer, body FLU, m.
         window_ticks: the broadcast velocity is averaged over this many ticks.
+        network: on the acoustic network (issue 24), where the ranges it receives are kept
+            (:class:`~tasks.missions.swarm.network.NetworkLog`; its EKF does not use them), or
+            ``None``.
+        clock: what it states of its clock on the network, (offset s, variance s^2): the
+            team's time reference (:func:`~tasks.missions.swarm.coop.leader_clock_statement`);
+            ``None`` off the network.
     """
 
-    def __init__(self, ekf: EkfNavigation, transducer_body_m: Array, window_ticks: int):
+    def __init__(
+        self,
+        ekf: EkfNavigation,
+        transducer_body_m: Array,
+        window_ticks: int,
+        network: NetworkLog | None = None,
+        clock: tuple[float, float] | None = None,
+    ):
         self.ekf = ekf
         self.arm = np.asarray(transducer_body_m, dtype=float)
         self._v: collections.deque[tuple[float, float]] = collections.deque(maxlen=window_ticks)
+        self.network = network
+        self.clock = clock
 
     def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
         out = self.ekf.step(tick, initial)
@@ -46,7 +62,16 @@ class LeaderNavigation:
         cur = None if out.current_m_s is None else np.asarray(out.current_m_s, dtype=float).copy()
         P = out.estimate.P[:2, :2].copy()
         b = Broadcast(LEADER, out.t_s, x.copy(), x + R @ self.arm, v, P, cur)
+        if self.network is not None:
+            for m in tick.arrived:
+                if m.device == NETWORK:
+                    self.network.add(m)
+        if self.clock is not None:
+            b = dataclasses.replace(
+                b, clock_offset_s=self.clock[0], clock_offset_var_s2=self.clock[1]
+            )
         return dataclasses.replace(out, broadcast=b)
 
     def outcome(self) -> dict[str, Any]:
-        return self.ekf.outcome()
+        out = self.ekf.outcome()
+        return out if self.network is None else {**out, **self.network.outcome()}

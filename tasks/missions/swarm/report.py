@@ -7,7 +7,7 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, model_serializer
 
 from bauv_sim.currents import UniformCurrentConfig
 from tasks.closed_loop.experiment import MissionExperiment
@@ -33,8 +33,18 @@ class FollowerRow(BaseModel):
     values: dict[str, float]
 
 
+class TeamRow(BaseModel):
+    """One vehicle under one team method on the measurements of the flights of one method
+    (:mod:`tasks.missions.swarm.team`), means over the successful runs."""
+
+    flight: str = Field(description="the method the followers flew with")
+    method: str = Field(description="the team method run on that flight's measurements")
+    vehicle: str
+    values: dict[str, float]
+
+
 class SwarmMetrics(BaseModel):
-    """``metrics.json`` of ``mission/swarm``."""
+    """``metrics.json`` of ``mission/swarm`` (``team`` only on the acoustic network)."""
 
     schema_version: Literal[1] = 1
     experiment: str
@@ -50,6 +60,80 @@ class SwarmMetrics(BaseModel):
     leader: dict[str, dict[str, float]] = Field(description="per method, the leader's means")
     warnings: list[str]
     runs: list[dict[str, Any]] = Field(description="per run: method -> vehicle -> metrics")
+    team: list[TeamRow] | None = Field(
+        None,
+        description="on the acoustic network: per flight, team method and vehicle, the error "
+        "and NEES on the flight's measurements, means over runs",
+    )
+
+    @model_serializer(mode="wrap")
+    def _without_absent_team(self, handler):
+        out = handler(self)
+        if out.get("team") is None:
+            out.pop("team", None)
+        return out
+
+
+TEAM_KEYS = (
+    ("mean_error_m", "Mean error (m)"),
+    ("final_error_m", "Final error (m)"),
+    ("max_error_m", "Max error (m)"),
+    ("nees", "NEES (2 dof)"),
+    ("nees_high", "NEES band upper end"),
+    ("consistent", "Not over-confident (runs)"),
+    ("clock_rmse_ms", "Clock offset RMSE (ms)"),
+    ("ranges_used", "Ranges used"),
+)
+"""The team table's values (:func:`tasks.missions.swarm.team.team_comparison`)."""
+
+
+def team_rows(runs: list[SwarmRunResult], methods: list[str], names) -> list[TeamRow]:
+    """Means over the runs of the team comparison, per flight, team method and vehicle
+    (``consistent``: the count of runs whose NEES is at or below the band's upper end)."""
+    rows = []
+    for flight in methods:
+        done = [r.team[flight] for r in runs if flight in r.team]
+        if not done:
+            continue
+        for method in done[0]:
+            for vehicle in names:
+                values = {}
+                for key, _ in TEAM_KEYS:
+                    vals = [d[method][vehicle][key] for d in done if key in d[method][vehicle]]
+                    if vals:
+                        values[key] = float(np.sum(vals) if key == "consistent" else np.mean(vals))
+                rows.append(TeamRow(flight=flight, method=method, vehicle=vehicle, values=values))
+    return rows
+
+
+def team_table(rows: list[TeamRow], n_ok: int):
+    """The table of the team comparison (acceptance 4 of issue 24 on the physical vehicles)."""
+    from tasks.core.report import Table
+
+    return Table(
+        f"Team navigation on each flight's measurements ({n_ok} run(s), mean over runs)",
+        ["Flight", "Vehicle", "Method", *(label for _, label in TEAM_KEYS)],
+        [
+            [
+                row.flight.upper(),
+                row.vehicle,
+                row.method,
+                *(_cell(k, row.values.get(k)) for k, _ in TEAM_KEYS),
+            ]
+            for row in rows
+        ],
+        digits=3,
+        slug="team",
+        note=(
+            "Every method on the same data: the measurements the vehicles had in the flight "
+            "(each vehicle's dead reckoning, the leader's USBL fixes, every range of the acoustic "
+            "network) on the control tick's grid. ga2 and leader-ekf: seed 003 on each "
+            "follower's ranges from the leader alone (clocks not modelled); decentralised: "
+            "covariance intersection with the clocks in the state; central: one EKF over the "
+            "team (the reference). NEES: horizontal position, mean over the samples of a run; "
+            "band: two-sided 95 % for the mean of the runs' NEES (nav.cooperative.team_metrics)."
+        ),
+    )
 
 
 ROW_KEYS = (
@@ -66,7 +150,9 @@ ROW_KEYS = (
 )
 
 
-COUNT_KEYS = frozenset({"fixes_accepted", "fixes_refused", "usbl_fixes", "diverged_runs"})
+COUNT_KEYS = frozenset(
+    {"fixes_accepted", "fixes_refused", "usbl_fixes", "diverged_runs", "ranges_used", "consistent"}
+)
 """Row keys that count events: printed as whole numbers when the mean over runs is one."""
 
 
@@ -135,7 +221,12 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
         followers=rows,
         leader=leader,
         warnings=warnings,
-        runs=[{"run": r.run, "failed": r.failed, "metrics": r.metrics} for r in runs],
+        runs=[
+            {"run": r.run, "failed": r.failed, "metrics": r.metrics}
+            | ({"team": r.team} if r.team else {})
+            for r in runs
+        ],
+        team=team_rows(ok, methods, (LEADER, *names)) if scn.followers.network.enabled else None,
     )
     files = [write_metrics(ctx.out_dir, metrics)]
     for m in methods:
@@ -185,6 +276,8 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
         slug="leader",
     )
     tables = [t1, t2]
+    if metrics.team:
+        tables.append(team_table(metrics.team, len(ok)))
     if warnings or failures:
         tables.append(Table("Warnings", ["Warning"], [[w] for w in warnings], slug="warnings"))
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")

@@ -9,9 +9,12 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
+from bauv_sim.acoustics.channel import slot_senders
+from bauv_sim.acoustics.sound import SoundSpeedConfig
 from bauv_sim.autopilot import AutopilotConfig
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
+from bauv_sim.errors import ConfigError
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
@@ -43,10 +46,14 @@ from tasks.missions.swarm.formation import (
     racetrack,
     station_point_m,
 )
+from tasks.missions.swarm.network import SwarmNetworkConfig
+from tasks.missions.swarm.options import CoopNavigationConfig
 
 Array = NDArray[np.float64]
-Method = Literal["ga1", "ga2", "ekf", "dr"]
-METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr")
+Method = Literal["ga1", "ga2", "ekf", "dr", "decentralised"]
+METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr", "decentralised")
+LEADER_ONLY_METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr")
+"""Seed 003's methods: a follower navigates on the leader's ranges alone (``dr``: on none)."""
 MAX_FOLLOWERS = 12
 """The most followers a scenario may have (``followers.count``)."""
 FOLLOWERS = tuple(f"f{i}" for i in range(1, MAX_FOLLOWERS + 1))
@@ -126,6 +133,10 @@ class FollowersConfig(Config):
     )
     heading_sigma_deg: float = Field(2.0, ge=0, description="scatter of the start heading, deg")
     sensors: FollowerSensors = Field(default_factory=FollowerSensors)
+    network: SwarmNetworkConfig = Field(
+        default_factory=SwarmNetworkConfig,
+        description="the team's acoustic network (off by default: the followers' modem)",
+    )
     autopilot: AutopilotConfig = Field(default_factory=AutopilotConfig)
 
     @model_validator(mode="after")
@@ -193,7 +204,9 @@ class FollowerNavigationConfig(Config):
         "ekf",
         description="ga1, ga2 (eq. 3, 4), the range EKF, or dr (default: the range EKF, the "
         "method that keeps the follower on station in the physics; GA1 as printed loses it "
-        "after the leader's turn, models/bauv/README.md and the module docstring)",
+        "after the leader's turn, models/bauv/README.md and the module docstring); on the "
+        "acoustic network also decentralised (every range, clocks in the state, covariance "
+        "intersection: navigation.coop)",
     )
     methods: tuple[Method, ...] = Field(
         (),
@@ -232,6 +245,10 @@ class FollowerNavigationConfig(Config):
     hdop_warning: float = Field(
         3.0, gt=0, description="warn when the mean HDOP at a follower's fixes exceeds this"
     )
+    coop: CoopNavigationConfig = Field(
+        default_factory=CoopNavigationConfig,
+        description="the decentralised filter and the team methods compared after each flight",
+    )
     divergence_m: float = Field(
         25.0,
         gt=0,
@@ -268,6 +285,12 @@ class SwarmScenario(Config):
         default_factory=lambda: UniformCurrentConfig(speed_m_s=0.2, direction_deg=90.0),
         description="0.2 m/s towards east: across the racetrack's legs",
     )
+    sound: SoundSpeedConfig = Field(
+        default_factory=SoundSpeedConfig,
+        description="the sea's true sound-speed profile for every vehicle's acoustic devices "
+        "(the leader's USBL, the modem, the network); default: none, each device's own "
+        "sound_speed_m_s",
+    )
     leader: LeaderConfig = Field(default_factory=LeaderConfig)
     followers: FollowersConfig = Field(default_factory=FollowersConfig)
     navigation: FollowerNavigationConfig = Field(default_factory=FollowerNavigationConfig)
@@ -302,7 +325,25 @@ class SwarmScenario(Config):
                         f"{where}.{name}.period_s = {period:g}: the autopilot reads it every "
                         f"control tick ({tick:g} s)"
                     )
-        check_slots(fs.modem, tick, self.followers.count, "followers.sensors.modem")
+        net = self.followers.network
+        if not net.enabled:
+            check_slots(fs.modem, tick, self.followers.count, "followers.sensors.modem")
+            if "decentralised" in self.methods():
+                raise ValueError(
+                    "navigation.method(s): decentralised needs the acoustic network "
+                    "(followers.network.enabled = true)"
+                )
+        else:
+            if net.ranging != "owtt":
+                raise ValueError(
+                    f"followers.network.ranging = {net.ranging!r}: the vehicles' online device "
+                    "ranges by one-way travel time only ('owtt')"
+                )
+            names = (LEADER, *FOLLOWERS[: self.followers.count])
+            try:
+                slot_senders(net, names)
+            except ConfigError as exc:
+                raise ValueError(f"followers.{exc}") from None
         st = self.station
         if st.min_speed_m_s >= st.max_speed_m_s:
             raise ValueError(
