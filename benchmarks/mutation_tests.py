@@ -207,6 +207,9 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_swarm.py",
     ),
     "tasks/missions/swarm/run.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
+    "tasks/missions/swarm/formation.py": ("tests/tasks/test_swarm_team.py",),
+    "tasks/missions/swarm/team.py": ("tests/tasks/test_swarm_team.py",),
+    "tasks/missions/swarm/relay.py": ("tests/tasks/test_swarm_team.py",),
     "tasks/missions/swarm/report.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
     "tasks/missions/correction.py": (
         "tests/tasks/test_run_data.py",
@@ -1007,6 +1010,38 @@ ISSUE23 = [
 """Issue 23: the DVL device's lock and mounting, the DVL measurement model, the TRN likelihood,
 bound and particle covariance."""
 
+ISSUE24_SWARM = [
+    Mutation(
+        "swarm-record-current-of-next-tick",
+        "own",
+        "index",
+        "tasks/missions/swarm/team.py",
+        "    c = v[current][: k - 1, :2]",
+        "    c = v[current][1:k, :2]",
+        "the team record's DR step from tick q dead-reckoned with the current of tick q + 1",
+    ),
+    Mutation(
+        "swarm-relays-never-fused",
+        "own",
+        "default",
+        "tasks/missions/swarm/relay.py",
+        "                out.append(r)\n",
+        "                pass\n",
+        "a vehicle never fuses the ranges it sent that its peers relay back",
+    ),
+    Mutation(
+        "swarm-generated-station-ring",
+        "own",
+        "index",
+        "tasks/missions/swarm/formation.py",
+        "distance_m=STATION_RING_M * (ring + 1)",
+        "distance_m=STATION_RING_M * (ring + 2)",
+        "the generated stations' rings start at 20 m (the default stations move)",
+    ),
+]
+"""Issue 24, mission/swarm: the team record's dead reckoning, the relayed ranges of the
+decentralised followers, the generated stations."""
+
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
     *OWN,
@@ -1015,6 +1050,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_SEED004,
     *ISSUE22_CORE,
     *ISSUE23,
+    *ISSUE24_SWARM,
 ]
 
 _IGNORE = shutil.ignore_patterns(

@@ -227,3 +227,103 @@ def test_the_network_changes_nothing_when_off():
     assert res.team == {}
     for v in res.flights["ekf"].vehicles.values():
         assert "network" not in v.fixes and "network" not in v.outcome
+
+
+def test_decentralised_flies_on_the_network_and_the_batch_reports_the_team(tmp_path):
+    """A batch on the network with the decentralised method: every follower fuses the ranges
+    from every other vehicle and, relayed back in the receivers' broadcasts, the ranges it sent
+    (the clock offsets then stay near their true 0 instead of wandering by milliseconds); the
+    report has the team table and metrics.json the team rows of every method and vehicle
+    (NaN-free), and each vehicle's network table is exported."""
+    import json
+
+    from tasks.core.runner import run
+
+    out = tmp_path / "swarm"
+    run(
+        "mission/swarm",
+        n_runs=1,
+        seed=3,
+        out_dir=out,
+        progress=False,
+        overrides=[
+            "timing.max_duration_s=30",
+            "followers.count=2",
+            "followers.network.enabled=true",
+            "navigation.method=decentralised",
+            "report.recording=false",
+            "report.figures=false",
+        ],
+    )
+    text = (out / "metrics.json").read_text()
+    assert "NaN" not in text
+    m = json.loads(text)
+    assert m["n_failed"] == 0
+    rows = {(r["flight"], r["method"], r["vehicle"]): r["values"] for r in m["team"]}
+    methods = ("ga2", "leader-ekf", "decentralised", "central")
+    assert set(rows) == {
+        ("decentralised", meth, v) for meth in methods for v in ("leader", "f1", "f2")
+    }
+    for (_, meth, v), values in rows.items():
+        assert values["mean_error_m"] > 0 and values["nees"] > 0 and values["nees_high"] > 2
+        assert ("clock_rmse_ms" in values) == (meth in ("decentralised", "central"))
+        if v != "leader":
+            assert values["ranges_used"] >= (8 if meth in ("decentralised", "central") else 4)
+    assert "Team navigation" in (out / "tables.md").read_text()
+    assert (
+        m["runs"][0]["team"]["decentralised"]["central"]["f1"]
+        == rows[("decentralised", "central", "f1")]
+    )
+    assert (out / "data" / "run-000000-decentralised" / "f2.network.parquet").is_file()
+    for f in ("f1", "f2"):
+        got = m["runs"][0]["metrics"]["decentralised"][f]
+        assert got["fixes_accepted"] >= 8  # 2 senders x 5 cycles, the last may be cut
+    # the relays and the clock estimate, from the flight itself
+    from tasks.missions.swarm import fly_run
+
+    scn = plan_batch(
+        NAME,
+        overrides=[
+            "timing.max_duration_s=30",
+            "followers.count=2",
+            "followers.network.enabled=true",
+            "navigation.method=decentralised",
+        ],
+    ).scenario
+    res = fly_run(scn, 3, 0)
+    for f in ("f1", "f2"):
+        outcome = res.flights["decentralised"].vehicles[f].outcome
+        assert outcome["fix_counts"].get("relayed accepted", 0) >= 6, outcome["fix_counts"]
+        assert abs(outcome["clock_offset_s"]) < 2e-4  # true offset 0 (prior sigma 1 ms)
+
+
+@pytest.mark.slow
+def test_the_team_methods_on_a_decentralised_flight_rank_as_cooperation_predicts():
+    """Issue 24's acceptance 4 on the physical vehicles: three followers fly 400 s on the
+    network with the decentralised method; on that flight's measurements, averaged over the
+    followers, the centralised EKF's error is at most the decentralised filters', which is at
+    most seed 003's range EKF on the leader's ranges (measured, seed 0: 1.10, 1.45 and 1.61 m;
+    per follower central <= decentralised everywhere, but f1's leader-only EKF, 1.23 m, beats
+    its decentralised filter, 1.38 m), and the decentralised filters are not over-confident
+    (NEES 1.3-2.6 against the band's upper end 7.38), while GA2's stated covariance is
+    (NEES in the hundreds)."""
+    scn = scenario(
+        "timing.max_duration_s=400",
+        "followers.count=3",
+        "followers.network.enabled=true",
+        "navigation.method=decentralised",
+    )
+    res = fly_run(scn, 0, 0)
+    assert res.failed is None
+    team = res.team["decentralised"]
+    followers = ("f1", "f2", "f3")
+
+    def mean(method):
+        return np.mean([team[method][f]["mean_error_m"] for f in followers])
+
+    assert mean("central") <= mean("decentralised") <= mean("leader-ekf")
+    for f in followers:
+        assert team["central"][f]["mean_error_m"] <= team["decentralised"][f]["mean_error_m"]
+        dec = team["decentralised"][f]
+        assert dec["nees"] <= dec["nees_high"] and dec["consistent"] == 1.0
+        assert team["ga2"][f]["nees"] > team["ga2"][f]["nees_high"]

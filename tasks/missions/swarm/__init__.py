@@ -8,6 +8,11 @@ The package: :mod:`~tasks.missions.swarm.scenario` (the scenario and its section
 :class:`nav.navigator.BroadcastRangeNavigator`), :mod:`~tasks.missions.swarm.station` (station
 keeping), :mod:`~tasks.missions.swarm.design` (the mission's design: the scene, the vehicles and
 their parts),
+:mod:`~tasks.missions.swarm.network` (the team's acoustic network: its section, the device on
+every rig, what each vehicle heard), :mod:`~tasks.missions.swarm.options` (the cooperative
+filters' settings), :mod:`~tasks.missions.swarm.coop` (a follower's decentralised navigation),
+:mod:`~tasks.missions.swarm.relay` (ranges relayed back to their senders),
+:mod:`~tasks.missions.swarm.team` (the team methods compared on a flight's measurements),
 :mod:`~tasks.missions.swarm.run` (one run's flights and metrics) and
 :mod:`~tasks.missions.swarm.report` (tables, ``metrics.json``) with
 :mod:`~tasks.missions.swarm.figures` (figure, recording); this module registers the experiment.
@@ -72,6 +77,21 @@ says so. An aided estimate (the leader's EKF, a follower's GA1, GA2 or EKF) fart
 ``navigation.divergence_m`` from the vehicle's true position has diverged: the report and
 ``metrics.json`` name it with the time (``divergences``, a ``Diverged runs`` column) and ``bauv
 run`` exits with status 1.
+
+**A team that navigates together** (issue 24; ``--set followers.network.enabled=true``): every
+vehicle, the leader too, ranges to every other on the acoustic network
+(:mod:`bauv_sim.acoustics.network`: one-way travel times in TDMA slots kept by each vehicle's
+clock, ``followers.network.clocks``; the sender and the receiver at their own instants; packet
+loss by the sonar equation, collisions) in place of the followers' modem; each packet carries
+its sender's broadcast with its clock estimate. Only the leader has the USBL. The seed 003
+methods use the leader's ranges alone (the clocks' offsets bias them); ``navigation.method =
+decentralised`` flies each follower on :class:`nav.cooperative.CoopNavigator` (position and
+clock, every range fused with the sender's broadcast by covariance intersection, the ranges it
+sent relayed back by their receivers: :mod:`~tasks.missions.swarm.coop`). After each flight the
+same measurements go to every team method (:mod:`~tasks.missions.swarm.team`: seed 003's GA2
+and range EKF on the leader's ranges, the decentralised filters, the centralised EKF): the
+report's team table and ``metrics.json``'s ``team`` give each vehicle's error and NEES per
+method. ``sound`` sets the sea's sound-speed profile for every vehicle's acoustic devices.
 """
 
 from __future__ import annotations

@@ -52,6 +52,7 @@ from nav.relative import dr_increment, dr_increment_covariance, hdop
 from tasks.closed_loop.navigation import FixRecord, NavOutput
 from tasks.missions.swarm.network import NETWORK, NetworkLog
 from tasks.missions.swarm.options import current_covariance
+from tasks.missions.swarm.relay import RelayBook, RelayBroadcast, Relayed
 
 Array = NDArray[np.float64]
 
@@ -79,6 +80,8 @@ class CoopFollowerNavigation:
         use_leader_current: dead-reckon over ground with the current the leader sends.
         dr_warning_s: an interval without an accepted range this long is a DR gap, s.
         refusal_codes: the modem table's refusal codes by reason.
+        relay_window_s: with ``options.relay``, how long a received range is relayed in the
+            broadcasts (two TDMA cycles), s (:mod:`tasks.missions.swarm.relay`).
     """
 
     method = "decentralised"
@@ -104,6 +107,7 @@ class CoopFollowerNavigation:
         use_leader_current: bool,
         dr_warning_s: float,
         refusal_codes: dict[str, int],
+        relay_window_s: float,
     ):
         self.name, self.leader_name = name, leader
         self.nav = CoopNavigator.for_vehicle(
@@ -124,6 +128,7 @@ class CoopFollowerNavigation:
         self.current = np.zeros(2)
         self.velocity = np.zeros(2)
         self._q_rate = np.zeros((2, 2))
+        self.relays = RelayBook(name, relay_window_s) if options.relay else None
         self.speed, self.depth = 0.0, -float(x0[2])
         self.t_prev, self.last_fix_s = 0.0, 0.0
         self.gaps: list[tuple[float, float]] = []
@@ -175,6 +180,9 @@ class CoopFollowerNavigation:
             offset,
             var,
         )
+        if self.relays is not None:
+            relayed = self.relays.outgoing(t + offset)
+            broadcast = RelayBroadcast(**vars(broadcast), relayed=relayed)
         return NavOutput(
             t_s=t,
             estimate=est,
@@ -219,6 +227,13 @@ class CoopFollowerNavigation:
         lag = t - (a.rx_local_s - float(self.nav.clock_offset[0]))
         depth_i = self.depth - arm[2]
         depth_j = -float(b.transducer_world_m[2])
+        if self.relays is not None:
+            self._relayed(t, a.sender, b, arm, depth_i)
+            made = self.nav.broadcast(np.array([-lag]), self.velocity[None])
+            mine = PeerEstimate(made.position_m + arm[:2], made.clock_offset_s, made.cov_m2)
+            self.relays.keep(
+                Relayed(a.sender, a.tx_local_s, a.rx_local_s, a.range_m, mine, depth_i)
+            )
         info, w = self.nav.fuse_range(
             np.array([a.range_m]),
             peer,
@@ -258,6 +273,30 @@ class CoopFollowerNavigation:
         return FixRecord(
             "modem", m.t_valid_s, t, z, accepted, np.array([p[0], p[1], -self.depth]), nis
         )
+
+    def _relayed(self, t: float, relayer: str, b: Broadcast, arm: Array, depth_m: float) -> None:
+        """Fuse the ranges this vehicle sent that ``relayer`` relays in its broadcast ``b``
+        (:mod:`~tasks.missions.swarm.relay`): this vehicle at its transmission (``T - b_i``, its
+        state moved back by its velocity), the relayer's transducer at its reception less this
+        vehicle's lever arm."""
+        for r in self.relays.incoming(relayer, b):
+            e = r.estimate
+            peer = PeerEstimate(e.position_m - arm[:2], e.clock_offset_s, e.cov_m2)
+            lag = t - (r.tx_local_s - float(self.nav.clock_offset[0]))
+            info, _ = self.nav.fuse_range(
+                np.array([r.range_m]),
+                peer,
+                sigma_m=self.sigma_range_m,
+                depth_m=depth_m,
+                peer_depth_m=r.depth_m,
+                kind="owtt",
+                sound_speed_m_s=self.c,
+                lag_s=lag,
+                velocity_m_s=self.velocity[None],
+                sent_by_me=True,
+                extra_var_m2=np.array([0.5 * np.trace(self._q_rate) * max(lag, 0.0)]),
+            )
+            self.counts["relayed accepted" if info.applied[0] else "relayed refused"] += 1
 
     def _end_tick(self, t: float, fix_event: bool) -> tuple[Estimate, FollowerReport]:
         """The estimate and the seed 003 follower's report of this tick."""

@@ -23,6 +23,7 @@ from tasks.missions.swarm.follower import FOLLOWER_COLUMNS, FollowerNavigation
 from tasks.missions.swarm.leader import LeaderNavigation
 from tasks.missions.swarm.network import NETWORK, NetworkedRig, NetworkLog, network_extra
 from tasks.missions.swarm.options import coop_options, leader_clock_statement
+from tasks.missions.swarm.relay import RelayBook
 from tasks.missions.swarm.scenario import (
     DEPTH_SIGMA_M,
     FOLLOWERS,
@@ -96,8 +97,9 @@ class SwarmMission:
         window = max(1, round(scn.leader.velocity_window_s / tick))
         if net.enabled:
             lead.rig = NetworkedRig(lead.rig, self._network_rig(scn, seed, run, physics, LEADER))
+            relays = RelayBook(LEADER, 2 * net.period_s) if scn.navigation.coop.relay else None
             lead.navigation = LeaderNavigation(
-                lead.navigation, arm_l, window, NetworkLog(team), leader_clock_statement()
+                lead.navigation, arm_l, window, NetworkLog(team), leader_clock_statement(), relays
             )
         else:
             lead.navigation = LeaderNavigation(lead.navigation, arm_l, window)
@@ -193,4 +195,5 @@ def decentralised_navigation(
         c.current == "leader",
         c.dr_warning_s,
         REFUSAL_CODES,
+        2 * net.period_s,
     )

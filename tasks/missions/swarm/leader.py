@@ -13,8 +13,10 @@ from numpy.typing import NDArray
 from bauv_sim.frames import R_from_roll_pitch_heading, unit_vector_scalar
 from bauv_sim.sensors.online import Broadcast
 from bauv_sim.sensors.rig import RigTick
+from nav.cooperative import PeerEstimate
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput
 from tasks.missions.swarm.network import NETWORK, NetworkLog
+from tasks.missions.swarm.relay import RelayBook, RelayBroadcast, Relayed
 from tasks.missions.swarm.scenario import LEADER
 
 Array = NDArray[np.float64]
@@ -31,8 +33,12 @@ class LeaderNavigation:
             (:class:`~tasks.missions.swarm.network.NetworkLog`; its EKF does not use them), or
             ``None``.
         clock: what it states of its clock on the network, (offset s, variance s^2): the
-            team's time reference (:func:`~tasks.missions.swarm.coop.leader_clock_statement`);
+            team's time reference (:func:`~tasks.missions.swarm.options.leader_clock_statement`);
             ``None`` off the network.
+        relays: on the network with ``navigation.coop.relay``, the ranges it received that its
+            broadcast relays to their senders (:mod:`tasks.missions.swarm.relay`), each with its
+            transducer at the reception (its EKF's position moved back by its velocity, the
+            EKF's covariance, the clock stated), or ``None``.
     """
 
     def __init__(
@@ -42,12 +48,14 @@ class LeaderNavigation:
         window_ticks: int,
         network: NetworkLog | None = None,
         clock: tuple[float, float] | None = None,
+        relays: RelayBook | None = None,
     ):
         self.ekf = ekf
         self.arm = np.asarray(transducer_body_m, dtype=float)
         self._v: collections.deque[tuple[float, float]] = collections.deque(maxlen=window_ticks)
         self.network = network
         self.clock = clock
+        self.relays = relays
 
     def step(self, tick: RigTick, initial: bool = False) -> NavOutput:
         out = self.ekf.step(tick, initial)
@@ -66,11 +74,25 @@ class LeaderNavigation:
             for m in tick.arrived:
                 if m.device == NETWORK:
                     self.network.add(m)
+                    if self.relays is not None:
+                        self._keep(m, b)
         if self.clock is not None:
             b = dataclasses.replace(
                 b, clock_offset_s=self.clock[0], clock_offset_var_s2=self.clock[1]
             )
+        if self.relays is not None:
+            b = RelayBroadcast(**vars(b), relayed=self.relays.outgoing(out.t_s))
         return dataclasses.replace(out, broadcast=b)
+
+    def _keep(self, m, b: Broadcast) -> None:
+        """Keep a range it received to relay it, with its transducer at the reception."""
+        a = m.payload
+        lag = b.t_s - a.rx_local_s  # its clock is the team's time
+        at_rx = b.transducer_world_m - np.array([*(b.velocity_world_m_s * lag), 0.0])
+        offset, var = self.clock if self.clock is not None else (0.0, 0.0)
+        est = PeerEstimate.from_parts(at_rx[None, :2], b.covariance_m2[None], [offset], [var])
+        depth = -float(at_rx[2])
+        self.relays.keep(Relayed(a.sender, a.tx_local_s, a.rx_local_s, a.range_m, est, depth))
 
     def outcome(self) -> dict[str, Any]:
         out = self.ekf.outcome()

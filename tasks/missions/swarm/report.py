@@ -79,6 +79,7 @@ TEAM_KEYS = (
     ("final_error_m", "Final error (m)"),
     ("max_error_m", "Max error (m)"),
     ("nees", "NEES (2 dof)"),
+    ("nees_low", "NEES band lower end"),
     ("nees_high", "NEES band upper end"),
     ("consistent", "Not over-confident (runs)"),
     ("clock_rmse_ms", "Clock offset RMSE (ms)"),
