@@ -1041,6 +1041,41 @@ ISSUE24_SWARM = [
 ]
 """Issue 24, mission/swarm: the team record's dead reckoning, the relayed ranges of the
 decentralised followers, the generated stations."""
+ISSUE24 = [
+    # part C (nav-coop): the cooperative filters' clocks and covariance intersection
+    Mutation(
+        "coop-owtt-clock-jacobian-sign",
+        "own",
+        "sign",
+        "nav/cooperative/ranging.py",
+        "        H[:, 0, ra + 2] = c\n",
+        "        H[:, 0, ra + 2] = -c\n",
+        "the one-way range's derivative in the receiver's clock offset with the wrong sign",
+        tests=("tests/nav/test_coop_ranging.py", "tests/nav/test_coop_clock.py"),
+    ),
+    Mutation(
+        "coop-clock-drift-not-propagated",
+        "own",
+        "correction",
+        "nav/cooperative/decentralised.py",
+        "            fx[:, 2] += self.x[:, 3] * dt_s\n",
+        "            fx[:, 2] += 0.0\n",
+        "a vehicle's clock offset does not advance by its estimated drift between ranges",
+        tests=("tests/nav/test_coop_clock.py", "tests/nav/test_coop_team.py"),
+    ),
+    Mutation(
+        "coop-ci-without-inflation",
+        "own",
+        "correction",
+        "nav/cooperative/decentralised.py",
+        "            own_scale, peer_scale = 1.0 / w, 1.0 / (1.0 - w)\n",
+        "            own_scale, peer_scale = np.ones(n), np.ones(n)\n",
+        "covariance intersection without its scaled priors: the peer's estimate double counted",
+        tests=("tests/nav/test_coop_team.py",),
+    ),
+]
+"""Issue 24: the cooperative filters (part C): the OWTT clock term, the clock prediction, the CI
+bound."""
 
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
@@ -1051,6 +1086,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_CORE,
     *ISSUE23,
     *ISSUE24_SWARM,
+    *ISSUE24,
 ]
 
 _IGNORE = shutil.ignore_patterns(

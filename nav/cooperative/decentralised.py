@@ -129,7 +129,7 @@ def ci_weight(
     h_peer: ArrayLike,
     r_m2: float,
     grid: int = 16,
-    iterations: int = 30,
+    iterations: int = 20,
     criterion: str = "position",
 ) -> Array:
     """The covariance-intersection weight of a scalar measurement, per run: ``w`` in (0, 1)
@@ -220,7 +220,7 @@ class CoopNavigator:
         min_range_m: float = 0.5,
         gate_probability: float | None = None,
         ci_grid: int = 16,
-        ci_iterations: int = 30,
+        ci_iterations: int = 20,
         ci_criterion: str = "position",
     ):
         start = np.asarray(start_m, dtype=float)

@@ -77,7 +77,7 @@ class CoopOptions:
     min_range_m: float = 0.5
     gate_probability: float | None = None
     ci_grid: int = 16
-    ci_iterations: int = 30
+    ci_iterations: int = 20
     ci_criterion: str = "position"
     relay: bool = True
     ga: GaOptions = field(default_factory=GaOptions)

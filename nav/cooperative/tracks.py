@@ -218,8 +218,8 @@ class _DrNoise:
         a = np.clip(np.searchsorted(t, lo, side="right") - 1, 0, k - 2)
         b = np.clip(np.searchsorted(t, hi, side="right") - 1, 0, k - 2)
         dt = np.diff(t)
-        acc = self.acc[self.rows, vehicle]
-        step = self.step[self.rows, vehicle]
+        acc = self.acc[:, vehicle]
+        step = self.step[:, vehicle]
         frac_a = np.clip((lo - t[a]) / dt[a], 0.0, 1.0)
         frac_b = np.clip((hi - t[b]) / dt[b], 0.0, 1.0)
         rows = self.rows
@@ -425,10 +425,15 @@ def _leader_only(record: TeamRecord, method: str, opts: CoopOptions) -> TeamTrac
     used = np.zeros((n, v), dtype=np.int64)
     pos[:, 0], cov[:, 0] = leader.pos[:, 0], leader.cov[:, 0]
     from_leader = np.flatnonzero(record.range_sender == 0)
-    leader_var = [np.trace(sent[e].cov_m2[:, :2, :2], axis1=1, axis2=2) / 2 for e in from_leader]
-    leader_sigma = float(np.sqrt(np.mean(leader_var))) if leader_var else 0.0
-    start_sigma = float(np.sqrt(max(np.max(np.diagonal(record.start_cov_m2, 0, 2, 3)), 0.0)))
-    start_cov = np.eye(2) * start_sigma**2
+    # seed 003's EKF takes scalar sigmas: each run's own (so that a run's numbers do not depend
+    # on the other runs of its batch), the runs sharing a value filtered together
+    leader_var = np.zeros(n)
+    for e in from_leader:
+        leader_var += np.trace(sent[int(e)].cov_m2[:, :2, :2], axis1=1, axis2=2) / 2
+    leader_sigma = np.sqrt(leader_var / max(len(from_leader), 1))
+    start_var = np.diagonal(record.start_cov_m2, 0, 2, 3).reshape(n, -1).max(axis=1)
+    start_sigma = np.sqrt(np.maximum(start_var, 0.0))
+    start_cov = np.eye(2) * (start_sigma**2)[:, None, None, None]
     dr_all = _dr_tracks(record, start_cov)
     dr_pos = dr_all.position_m.reshape(n, v, k, 2)
     dr_cov = dr_all.cov_m2.reshape(n, v, k, 2, 2)
@@ -455,17 +460,52 @@ def _leader_only(record: TeamRecord, method: str, opts: CoopOptions) -> TeamTrac
         if method == "ga2":
             ga = replace(opts.ga, sigma_range_m=record.sigma_range_m)
             track = ga_track("ga2", dr, ranges, ga)
+            track_pos, fix_cov, accepted = track.position_m, track.fix_cov_m2, track.accepted
+            fix_used = accepted
         else:
-            ekf_opts = RangeEkfOptions(
-                sigma_range_m=record.sigma_range_m,
-                min_range_m=opts.min_range_m,
-                initial_sigma_m=start_sigma,
-                leader_sigma_m=leader_sigma,
+            track_pos, fix_cov, accepted = _leader_ekf(
+                record, opts, dr, ranges, start_sigma, leader_sigma
             )
-            track = ekf_track(dr, ranges, ekf_opts)
-        pos[:, i] = track.position_m
-        fix_used = track.accepted if method == "ga2" else np.ones_like(track.accepted)
-        cov[:, i] = _cov_since_fixes(dr_cov[:, i], ranges.fix_tick, track.fix_cov_m2, fix_used)
-        used[:, i] = track.accepted.sum(axis=1)
+            fix_used = np.ones_like(accepted)
+        pos[:, i] = track_pos
+        cov[:, i] = _cov_since_fixes(dr_cov[:, i], ranges.fix_tick, fix_cov, fix_used)
+        used[:, i] = accepted.sum(axis=1)
     zeros = np.zeros((n, v, k))
     return TeamTracks(method, pos, cov, zeros, zeros.copy(), False, used)
+
+
+def _leader_ekf(
+    record: TeamRecord,
+    opts: CoopOptions,
+    dr: DeadReckonedTrack,
+    ranges: LeaderRanges,
+    start_sigma: Array,
+    leader_sigma: Array,
+) -> tuple[Array, Array, NDArray[np.bool_]]:
+    """Seed 003's range EKF (:func:`nav.relative.ekf_track`) on groups of runs with equal sigmas
+    (start, leader; per run, shape (n,)): positions (n, k, 2), posterior at each range
+    (n, K, 2, 2), accepted (n, K)."""
+    n, k = dr.position_m.shape[:2]
+    n_fix = len(ranges.fix_tick)
+    pos, fix_cov = np.empty((n, k, 2)), np.empty((n, n_fix, 2, 2))
+    accepted = np.zeros((n, n_fix), dtype=bool)
+    keys, group = np.unique(
+        np.stack([start_sigma, leader_sigma], axis=1), axis=0, return_inverse=True
+    )
+    for g, (s0, sl) in enumerate(keys):
+        rows = np.flatnonzero(group.ravel() == g)
+        options = RangeEkfOptions(
+            sigma_range_m=record.sigma_range_m,
+            min_range_m=opts.min_range_m,
+            initial_sigma_m=float(s0),
+            leader_sigma_m=float(sl),
+        )
+        part = ekf_track(
+            DeadReckonedTrack(dr.position_m[rows], dr.cov_m2[rows]),
+            LeaderRanges(
+                ranges.fix_tick, ranges.range_m[rows], ranges.present[rows], ranges.leader_m[rows]
+            ),
+            options,
+        )
+        pos[rows], fix_cov[rows], accepted[rows] = part.position_m, part.fix_cov_m2, part.accepted
+    return pos, fix_cov, accepted

@@ -162,3 +162,70 @@ def test_the_centralised_update_equals_filterpy_on_a_small_team():
     assert np.allclose(team.P[0], f.P, rtol=1e-10, atol=1e-16)
     # the range moved the clock offsets (it observes them)
     assert abs(team.x[0, 6] - x0[0, 6]) > 1e-6
+
+
+def test_prediction_is_the_two_state_clock_model_worked_out_by_hand():
+    # x = [e, n, b, d] per vehicle; over dt: p += step, b += d dt; P -> F P F^T + Q with
+    # F = [[I, 0], [0, [[1, dt], [0, 1]]]] and Q = blockdiag(step_cov, clock Q of Brown & Hwang)
+    qb, qd, dt = 1e-12, 1e-18, 2.0
+    clock = ClockOptions(
+        offset_sigma_s=1e-3, drift_sigma=1e-6, offset_noise_s2_per_s=qb, drift_noise_per_s=qd
+    )
+    opts = CoopOptions(clock=clock, leader_clock=clock)
+    start = np.array([[[0.0, 0.0], [10.0, 20.0]]])
+    team = TeamEkf(start, np.array([[np.eye(2), 2 * np.eye(2)]]), opts)
+    team.x[0, 3], team.x[0, 7] = 3e-6, -2e-6  # drifts
+    team.x[0, 2], team.x[0, 6] = 1e-3, -5e-4  # offsets
+    team.P[0, 2, 3] = team.P[0, 3, 2] = 1e-10  # an offset-drift correlation
+    x0, P0 = team.x[0].copy(), team.P[0].copy()
+    step = np.array([[[1.0, -0.5], [0.3, 0.2]]])
+    step_cov = np.array([[np.eye(2) * 0.01, np.eye(2) * 0.04]])
+    team.predict(step, step_cov, dt)
+    F = np.eye(8)
+    F[2, 3] = F[6, 7] = dt
+    Q = np.zeros((8, 8))
+    Q[:2, :2], Q[4:6, 4:6] = step_cov[0, 0], step_cov[0, 1]
+    for b in (2, 6):
+        Q[b, b] = qb * dt + qd * dt**3 / 3
+        Q[b, b + 1] = Q[b + 1, b] = qd * dt**2 / 2
+        Q[b + 1, b + 1] = qd * dt
+    want = x0.copy()
+    want[[0, 1, 4, 5]] += step[0].ravel()
+    want[2] += 3e-6 * dt
+    want[6] += -2e-6 * dt
+    assert np.allclose(team.x[0], want, rtol=0, atol=1e-15)
+    assert np.allclose(team.P[0], F @ P0 @ F.T + Q, rtol=1e-12, atol=1e-30)
+    # the decentralised navigator predicts its block the same way
+    from nav.cooperative import CoopNavigator
+
+    nav = CoopNavigator(start[:, 1], np.array([2 * np.eye(2)]), clock)
+    nav.x[0], nav.P[0] = x0[4:], P0[4:, 4:]
+    nav.predict(step[:, 1], step_cov[:, 1], dt)
+    assert np.allclose(nav.x[0], want[4:], rtol=0, atol=1e-15)
+    assert np.allclose(nav.P[0], (F @ P0 @ F.T + Q)[4:, 4:], rtol=1e-12, atol=1e-30)
+
+
+def test_a_two_way_range_does_not_touch_the_clocks_and_a_one_way_range_does():
+    from nav.cooperative import CoopNavigator, PeerEstimate
+
+    n = 4
+    clock = ClockOptions(offset_sigma_s=1e-3, drift_sigma=1e-6)
+    peer = PeerEstimate.from_parts(
+        np.tile([50.0, 0.0], (n, 1)), np.tile(np.eye(2), (n, 1, 1)), np.zeros(n), np.full(n, 1e-8)
+    )
+    out = {}
+    for kind in ("twtt", "owtt"):
+        nav = CoopNavigator(np.zeros((n, 2)), np.tile(np.eye(2) * 4.0, (n, 1, 1)), clock)
+        x0, P0 = nav.x.copy(), nav.P.copy()
+        info, w = nav.fuse_range(
+            np.full(n, 51.5), peer, sigma_m=0.1, depth_m=5.0, peer_depth_m=5.0, kind=kind
+        )
+        assert info.applied.all() and np.all((w > 0) & (w < 1))
+        assert not np.allclose(nav.x[:, 0], x0[:, 0])  # the position moved
+        out[kind] = (nav.x - x0, nav.P - P0)
+    # two-way: no information on the clocks (CI may widen them: its bound, 1/w, where the range
+    # says nothing)
+    dx, dP = out["twtt"]
+    assert np.all(dx[:, 2:] == 0) and np.all(dP[:, 2, 2] >= 0)
+    dx, dP = out["owtt"]
+    assert np.all(np.abs(dx[:, 2]) > 0) and np.all(dP[:, 2, 2] < 0)

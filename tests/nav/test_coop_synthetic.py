@@ -51,6 +51,18 @@ def truth(vehicle, t, phase):
     return p + OFFSETS[vehicle] + wander
 
 
+def _arrival(sender, t_tx, receiver, guess, phase):
+    """True reception time of a ping sent by ``sender`` at ``t_tx`` (n,): the fixed point of
+    ``t_rx = t_tx + |p_s(t_tx) - p_r(t_rx)| / c`` on the receiver's trajectory."""
+    p_tx = truth(sender, t_tx, phase[:, sender])
+    t_rx = guess.copy()
+    for _ in range(6):
+        p_rx = truth(receiver, t_rx, phase[:, receiver])
+        dz = DEPTHS[receiver] - DEPTHS[sender]
+        t_rx = t_tx + np.sqrt(((p_rx - p_tx) ** 2).sum(-1) + dz**2) / C
+    return t_rx
+
+
 def make_team(
     n=20,
     v=4,
@@ -67,6 +79,8 @@ def make_team(
     slot_s=2.0,
     leader_offset_sigma_s=1e-7,
     fix_vehicles=(0,),
+    kind="owtt",
+    turnaround_s=0.5,
 ):
     rng = np.random.default_rng(seed)
     k = round(duration_s / dt_s) + 1
@@ -107,15 +121,24 @@ def make_team(
         for s in range(v):
             T = np.full(n, base + s * slot_s + 0.1)
             t_tx = (T - b0[:, s]) / (1.0 + d[:, s])
-            p_tx = truth(s, t_tx, phase[:, s])
+            if kind == "twtt":  # s interrogates one peer per slot, round robin
+                r = (s + 1 + cycle % (v - 1)) % v
+                t1 = _arrival(s, t_tx, r, t_tx, phase)
+                t2 = t1 + turnaround_s / (1.0 + d[:, r])  # the reply, the responder's clock
+                t3 = _arrival(r, t2, s, t2, phase)
+                L = t3 + b0[:, s] + d[:, s] * t3 + rng.normal(0, 2 * sigma_range_m / C, n)
+                ev["s"].append(r)
+                ev["r"].append(s)
+                ev["tx"].append(int(np.floor(t_tx.min() / dt_s + 1e-9)))
+                ev["rx"].append(int(np.ceil(t3.max() / dt_s - 1e-9)))
+                ev["z"].append(C * (L - T - turnaround_s) / 2)
+                ev["T"].append(T)
+                ev["L"].append(L)
+                continue
             for r in range(v):
                 if r == s:
                     continue
-                t_rx = t_tx.copy()
-                for _ in range(6):
-                    p_rx = truth(r, t_rx, phase[:, r])
-                    dist = np.sqrt(((p_rx - p_tx) ** 2).sum(-1) + (DEPTHS[r] - DEPTHS[s]) ** 2)
-                    t_rx = t_tx + dist / C
+                t_rx = _arrival(s, t_tx, r, t_tx, phase)
                 L = t_rx + b0[:, r] + d[:, r] * t_rx + rng.normal(0, sigma_range_m / C, n)
                 ev["s"].append(s)
                 ev["r"].append(r)
@@ -146,7 +169,7 @@ def make_team(
         range_tx_local_s=np.stack(ev["T"], axis=1),
         range_rx_local_s=np.stack(ev["L"], axis=1),
         range_present=np.ones((n, m), dtype=bool),
-        kind="owtt",
+        kind=kind,
         sound_speed_m_s=C,
         sigma_range_m=sigma_range_m,
     )
