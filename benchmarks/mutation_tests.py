@@ -210,8 +210,14 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "tasks/paper003/run.py": ("tests/tasks/test_paper003.py",),
     "tasks/paper003/report.py": ("tests/tasks/test_paper003.py",),
     "tasks/paper003/square.py": ("tests/tasks/test_paper003.py",),
-    "tasks/missions/swarm/parts.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
+    "tasks/missions/swarm/follower.py": (
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_swarm.py",
+    ),
     "tasks/missions/swarm/run.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
+    "tasks/missions/swarm/formation.py": ("tests/tasks/test_swarm_team.py",),
+    "tasks/missions/swarm/team.py": ("tests/tasks/test_swarm_team.py",),
+    "tasks/missions/swarm/relay.py": ("tests/tasks/test_swarm_team.py",),
     "tasks/missions/swarm/report.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
     "tasks/missions/correction.py": (
         "tests/tasks/test_run_data.py",
@@ -668,7 +674,7 @@ OWN: list[Mutation] = [
         "swarm-leader-course-unit-deg",
         "own",
         "unit",
-        "tasks/missions/swarm/parts.py",
+        "tasks/missions/swarm/follower.py",
         '"leader_course": ("leader_course", "rad", "the leader\'s stated course", (), False)',
         '"leader_course": ("leader_course", "deg", "the leader\'s stated course", (), False)',
         "the swarm followers' leader_course labelled deg",
@@ -718,7 +724,7 @@ OWN: list[Mutation] = [
         "modem-t-valid-t-arrival-swapped",
         "own",
         "columns",
-        "tasks/missions/swarm/parts.py",
+        "tasks/missions/swarm/follower.py",
         'FixRecord("modem", m.t_valid_s, t, z,',
         'FixRecord("modem", t, m.t_valid_s, z,',
         "the modem table's t_valid and t_arrival swapped",
@@ -809,7 +815,7 @@ OWN_ROUND2: list[Mutation] = [
         "modem-centre-columns-swapped",
         "own",
         "columns",
-        "tasks/missions/swarm/parts.py",
+        "tasks/missions/swarm/follower.py",
         "                centre[0],\n                centre[1],\n",
         "                centre[1],\n                centre[0],\n",
         "the modem table's centre_east and centre_north swapped",
@@ -1065,6 +1071,37 @@ ISSUE24_RAYS = [
 ]
 """Issue 24, part A: the layered medium's eigenray (distance per layer, arrival sign of a
 turning ray), the USBL source traced back, the devices in a profile."""
+ISSUE24_SWARM = [
+    Mutation(
+        "swarm-record-current-of-next-tick",
+        "own",
+        "index",
+        "tasks/missions/swarm/team.py",
+        "    c = v[current][: k - 1, :2]",
+        "    c = v[current][1:k, :2]",
+        "the team record's DR step from tick q dead-reckoned with the current of tick q + 1",
+    ),
+    Mutation(
+        "swarm-relays-never-fused",
+        "own",
+        "default",
+        "tasks/missions/swarm/relay.py",
+        "                out.append(r)\n",
+        "                pass\n",
+        "a vehicle never fuses the ranges it sent that its peers relay back",
+    ),
+    Mutation(
+        "swarm-generated-station-ring",
+        "own",
+        "index",
+        "tasks/missions/swarm/formation.py",
+        "distance_m=STATION_RING_M * (ring + 1)",
+        "distance_m=STATION_RING_M * (ring + 2)",
+        "the generated stations' rings start at 20 m (the default stations move)",
+    ),
+]
+"""Issue 24, mission/swarm: the team record's dead reckoning, the relayed ranges of the
+decentralised followers, the generated stations."""
 ISSUE24 = [
     Mutation(
         "acoustic-receiver-frozen-during-travel",
@@ -1195,6 +1232,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE22_CORE,
     *ISSUE23,
     *ISSUE24_RAYS,
+    *ISSUE24_SWARM,
     *ISSUE24,
     *ISSUE24_COOP,
 ]

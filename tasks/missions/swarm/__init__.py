@@ -2,13 +2,24 @@
 one acoustic range every 5 s (Naus & Piskur 2022).
 
 The package: :mod:`~tasks.missions.swarm.scenario` (the scenario and its sections),
-:mod:`~tasks.missions.swarm.parts` (the leader's broadcast, the followers' navigation adapters
-to :class:`nav.navigator.BroadcastRangeNavigator`, station keeping, the mission's design),
+:mod:`~tasks.missions.swarm.formation` (the leader's pattern, the followers' stations),
+:mod:`~tasks.missions.swarm.leader` (the leader's broadcast),
+:mod:`~tasks.missions.swarm.follower` (a follower's navigation: the adapter of its rig to
+:class:`nav.navigator.BroadcastRangeNavigator`), :mod:`~tasks.missions.swarm.station` (station
+keeping), :mod:`~tasks.missions.swarm.design` (the mission's design: the scene, the vehicles and
+their parts),
+:mod:`~tasks.missions.swarm.network` (the team's acoustic network: its section, the device on
+every rig, what each vehicle heard), :mod:`~tasks.missions.swarm.options` (the cooperative
+filters' settings), :mod:`~tasks.missions.swarm.coop` (a follower's decentralised navigation),
+:mod:`~tasks.missions.swarm.relay` (ranges relayed back to their senders),
+:mod:`~tasks.missions.swarm.team` (the team methods compared on a flight's measurements),
 :mod:`~tasks.missions.swarm.run` (one run's flights and metrics) and
-:mod:`~tasks.missions.swarm.report` (tables, figure, recording); this module registers the
-experiment.
+:mod:`~tasks.missions.swarm.report` (tables, ``metrics.json``) with
+:mod:`~tasks.missions.swarm.figures` (figure, recording); this module registers the experiment.
 
-One sea, one MuJoCo model, up to five vehicles namespaced ``leader``, ``f1`` .. ``f4``:
+One sea, one MuJoCo model, a leader and up to 12 followers namespaced ``leader``, ``f1``,
+``f2`` ... (``followers.count``; the modem's five-second period holds six slots, more need a
+longer ``followers.sensors.modem.period_s``):
 
 * **The leader** flies a way-point pattern (a racetrack, :func:`racetrack`: 230 m north, a half
   circle of 50 m radius, 230 m south, about 10 minutes at 1 m/s) on the standard navigation
@@ -33,7 +44,9 @@ One sea, one MuJoCo model, up to five vehicles namespaced ``leader``, ``f1`` .. 
   0.2 m/s cross current, which the paper's DR model lacks, drags every method's estimate along
   the track within minutes (measured; see :class:`FollowerNavigation`).
 * **Station keeping** (:class:`StationGuidance`): the station is a point at
-  ``followers.stations[i]`` (relative bearing clockwise from the leader's course, distance) from
+  ``followers.stations[i]`` (relative bearing clockwise from the leader's course, distance; for
+  the followers beyond the list, rings of three stations, abeam to starboard, abeam to port and
+  astern, at 10, 20, 30 ... m: :func:`generated_station`, whose first four are the defaults) from
   the leader's position dead-reckoned from its last message with its stated velocity. The
   follower asks for the leader's velocity plus a proportional-integral correction towards the
   station computed from its own estimate (the integral takes up the current the follower cannot
@@ -64,30 +77,44 @@ says so. An aided estimate (the leader's EKF, a follower's GA1, GA2 or EKF) fart
 ``navigation.divergence_m`` from the vehicle's true position has diverged: the report and
 ``metrics.json`` name it with the time (``divergences``, a ``Diverged runs`` column) and ``bauv
 run`` exits with status 1.
+
+**A team that navigates together** (issue 24; ``--set followers.network.enabled=true``): every
+vehicle, the leader too, ranges to every other on the acoustic network
+(:mod:`bauv_sim.acoustics.network`: one-way travel times in TDMA slots kept by each vehicle's
+clock, ``followers.network.clocks``; the sender and the receiver at their own instants; packet
+loss by the sonar equation, collisions) in place of the followers' modem; each packet carries
+its sender's broadcast with its clock estimate. Only the leader has the USBL. The seed 003
+methods use the leader's ranges alone (the clocks' offsets bias them); ``navigation.method =
+decentralised`` flies each follower on :class:`nav.cooperative.CoopNavigator` (position and
+clock, every range fused with the sender's broadcast by covariance intersection, the ranges it
+sent relayed back by their receivers: :mod:`~tasks.missions.swarm.coop`). After each flight the
+same measurements go to every team method (:mod:`~tasks.missions.swarm.team`: seed 003's GA2
+and range EKF on the leader's ranges, the decentralised filters, the centralised EKF): the
+report's team table and ``metrics.json``'s ``team`` give each vehicle's error and NEES per
+method. ``sound`` sets the sea's sound-speed profile for every vehicle's acoustic devices.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import MissionExperiment
-from tasks.core.registry import ReportContext, ReportSummary, register
-from tasks.missions.swarm.parts import (
-    EN,
-    FOLLOWER_COLUMNS,
-    FollowerNavigation,
-    LeaderNavigation,
-    StationGuidance,
-    SwarmMission,
+from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
+from tasks.missions.swarm.design import SwarmMission
+from tasks.missions.swarm.figures import record_swarm, swarm_figure
+from tasks.missions.swarm.follower import EN, FOLLOWER_COLUMNS, FollowerNavigation
+from tasks.missions.swarm.formation import (
+    DEFAULT_STATIONS,
+    MIN_STATION_SEPARATION_M,
+    StationConfig,
+    generated_station,
+    racetrack,
+    station_point_m,
 )
-from tasks.missions.swarm.report import (
-    FollowerRow,
-    SwarmMetrics,
-    record_swarm,
-    report_swarm,
-    swarm_figure,
-)
+from tasks.missions.swarm.leader import LeaderNavigation
+from tasks.missions.swarm.report import FollowerRow, SwarmMetrics, report_swarm
 from tasks.missions.swarm.run import (
     SwarmRunResult,
     divergences,
@@ -98,10 +125,10 @@ from tasks.missions.swarm.run import (
     leader_metrics,
 )
 from tasks.missions.swarm.scenario import (
-    DEFAULT_STATIONS,
     DEPTH_SIGMA_M,
     FOLLOWERS,
     LEADER,
+    MAX_FOLLOWERS,
     METHODS,
     REFUSAL_CODES,
     REFUSALS,
@@ -110,12 +137,11 @@ from tasks.missions.swarm.scenario import (
     FollowerSensors,
     LeaderConfig,
     Method,
-    StationConfig,
     StationGuidanceConfig,
     SwarmScenario,
-    racetrack,
     station_offsets,
 )
+from tasks.missions.swarm.station import StationGuidance
 
 __all__ = [
     "DEFAULT_STATIONS",
@@ -124,7 +150,9 @@ __all__ = [
     "FOLLOWERS",
     "FOLLOWER_COLUMNS",
     "LEADER",
+    "MAX_FOLLOWERS",
     "METHODS",
+    "MIN_STATION_SEPARATION_M",
     "REFUSALS",
     "REFUSAL_CODES",
     "FollowerNavigation",
@@ -147,12 +175,14 @@ __all__ = [
     "flight_warnings",
     "fly_run",
     "follower_metrics",
+    "generated_station",
     "leader_course_true",
     "leader_metrics",
     "racetrack",
     "record_swarm",
     "report_swarm",
     "station_offsets",
+    "station_point_m",
     "swarm_figure",
 ]
 
@@ -174,6 +204,19 @@ class SwarmExperiment(MissionExperiment):
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
             )
+
+    def memory(self, scenario: SwarmScenario, n_runs: int) -> list[MemoryTerm]:
+        """The mission's estimate (:meth:`MissionExperiment.memory`, one vehicle's per-tick
+        columns) with the per-tick terms for every vehicle of every flight of a run: (1 +
+        ``followers.count``) vehicles x the methods flown (measured: 2.4 kB per tick for a
+        leader and 4 followers, 480 B per vehicle, against 500 B for one)."""
+        k = (1 + scenario.followers.count) * len(scenario.methods())
+        terms = super().memory(scenario, n_runs)
+        what = f" x {k} vehicles x methods (followers.count, navigation.methods)"
+        scaled = [
+            dataclasses.replace(t, bytes=k * t.bytes, fields=t.fields + what) for t in terms[:2]
+        ]
+        return scaled + terms[2:]
 
     def run_block(self, scenario: SwarmScenario, seed: int, runs: tuple[int, ...]):
         return [fly_run(scenario, seed, r) for r in runs]

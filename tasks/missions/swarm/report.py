@@ -1,20 +1,19 @@
-"""The report of ``mission/swarm``: the tables, the warnings, the figure and the recording of one
-run (:mod:`tasks.missions.swarm`)."""
+"""The report of ``mission/swarm``: the tables, the warnings and ``metrics.json``; the figure and
+the recording of one run (:mod:`~tasks.missions.swarm.figures`) (:mod:`tasks.missions.swarm`)."""
 
 from __future__ import annotations
 
-import math
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, model_serializer
 
 from bauv_sim.currents import UniformCurrentConfig
 from tasks.closed_loop.experiment import MissionExperiment
-from tasks.closed_loop.result import MissionRun
 from tasks.core.registry import ReportContext, ReportSummary
-from tasks.missions.swarm.run import SwarmRunResult, leader_course_true
+from tasks.missions.swarm.figures import record_swarm, swarm_figure
+from tasks.missions.swarm.run import SwarmRunResult
 from tasks.missions.swarm.scenario import FOLLOWERS, LEADER, SwarmScenario, station_offsets
 
 Array = NDArray[np.float64]
@@ -34,8 +33,18 @@ class FollowerRow(BaseModel):
     values: dict[str, float]
 
 
+class TeamRow(BaseModel):
+    """One vehicle under one team method on the measurements of the flights of one method
+    (:mod:`tasks.missions.swarm.team`), means over the successful runs."""
+
+    flight: str = Field(description="the method the followers flew with")
+    method: str = Field(description="the team method run on that flight's measurements")
+    vehicle: str
+    values: dict[str, float]
+
+
 class SwarmMetrics(BaseModel):
-    """``metrics.json`` of ``mission/swarm``."""
+    """``metrics.json`` of ``mission/swarm`` (``team`` only on the acoustic network)."""
 
     schema_version: Literal[1] = 1
     experiment: str
@@ -51,6 +60,81 @@ class SwarmMetrics(BaseModel):
     leader: dict[str, dict[str, float]] = Field(description="per method, the leader's means")
     warnings: list[str]
     runs: list[dict[str, Any]] = Field(description="per run: method -> vehicle -> metrics")
+    team: list[TeamRow] | None = Field(
+        None,
+        description="on the acoustic network: per flight, team method and vehicle, the error "
+        "and NEES on the flight's measurements, means over runs",
+    )
+
+    @model_serializer(mode="wrap")
+    def _without_absent_team(self, handler):
+        out = handler(self)
+        if out.get("team") is None:
+            out.pop("team", None)
+        return out
+
+
+TEAM_KEYS = (
+    ("mean_error_m", "Mean error (m)"),
+    ("final_error_m", "Final error (m)"),
+    ("max_error_m", "Max error (m)"),
+    ("nees", "NEES (2 dof)"),
+    ("nees_low", "NEES band lower end"),
+    ("nees_high", "NEES band upper end"),
+    ("consistent", "Not over-confident (runs)"),
+    ("clock_rmse_ms", "Clock offset RMSE (ms)"),
+    ("ranges_used", "Ranges used"),
+)
+"""The team table's values (:func:`tasks.missions.swarm.team.team_comparison`)."""
+
+
+def team_rows(runs: list[SwarmRunResult], methods: list[str], names) -> list[TeamRow]:
+    """Means over the runs of the team comparison, per flight, team method and vehicle
+    (``consistent``: the count of runs whose NEES is at or below the band's upper end)."""
+    rows = []
+    for flight in methods:
+        done = [r.team[flight] for r in runs if flight in r.team]
+        if not done:
+            continue
+        for method in done[0]:
+            for vehicle in names:
+                values = {}
+                for key, _ in TEAM_KEYS:
+                    vals = [d[method][vehicle][key] for d in done if key in d[method][vehicle]]
+                    if vals:
+                        values[key] = float(np.sum(vals) if key == "consistent" else np.mean(vals))
+                rows.append(TeamRow(flight=flight, method=method, vehicle=vehicle, values=values))
+    return rows
+
+
+def team_table(rows: list[TeamRow], n_ok: int):
+    """The table of the team comparison (acceptance 4 of issue 24 on the physical vehicles)."""
+    from tasks.core.report import Table
+
+    return Table(
+        f"Team navigation on each flight's measurements ({n_ok} run(s), mean over runs)",
+        ["Flight", "Vehicle", "Method", *(label for _, label in TEAM_KEYS)],
+        [
+            [
+                row.flight.upper(),
+                row.vehicle,
+                row.method,
+                *(_cell(k, row.values.get(k)) for k, _ in TEAM_KEYS),
+            ]
+            for row in rows
+        ],
+        digits=3,
+        slug="team",
+        note=(
+            "Every method on the same data: the measurements the vehicles had in the flight "
+            "(each vehicle's dead reckoning, the leader's USBL fixes, every range of the acoustic "
+            "network) on the control tick's grid. ga2 and leader-ekf: seed 003 on each "
+            "follower's ranges from the leader alone (clocks not modelled); decentralised: "
+            "covariance intersection with the clocks in the state; central: one EKF over the "
+            "team (the reference). NEES: horizontal position, mean over the samples of a run; "
+            "band: two-sided 95 % for the mean of the runs' NEES (nav.cooperative.team_metrics)."
+        ),
+    )
 
 
 ROW_KEYS = (
@@ -67,7 +151,9 @@ ROW_KEYS = (
 )
 
 
-COUNT_KEYS = frozenset({"fixes_accepted", "fixes_refused", "usbl_fixes", "diverged_runs"})
+COUNT_KEYS = frozenset(
+    {"fixes_accepted", "fixes_refused", "usbl_fixes", "diverged_runs", "ranges_used", "consistent"}
+)
 """Row keys that count events: printed as whole numbers when the mean over runs is one."""
 
 
@@ -136,7 +222,12 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
         followers=rows,
         leader=leader,
         warnings=warnings,
-        runs=[{"run": r.run, "failed": r.failed, "metrics": r.metrics} for r in runs],
+        runs=[
+            {"run": r.run, "failed": r.failed, "metrics": r.metrics}
+            | ({"team": r.team} if r.team else {})
+            for r in runs
+        ],
+        team=team_rows(ok, methods, (LEADER, *names)) if scn.followers.network.enabled else None,
     )
     files = [write_metrics(ctx.out_dir, metrics)]
     for m in methods:
@@ -186,6 +277,8 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
         slug="leader",
     )
     tables = [t1, t2]
+    if metrics.team:
+        tables.append(team_table(metrics.team, len(ok)))
     if warnings or failures:
         tables.append(Table("Warnings", ["Warning"], [[w] for w in warnings], slug="warnings"))
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
@@ -200,164 +293,3 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
     text = "".join(t.to_text() + "\n" for t in tables)
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"
     return ReportSummary(text, tuple(files), tuple(failures), tuple(diverged))
-
-
-COLORS_V = [(0, 0, 0), (0, 114, 178), (213, 94, 0), (0, 158, 115), (230, 159, 0)]
-"""Recording colours of the leader and f1 .. f4 (the figure style's Okabe-Ito colours)."""
-
-
-def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out) -> list[str]:
-    """Tracks of the recorded run (every vehicle's truth and estimate, first method) and each
-    follower's true distance to its station over time, per method (PNG and PDF, project
-    style)."""
-    from tasks.core import style
-
-    with style.context():
-        return _draw_swarm(name, scn, rec, methods, out, style)
-
-
-def _draw_swarm(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out, style):
-    pal = style.PALETTE
-    vehicle_colors = [pal[k] for k in ("black", "blue", "vermillion", "bluish_green", "orange")]
-    method_names = {"ga1": "GA1", "ga2": "GA2", "ekf": "EKF", "dr": "DR"}
-    fig, axs = style.subplots("page", 3.8, 1, 2)
-    flight = rec.flights[methods[0]]
-    ax = axs[0]
-    for (vn, v), c in zip(flight.vehicles.items(), vehicle_colors, strict=False):
-        ax.plot(v["truth_pos"][:, 0], v["truth_pos"][:, 1], "-", color=c, lw=1.0, label=vn)
-        ax.plot(v["ekf_pos"][:, 0], v["ekf_pos"][:, 1], ":", color=c, lw=0.8, label="_")
-    ax.plot([], [], "k:", lw=0.8, label="estimates")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(style.label("east", "m"))
-    ax.set_ylabel(style.label("north", "m"))
-    style.title(ax, f"Truth and estimates ({method_names.get(methods[0], methods[0])})")
-    ax.legend(loc="best")
-    ax = axs[1]
-    tick = scn.timing.control_tick_s
-    dashes = ["-", "--", "-.", ":"]
-    for m in methods:
-        f = rec.flights[m]
-        if LEADER not in f.vehicles:
-            continue
-        lead = f.vehicles[LEADER]
-        course = leader_course_true(lead, max(1, round(scn.leader.velocity_window_s / tick)))
-        for j, (vn, st) in enumerate(zip(FOLLOWERS, station_offsets(scn), strict=False)):
-            if vn not in f.vehicles:
-                continue
-            v = f.vehicles[vn]
-            n = min(len(v["t"]), len(lead["t"]))
-            b = math.radians(st.relative_bearing_deg)
-            sp = lead["truth_pos"][:n, :2] + st.distance_m * np.column_stack(
-                [np.sin(course[:n] + b), np.cos(course[:n] + b)]
-            )
-            ax.plot(
-                v["t"][:n],
-                np.maximum(np.hypot(*(v["truth_pos"][:n, :2] - sp).T), 1e-2),
-                dashes[j % 4],
-                color=style.color(method_names.get(m, m)),
-                lw=0.8,
-                label=f"{vn} {method_names.get(m, m)}",
-            )
-    ax.set_yscale("log")
-    style.log_ticks(ax)
-    ax.set_xlabel(style.label("time", "s"))
-    ax.set_ylabel(style.label("true distance to the station", "m"))
-    style.title(ax, "Station-keeping error")
-    ax.legend(ncol=2, loc="best")
-    return style.save(fig, out / "swarm.png")
-
-
-def record_swarm(name: str, scn: SwarmScenario, run: MissionRun, method: str, out) -> str:
-    """``recording.rrd`` of a flight: every vehicle (hull, truth, estimate), each follower's
-    range circle at each fix (the leader position it used, the horizontal range), its HDOP, its
-    station and navigation errors."""
-    import rerun as rr
-
-    from bauv_sim.frames import quat_wxyz_to_xyzw
-    from bauv_sim.hull import MODEL_DIR
-    from tasks.closed_loop.report import circle
-    from tasks.core.recording import TIMELINE, Recording
-
-    rec = Recording(out / "recording.rrd", name, f"{name}/seed{run.seed}/run{run.run}/{method}")
-    r = rec.rec
-    tick = scn.timing.control_tick_s
-    lead = run.vehicles[LEADER]
-    course = leader_course_true(lead, max(1, round(scn.leader.velocity_window_s / tick)))
-    tx = np.array([scn.transceiver_east_m, scn.transceiver_north_m, -20.0])
-    rec.point("transceiver", tx, (0, 0, 0), "USBL transceiver")
-    stations = dict(zip(FOLLOWERS, station_offsets(scn), strict=False))
-    plots = []
-    for (vn, v), color in zip(run.vehicles.items(), COLORS_V, strict=False):
-        t = v["t"]
-        r.send_columns(
-            f"world/{vn}/vehicle",
-            indexes=[rr.TimeColumn(TIMELINE, duration=t)],
-            columns=rr.Transform3D.columns(
-                translation=v["truth_pos"], quaternion=quat_wxyz_to_xyzw(v["truth_quat_wxyz"])
-            ),
-        )
-        r.log(
-            f"world/{vn}/vehicle/hull",
-            rr.Asset3D(path=MODEL_DIR / "assets" / "hull.obj"),
-            static=True,
-        )
-        rec.track(f"{vn}/truth", t, v["truth_pos"], color)
-        light = tuple(int(c + (255 - c) * 0.5) for c in color)
-        rec.track(f"{vn}/estimate", t, v["ekf_pos"], light, radius_m=0.4)
-        if vn == LEADER:
-            continue
-        fx = v.fixes.get("modem")
-        if fx:
-            z = -scn.station.depth_m
-            for ta, rng_h, ce, cn, ok in zip(
-                fx["t_arrival"].values,
-                fx["horizontal_range"].values,
-                fx["centre_east"].values,
-                fx["centre_north"].values,
-                fx["accepted"].values,
-                strict=True,
-            ):
-                r.set_time(TIMELINE, duration=float(ta))
-                if rng_h > 0:
-                    r.log(
-                        f"world/{vn}/range_circle",
-                        rr.LineStrips3D(
-                            [circle(float(ce), float(cn), float(rng_h), z)],
-                            colors=color if ok else (150, 150, 150),
-                            radii=0.08,
-                        ),
-                    )
-            r.reset_time()
-        rec.scalars(f"hdop/{vn}", t, v["hdop"], color, f"{vn} HDOP")
-        st = stations[vn]
-        n = min(len(t), len(lead["t"]))
-        b = math.radians(st.relative_bearing_deg)
-        sp = lead["truth_pos"][:n, :2] + st.distance_m * np.column_stack(
-            [np.sin(course[:n] + b), np.cos(course[:n] + b)]
-        )
-        rec.track(
-            f"{vn}/station",
-            t[:n],
-            np.column_stack([sp, np.full(n, -scn.station.depth_m)]),
-            (255, 127, 14),
-            radius_m=0.3,
-            strip=False,
-        )
-        rec.scalars(
-            f"station_error/{vn}",
-            t[:n],
-            np.hypot(*(v["truth_pos"][:n, :2] - sp).T),
-            color,
-            f"{vn} true distance to station (m)",
-        )
-        rec.scalars(
-            f"errors/{vn}",
-            t,
-            np.hypot(*(v["ekf_pos"] - v["truth_pos"])[:, :2].T),
-            color,
-            f"{vn} {method.upper()} position error (m)",
-        )
-        plots = ["hdop", "station_error", "errors"]
-    rec.blueprint(*plots)
-    rec.close()
-    return "recording.rrd"

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -12,7 +12,8 @@ from nav.metrics import first_exceedance
 from tasks.closed_loop.result import MissionRun, VehicleRun
 from tasks.closed_loop.world import fly
 from tasks.core import store
-from tasks.missions.swarm.parts import SwarmMission
+from tasks.missions.swarm.design import SwarmMission
+from tasks.missions.swarm.network import NETWORK, network_table
 from tasks.missions.swarm.scenario import (
     FOLLOWERS,
     LEADER,
@@ -20,6 +21,7 @@ from tasks.missions.swarm.scenario import (
     SwarmScenario,
     station_offsets,
 )
+from tasks.missions.swarm.team import team_comparison
 
 Array = NDArray[np.float64]
 
@@ -148,6 +150,9 @@ class SwarmRunResult:
         metrics: per method, per follower (and ``leader``), the metrics.
         warnings: what the report must say about these flights.
         diverged: one line per aided estimate that diverged (:func:`divergences`).
+        team: on the acoustic network, per method flown, the team comparison on that flight's
+            measurements (:func:`tasks.missions.swarm.team.team_comparison`: team method ->
+            vehicle -> metrics); empty off the network.
     """
 
     run: int
@@ -156,16 +161,24 @@ class SwarmRunResult:
     metrics: dict[str, dict[str, dict[str, float]]]
     warnings: list[str]
     diverged: list[str]
+    team: dict[str, dict[str, dict[str, dict[str, float]]]] = field(default_factory=dict)
 
 
 def fly_run(scn: SwarmScenario, seed: int, run: int) -> SwarmRunResult:
-    """Fly one run with every method of the scenario and compute its metrics."""
+    """Fly one run with every method of the scenario and compute its metrics (on the acoustic
+    network: each vehicle's ``network`` table from what it received, and the team comparison
+    on each flight's measurements)."""
     flights, metrics, warnings, diverged, failed = {}, {}, [], [], None
+    team: dict[str, dict[str, dict[str, dict[str, float]]]] = {}
     stations = station_offsets(scn)
     for method in scn.methods():
         res = fly(SwarmMission(method), scn, seed, run)
         failed = failed or res.failed
         flights[method] = res
+        for v in res.vehicles.values():
+            rows = v.outcome.pop(NETWORK, None)
+            if rows is not None:
+                v.fixes[NETWORK] = network_table(rows)
         m: dict[str, dict[str, float]] = {}
         if LEADER in res.vehicles and len(res.vehicles[LEADER]["t"]):
             m[LEADER] = leader_metrics(scn, res)
@@ -175,4 +188,6 @@ def fly_run(scn: SwarmScenario, seed: int, run: int) -> SwarmRunResult:
         metrics[method] = m
         warnings += flight_warnings(scn, method, res)
         diverged += divergences(scn, run, method, m)
-    return SwarmRunResult(run, failed, flights, metrics, warnings, diverged)
+        if scn.followers.network.enabled and m:
+            team[method] = team_comparison(scn, res)
+    return SwarmRunResult(run, failed, flights, metrics, warnings, diverged, team)

@@ -3,19 +3,18 @@ station keeping (:mod:`tasks.missions.swarm`)."""
 
 from __future__ import annotations
 
-import math
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
+from bauv_sim.acoustics.channel import slot_senders
+from bauv_sim.acoustics.sound import SoundSpeedConfig
 from bauv_sim.autopilot import AutopilotConfig
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
-from bauv_sim.frames import (
-    unit_vector_scalar,
-)
+from bauv_sim.errors import ConfigError
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
@@ -39,11 +38,27 @@ from tasks.closed_loop.scenario import (
     TimingConfig,
     WaypointConfig,
 )
+from tasks.missions.swarm.formation import (
+    DEFAULT_STATIONS,
+    MIN_STATION_SEPARATION_M,
+    StationConfig,
+    generated_station,
+    racetrack,
+    station_point_m,
+)
+from tasks.missions.swarm.network import SwarmNetworkConfig
+from tasks.missions.swarm.options import CoopNavigationConfig
 
 Array = NDArray[np.float64]
-Method = Literal["ga1", "ga2", "ekf", "dr"]
-METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr")
-FOLLOWERS = ("f1", "f2", "f3", "f4")
+Method = Literal["ga1", "ga2", "ekf", "dr", "decentralised"]
+METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr", "decentralised")
+LEADER_ONLY_METHODS: tuple[str, ...] = ("ga1", "ga2", "ekf", "dr")
+"""Seed 003's methods: a follower navigates on the leader's ranges alone (``dr``: on none)."""
+MAX_FOLLOWERS = 12
+"""The most followers a scenario may have (``followers.count``)."""
+FOLLOWERS = tuple(f"f{i}" for i in range(1, MAX_FOLLOWERS + 1))
+"""The followers' names in the scene, in order (``f1`` .. ``f12``; a flight has the first
+``followers.count``)."""
 LEADER = "leader"
 REFUSALS = ("ok", "dr", "no range", "range below minimum", "gate", "no fix", "no direction")
 """Codes of the modem fix table's ``refusal`` column (index = code); ``"degenerate"`` (a slant
@@ -53,55 +68,8 @@ DEPTH_SIGMA_M = 0.05
 """Standard deviation of a follower's stated depth (its pressure depth), m."""
 
 
-def racetrack(
-    length_m: float = 230.0,
-    radius_m: float = 50.0,
-    spacing_m: float = 40.0,
-    step_deg: float = 20.0,
-    depth_m: float = 3.0,
-) -> list[dict[str, float]]:
-    """The leader's default pattern from (0, 0): north ``length_m`` (a way-point every
-    ``spacing_m``, so that the direct course to the next one keeps the leader near the line in
-    the cross current), a clockwise half circle of ``radius_m`` (a way-point every ``step_deg``:
-    the turn is wide enough for a follower 10-20 m inside it), then south ``length_m``; about
-    620 m, 10 minutes at 1 m/s."""
-    legs = np.arange(spacing_m, length_m + 1e-9, spacing_m)
-    if legs[-1] < length_m - 1e-9:
-        legs = np.append(legs, length_m)
-    wps = [(0.0, float(n)) for n in legs]
-    for b in np.arange(270.0 + step_deg, 450.0 + 1e-9, step_deg):
-        e, n = unit_vector_scalar(math.radians(b % 360))
-        wps.append((radius_m + radius_m * e, length_m + radius_m * n))
-    wps += [(2 * radius_m, float(n)) for n in legs[::-1][1:]] + [(2 * radius_m, 0.0)]
-    return [
-        {"east_m": e, "north_m": n, "depth_m": depth_m, "acceptance_radius_m": 5.0} for e, n in wps
-    ]
-
-
 # ---------------------------------------------------------------------------------------------
 # Scenario
-
-
-class StationConfig(Config):
-    """A follower's station relative to the leader."""
-
-    relative_bearing_deg: float = Field(
-        90.0,
-        ge=0,
-        lt=360,
-        description="bearing of the station from the leader, clockwise from the leader's course "
-        "(90: abeam to starboard, 270: to port, 180: astern), deg",
-    )
-    distance_m: float = Field(10.0, gt=2.5, le=200, description="distance from the leader, m")
-
-
-DEFAULT_STATIONS = (
-    StationConfig(relative_bearing_deg=90.0, distance_m=10.0),
-    StationConfig(relative_bearing_deg=270.0, distance_m=10.0),
-    StationConfig(relative_bearing_deg=180.0, distance_m=10.0),
-    StationConfig(relative_bearing_deg=90.0, distance_m=20.0),
-)
-"""Four stations: abeam to starboard and to port at 10 m, astern at 10 m, starboard at 20 m."""
 
 
 class FollowerSensors(Config):
@@ -146,22 +114,51 @@ class FollowerSensors(Config):
 class FollowersConfig(Config):
     """The followers."""
 
-    count: int = Field(1, ge=1, le=4, description="number of followers (f1 .. f4)")
+    count: int = Field(
+        1,
+        ge=1,
+        le=MAX_FOLLOWERS,
+        description=f"number of followers (f1 .. f{MAX_FOLLOWERS}); beyond 6, the modem's "
+        "slots need a longer period (followers.sensors.modem.period_s)",
+    )
     stations: tuple[StationConfig, ...] = Field(
-        DEFAULT_STATIONS, min_length=1, max_length=4, description="station of f1, f2, ..."
+        DEFAULT_STATIONS,
+        min_length=1,
+        max_length=MAX_FOLLOWERS,
+        description="station of f1, f2, ...; followers beyond the list get generated stations "
+        "(rings of starboard, port, astern at 10, 20, 30 ... m: generated_station)",
     )
     position_sigma_m: float = Field(
         0.5, ge=0, description="scatter of the true start about the station, per axis, m"
     )
     heading_sigma_deg: float = Field(2.0, ge=0, description="scatter of the start heading, deg")
     sensors: FollowerSensors = Field(default_factory=FollowerSensors)
+    network: SwarmNetworkConfig = Field(
+        default_factory=SwarmNetworkConfig,
+        description="the team's acoustic network (off by default: the followers' modem)",
+    )
     autopilot: AutopilotConfig = Field(default_factory=AutopilotConfig)
 
     @model_validator(mode="after")
-    def _count(self) -> FollowersConfig:
-        if self.count > len(self.stations):
-            raise ValueError(f"count = {self.count}: only {len(self.stations)} stations are given")
+    def _separation(self) -> FollowersConfig:
+        pts = [station_point_m(s) for s in self.station_list()]
+        for j in range(len(pts)):
+            for i in range(j):
+                d = float(np.hypot(*(pts[j] - pts[i])))
+                if d < MIN_STATION_SEPARATION_M:
+                    how = "given" if j < len(self.stations) else "generated"
+                    raise ValueError(
+                        f"stations: f{j + 1}'s station ({how}) is {d:.2f} m from f{i + 1}'s; "
+                        f"stations must be at least {MIN_STATION_SEPARATION_M:g} m apart "
+                        "(give a station for every follower)"
+                    )
         return self
+
+    def station_list(self) -> list[StationConfig]:
+        """The stations of the ``count`` followers, in order: those given, then generated
+        (:func:`generated_station`) for the followers beyond the list."""
+        given = list(self.stations[: self.count])
+        return given + [generated_station(i) for i in range(len(given), self.count)]
 
 
 def _leader_sensors() -> MissionSensors:
@@ -207,7 +204,9 @@ class FollowerNavigationConfig(Config):
         "ekf",
         description="ga1, ga2 (eq. 3, 4), the range EKF, or dr (default: the range EKF, the "
         "method that keeps the follower on station in the physics; GA1 as printed loses it "
-        "after the leader's turn, models/bauv/README.md and the module docstring)",
+        "after the leader's turn, models/bauv/README.md and the module docstring); on the "
+        "acoustic network also decentralised (every range, clocks in the state, covariance "
+        "intersection: navigation.coop)",
     )
     methods: tuple[Method, ...] = Field(
         (),
@@ -246,6 +245,10 @@ class FollowerNavigationConfig(Config):
     hdop_warning: float = Field(
         3.0, gt=0, description="warn when the mean HDOP at a follower's fixes exceeds this"
     )
+    coop: CoopNavigationConfig = Field(
+        default_factory=CoopNavigationConfig,
+        description="the decentralised filter and the team methods compared after each flight",
+    )
     divergence_m: float = Field(
         25.0,
         gt=0,
@@ -282,6 +285,12 @@ class SwarmScenario(Config):
         default_factory=lambda: UniformCurrentConfig(speed_m_s=0.2, direction_deg=90.0),
         description="0.2 m/s towards east: across the racetrack's legs",
     )
+    sound: SoundSpeedConfig = Field(
+        default_factory=SoundSpeedConfig,
+        description="the sea's true sound-speed profile for every vehicle's acoustic devices "
+        "(the leader's USBL, the modem, the network); default: none, each device's own "
+        "sound_speed_m_s",
+    )
     leader: LeaderConfig = Field(default_factory=LeaderConfig)
     followers: FollowersConfig = Field(default_factory=FollowersConfig)
     navigation: FollowerNavigationConfig = Field(default_factory=FollowerNavigationConfig)
@@ -316,7 +325,25 @@ class SwarmScenario(Config):
                         f"{where}.{name}.period_s = {period:g}: the autopilot reads it every "
                         f"control tick ({tick:g} s)"
                     )
-        check_slots(fs.modem, tick, self.followers.count, "followers.sensors.modem")
+        net = self.followers.network
+        if not net.enabled:
+            check_slots(fs.modem, tick, self.followers.count, "followers.sensors.modem")
+            if "decentralised" in self.methods():
+                raise ValueError(
+                    "navigation.method(s): decentralised needs the acoustic network "
+                    "(followers.network.enabled = true)"
+                )
+        else:
+            if net.ranging != "owtt":
+                raise ValueError(
+                    f"followers.network.ranging = {net.ranging!r}: the vehicles' online device "
+                    "ranges by one-way travel time only ('owtt')"
+                )
+            names = (LEADER, *FOLLOWERS[: self.followers.count])
+            try:
+                slot_senders(net, names)
+            except ConfigError as exc:
+                raise ValueError(f"followers.{exc}") from None
         st = self.station
         if st.min_speed_m_s >= st.max_speed_m_s:
             raise ValueError(
@@ -331,5 +358,6 @@ class SwarmScenario(Config):
 
 
 def station_offsets(scn: SwarmScenario) -> list[StationConfig]:
-    """The stations of the scenario's followers, in order."""
-    return list(scn.followers.stations[: scn.followers.count])
+    """The stations of the scenario's followers, in order (those given, then generated:
+    :meth:`FollowersConfig.station_list`)."""
+    return scn.followers.station_list()
