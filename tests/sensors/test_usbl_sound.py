@@ -18,6 +18,7 @@ from bauv_sim.acoustics import SoundSpeedConfig
 from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.frames import R_from_quat_wxyz
 from bauv_sim.sensors.modem import Modem, ModemConfig
+from bauv_sim.sensors.online import Peer
 from bauv_sim.sensors.rig import SensorRig
 from bauv_sim.sensors.usbl import Usbl, UsblConfig
 from bauv_sim.truth import Truth
@@ -221,3 +222,35 @@ def test_mission_scenario_sound_reaches_the_rig(sound) -> None:
     else:
         assert isinstance(medium, LayeredMedium)
         assert medium.profile.speed(0.0) == pytest.approx(1548.52, abs=0.01)
+
+
+def test_online_modem_takes_the_rigs_medium() -> None:
+    """The follower's modem (seed 003's instant ranges) in a sound-speed gradient: the range is
+    the nominal speed times the circular ray's travel time, worked out in the test, and the
+    latency the travel time plus the processing."""
+    scene = SceneConfig(
+        vehicles=(
+            VehicleSpec(name="leader", east_m=0.0, north_m=0.0, depth_m=2.0),
+            VehicleSpec(name="f1", east_m=160.0, north_m=-90.0, depth_m=4.0),
+        )
+    )
+    phys = build_physics(scene, control_tick_s=0.2)
+    cfg = ModemConfig(range={"sigma_m": 0.0, "bias_m": 0.0}, broadcast="truth")
+    rig = SensorRig({"modem": cfg}, phys, "f1", 5, 0, "f1", propagation=MEDIUM)
+    plain = SensorRig({"modem": cfg}, phys, "f1", 5, 0, "f1")
+    lead, me = phys.truth("leader"), phys.truth("f1")
+    got, ref = [], []
+    for k in range(1, 60):
+        t = 0.2 * k
+        peers = {"leader": Peer(dataclasses.replace(lead, t_s=t), None)}
+        at = dataclasses.replace(me, t_s=t)
+        got += rig.sense(k, at, {}, peers=peers).arrived
+        ref += plain.sense(k, at, {}, peers=peers).arrived
+    assert got and len(got) == len(ref)
+    sites = [phys.site_position_world("modem", v) for v in ("leader", "f1")]
+    travel, _ = _circle(sites[0][None], sites[1][None])
+    for m, r in zip(got, ref, strict=True):
+        assert m.value[0] == pytest.approx(1500.0 * travel[0], rel=1e-9)
+        assert r.value[0] == pytest.approx(np.linalg.norm(sites[0] - sites[1]), rel=1e-12)
+        assert m.t_arrival_s - m.t_valid_s == pytest.approx(travel[0] + 0.5, rel=1e-9)
+    assert abs(got[0].value[0] - ref[0].value[0]) > 1e-3  # the medium is heard

@@ -357,7 +357,14 @@ class Seed004Mission:
         if seabed_pred:
             devices["multibeam"] = scn.multibeam
         rig = SensorRig(
-            devices, physics, "bauv", seed, run, "", extra={"odometry": {"speed_table": table}}
+            devices,
+            physics,
+            "bauv",
+            seed,
+            run,
+            "",
+            extra={"odometry": {"speed_table": table}},
+            propagation=scn.sound.propagation(),
         )
         n = scn.navigation
         P0 = initial_covariance(n)

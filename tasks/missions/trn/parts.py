@@ -312,7 +312,14 @@ class TrnMission:
         if s.use_usbl:
             devices["usbl"] = s.usbl
         rig = SensorRig(
-            devices, physics, "bauv", seed, run, "", extra={"odometry": {"speed_table": table}}
+            devices,
+            physics,
+            "bauv",
+            seed,
+            run,
+            "",
+            extra={"odometry": {"speed_table": table}},
+            propagation=scn.sound.propagation(),
         )
         n = scn.navigation
         P0 = initial_covariance(n)
