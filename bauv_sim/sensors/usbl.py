@@ -126,24 +126,32 @@ class Usbl:
         true_rae = range_azimuth_elevation(pos - self.transceiver_world_m)
         if self.propagation is not None:
             return self._sample_in_medium(tr.t_s, pos, true_rae)
-        k = len(index)
-        comps, produced = [], np.ones((self.n, k), dtype=bool)
+        meas, produced = self._measure(tr.t_s, true_rae, np.ones(true_rae.shape[:2], dtype=bool))
+        produced &= true_rae[..., 0] <= self.cfg.max_range_m
+        produced &= true_rae[..., 2] >= np.radians(self.cfg.min_elevation_deg)
+        t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
+        return SensorSamples(tr.t_s, meas, produced, t_arr)
+
+    def _measure(
+        self, t_s: NDArray[np.float64], rae: NDArray[np.float64], produced: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The device's errors on ``(range, azimuth, elevation)`` (shape (n, k, 3)) and its
+        dropouts: ``(measured (n, k, 3), produced (n, k))``, ``produced`` narrowed by the error
+        processes and the dropout. An elevation error past the zenith is the direction over the
+        top (not a clip)."""
+        comps = []
         for j, err in enumerate(self._errs):
-            ref = true_rae[..., 1] if err.model.needs_reference() else None
-            v, ok = err.apply(true_rae[..., j], tr.t_s, reference_rad=ref)
+            ref = rae[..., 1] if err.model.needs_reference() else None
+            v, ok = err.apply(rae[..., j], t_s, reference_rad=ref)
             comps.append(v)
             produced &= ok
         meas = np.stack(comps, axis=-1)
         meas[..., 0] = np.abs(meas[..., 0])
-        # an elevation error past the zenith is the direction over the top (not a clip)
         meas[..., 1], meas[..., 2] = fold_azimuth_elevation(meas[..., 1], meas[..., 2])
-        produced &= true_rae[..., 0] <= self.cfg.max_range_m
-        produced &= true_rae[..., 2] >= np.radians(self.cfg.min_elevation_deg)
         if self._drop is not None:
-            lost = self._drop.draw("random", k) < self.cfg.dropout_probability
+            lost = self._drop.draw("random", rae.shape[1]) < self.cfg.dropout_probability
             produced &= ~lost
-        t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
-        return SensorSamples(tr.t_s, meas, produced, t_arr)
+        return meas, produced
 
     def _sample_in_medium(
         self, t_s: NDArray[np.float64], pos: NDArray[np.float64], true_rae: NDArray[np.float64]
@@ -162,21 +170,9 @@ class Usbl:
             ],
             axis=-1,
         )
-        k = len(t_s)
-        comps, produced = [], reached.copy()
-        for j, err in enumerate(self._errs):
-            ref = acoustic[..., 1] if err.model.needs_reference() else None
-            v, ok = err.apply(acoustic[..., j], t_s, reference_rad=ref)
-            comps.append(v)
-            produced &= ok
-        meas = np.stack(comps, axis=-1)
-        meas[..., 0] = np.abs(meas[..., 0])
-        meas[..., 1], meas[..., 2] = fold_azimuth_elevation(meas[..., 1], meas[..., 2])
+        meas, produced = self._measure(t_s, acoustic, reached.copy())
         produced &= true_rae[..., 0] <= self.cfg.max_range_m
         produced &= acoustic[..., 2] >= np.radians(self.cfg.min_elevation_deg)
-        if self._drop is not None:
-            lost = self._drop.draw("random", k) < self.cfg.dropout_probability
-            produced &= ~lost
         t_arr = t_s + travel + self.cfg.processing_delay_s
         return SensorSamples(t_s, meas, produced, t_arr)
 
