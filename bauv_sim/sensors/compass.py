@@ -20,6 +20,14 @@ from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, regis
 from bauv_sim.truth import Truth
 
 
+def seed003_heading_error() -> AngleErrorConfig:
+    """Seed 003's compass (VN-100): uniform on [-2, +2] deg plus Test 3's calibrated
+    course-sector bias (0.4, 0.8, 0, 0.2 deg)."""
+    return AngleErrorConfig(
+        distribution="uniform", uniform_k=1.0, sigma_deg=2.0, sector_bias_deg=(0.4, 0.8, 0.0, 0.2)
+    )
+
+
 class CompassConfig(Config):
     """Compass / INS heading sensor."""
 

@@ -19,6 +19,11 @@ from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, regis
 from bauv_sim.truth import Truth
 
 
+def seed003_speed_error() -> SpeedErrorConfig:
+    """Seed 003's log (ALIZE): uniform on [-0.3, +0.3] m/s plus Test 3's 0.005 m/s bias."""
+    return SpeedErrorConfig(distribution="uniform", uniform_k=1.0, sigma_m_s=0.3, bias_m_s=0.005)
+
+
 class LogConfig(Config):
     """Speed-through-water log."""
 

@@ -38,10 +38,11 @@ from bauv_sim.sensors import (
     LengthErrorConfig,
     LogConfig,
     PressureConfig,
-    SpeedErrorConfig,
     UsblConfig,
     check_multiple,
 )
+from bauv_sim.sensors.compass import seed003_heading_error
+from bauv_sim.sensors.log import seed003_speed_error
 
 METHODS = ("dr", "ga2", "leader-ekf", "decentralised", "central")
 """Every method of :func:`nav.cooperative.team_tracks`, in the report's order."""
@@ -68,12 +69,7 @@ class SensorsConfig(Config):
     compass: CompassConfig = Field(
         default_factory=lambda: CompassConfig(
             period_s=0.2,
-            heading=AngleErrorConfig(
-                distribution="uniform",
-                uniform_k=1.0,
-                sigma_deg=2.0,
-                sector_bias_deg=(0.4, 0.8, 0.0, 0.2),
-            ),
+            heading=seed003_heading_error(),
         ),
         description="heading every tick: uniform +-2 deg plus the course-sector bias 0.4, 0.8, "
         "0, 0.2 deg (seed 003, Test 3)",
@@ -81,9 +77,7 @@ class SensorsConfig(Config):
     log: LogConfig = Field(
         default_factory=lambda: LogConfig(
             period_s=0.2,
-            speed=SpeedErrorConfig(
-                distribution="uniform", uniform_k=1.0, sigma_m_s=0.3, bias_m_s=0.005
-            ),
+            speed=seed003_speed_error(),
         ),
         description="speed through water every tick: uniform +-0.3 m/s plus 0.005 m/s bias "
         "(seed 003, Test 3)",

@@ -131,8 +131,10 @@ def team_table(rows: list[TeamRow], n_ok: int):
             "network) on the control tick's grid. ga2 and leader-ekf: seed 003 on each "
             "follower's ranges from the leader alone (clocks not modelled); decentralised: "
             "covariance intersection with the clocks in the state; central: one EKF over the "
-            "team (the reference). NEES: horizontal position, mean over the samples of a run; "
-            "band: two-sided 95 % for the mean of the runs' NEES (nav.cooperative.team_metrics)."
+            "team (the reference). NEES: horizontal position, mean over the samples of a run "
+            "(the table: mean over runs); band: two-sided 95 % of one run's NEES "
+            "(nav.cooperative.team_metrics on each run); not over-confident: the runs whose "
+            "NEES is at or below the band's upper end."
         ),
     )
 

@@ -22,11 +22,12 @@ from bauv_sim.sensors import (
     LengthErrorConfig,
     LogConfig,
     PressureConfig,
-    SpeedErrorConfig,
     UsblConfig,
     check_multiple,
 )
+from bauv_sim.sensors.compass import seed003_heading_error
 from bauv_sim.sensors.ins import InsConfig
+from bauv_sim.sensors.log import seed003_speed_error
 from bauv_sim.sensors.modem import ModemConfig, check_slots
 from tasks.closed_loop.scenario import (
     FaultConfig,
@@ -79,21 +80,14 @@ class FollowerSensors(Config):
     compass: CompassConfig = Field(
         default_factory=lambda: CompassConfig(
             period_s=0.2,
-            heading=AngleErrorConfig(
-                distribution="uniform",
-                uniform_k=1.0,
-                sigma_deg=2.0,
-                sector_bias_deg=(0.4, 0.8, 0.0, 0.2),
-            ),
+            heading=seed003_heading_error(),
         ),
         description="VN-100 (seed 003): uniform +-2 deg, Test 3's course-sector bias",
     )
     log: LogConfig = Field(
         default_factory=lambda: LogConfig(
             period_s=0.2,
-            speed=SpeedErrorConfig(
-                distribution="uniform", uniform_k=1.0, sigma_m_s=0.3, bias_m_s=0.005
-            ),
+            speed=seed003_speed_error(),
             min_speed_m_s=0.15,
         ),
         description="ALIZE log (seed 003): uniform +-0.3 m/s, Test 3's 0.005 m/s bias",
