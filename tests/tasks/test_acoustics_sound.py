@@ -5,8 +5,6 @@ to end without NaN, 1 vs 2 workers bit for bit, bad input."""
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -15,6 +13,7 @@ from bauv_sim.config import load_config
 from tasks.acoustics.run import exact, links, passage, run_block
 from tasks.acoustics.scenario import SoundSpeedScenario
 from tasks.core.runner import run
+from tests.tasks.refusal import assert_refused
 
 
 def _no_nan(text: str) -> dict:
@@ -122,15 +121,4 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     ],
 )
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, setting, pattern):
-    out = tmp_path / "out"
-    res = subprocess.run(
-        [sys.executable, "-m", "tasks.core.cli", "run", "acoustics/sound-speed", "--out", str(out)]
-        + ["--set", setting],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-    )
-    assert res.returncode == 2, res.stderr
-    lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
-    assert not out.exists()
+    assert_refused(tmp_path, "acoustics/sound-speed", "--set", setting, pattern=pattern)

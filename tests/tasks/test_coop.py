@@ -6,8 +6,6 @@ to end without NaN, 1 vs 2 workers bit for bit, bad input."""
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -22,6 +20,7 @@ from tasks.coop.measure import own_measurements
 from tasks.coop.run import clock_guard_s, nominal_times, run_block, team_record
 from tasks.coop.scenario import CoopScenario
 from tasks.core.runner import run
+from tests.tasks.refusal import assert_refused
 
 QUIET = [
     "sensors.compass.heading.sigma_deg=0",
@@ -247,18 +246,7 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     ],
 )
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, setting, pattern):
-    out = tmp_path / "out"
-    res = subprocess.run(
-        [sys.executable, "-m", "tasks.core.cli", "run", "coop/team", "--out", str(out)]
-        + ["--set", setting],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-    )
-    assert res.returncode == 2, res.stderr
-    lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
-    assert not out.exists()
+    assert_refused(tmp_path, "coop/team", "--set", setting, pattern=pattern)
 
 
 def test_a_non_finite_estimate_fails_the_block(monkeypatch):

@@ -10,8 +10,6 @@ import itertools
 import json
 import math
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -27,6 +25,7 @@ from tasks.missions.seed004 import (
     distance_to_polyline,
     surrogate,
 )
+from tests.tasks.refusal import assert_refused
 
 NAME = "mission/seed004"
 FAST = [
@@ -112,15 +111,6 @@ def test_the_registered_flight_is_the_seed004_design():
     assert isinstance(design, Seed004Mission) and design.filter == "upmf"
 
 
-def _bauv(tmp_path, *args):
-    return subprocess.run(
-        [sys.executable, "-m", "tasks.core.cli", "run", NAME, *args],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-    )
-
-
 @pytest.mark.parametrize(
     "args, pattern",
     [
@@ -132,12 +122,7 @@ def _bauv(tmp_path, *args):
     ],
 )
 def test_bad_input_is_one_line_exit_2(tmp_path, args, pattern):
-    out = tmp_path / "bad"
-    res = _bauv(tmp_path, "--runs", "1", "--out", str(out), *args)
-    assert res.returncode == 2, res.stderr
-    lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
-    assert not out.exists()
+    assert_refused(tmp_path, NAME, "--runs", "1", *args, pattern=pattern)
 
 
 def test_lost_bearings_degrade_with_a_warning_and_no_nan(tmp_path):
@@ -339,13 +324,8 @@ def test_a_filter_that_leaves_the_nominal_path_is_a_named_divergence_not_nan(tmp
     ],
 )
 def test_bad_seabed_setting_is_one_line_exit_2(tmp_path, args, pattern):
-    out = tmp_path / "bad"
     pred = ["--set", "navigation.prediction=seabed"]
-    res = _bauv(tmp_path, "--runs", "1", "--out", str(out), *pred, *args)
-    assert res.returncode == 2, res.stderr
-    lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
-    assert not out.exists()
+    assert_refused(tmp_path, NAME, "--runs", "1", *pred, *args, pattern=pattern)
 
 
 def test_beams_without_echo_degrade_to_the_command_with_a_warning_and_no_nan(tmp_path):

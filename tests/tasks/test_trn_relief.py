@@ -4,8 +4,6 @@ and against the PCRB within Monte Carlo tolerance, 1 vs 2 workers bit for bit, b
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -15,6 +13,7 @@ from bauv_sim.rng import generator
 from tasks.core.runner import run
 from tasks.trn.run import METHODS, lawnmower_truth, run_block
 from tasks.trn.scenario import DEFAULT_RELIEF_M, TrnReliefScenario
+from tests.tasks.refusal import assert_refused
 
 FAST = [
     "track.duration_s=60",
@@ -197,18 +196,7 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     ],
 )
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, setting, pattern):
-    out = tmp_path / "out"
-    res = subprocess.run(
-        [sys.executable, "-m", "tasks.core.cli", "run", "trn/relief", "--out", str(out)]
-        + ["--set", setting],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-    )
-    assert res.returncode == 2, res.stderr
-    lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
-    assert not out.exists()
+    assert_refused(tmp_path, "trn/relief", "--set", setting, pattern=pattern)
 
 
 def test_a_method_with_no_finite_run_says_no_data():
