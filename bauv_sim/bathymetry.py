@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from bauv_sim.errors import ConfigError
 from bauv_sim.geo import LocalFrame
+from bauv_sim.ocean import cf_variable
 
 Array = NDArray[np.float64]
 
@@ -89,17 +90,6 @@ def _check_size(shape: tuple[int, ...], where: str, variable: str) -> None:
         )
 
 
-def _coord(ds, standard_name: str, axis: str, where: str):
-    for name in list(ds.coords) + list(ds.data_vars):
-        a = ds[name].attrs
-        if a.get("standard_name") == standard_name or a.get("axis") == axis:
-            return ds[name]
-    for name in (standard_name, standard_name[:3]):
-        if name in ds.variables:
-            return ds[name]
-    raise ConfigError(f"{where}: no coordinate with standard_name '{standard_name}'")
-
-
 def read_netcdf(path: str | Path, variable: str | None = None) -> BathymetryGrid:
     """Read a CF-convention netCDF bathymetry (see the module docstring).
 
@@ -120,8 +110,8 @@ def read_netcdf(path: str | Path, variable: str | None = None) -> BathymetryGrid
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
     with ds:
-        lat = _coord(ds, "latitude", "Y", where)
-        lon = _coord(ds, "longitude", "X", where)
+        lat = cf_variable(ds, "latitude", "Y", where, ("latitude", "lat"))
+        lon = cf_variable(ds, "longitude", "X", where, ("longitude", "lon"))
         if variable is not None:
             if variable not in ds.data_vars:
                 raise ConfigError(

@@ -141,8 +141,12 @@ def write_current_grid(grid: CurrentGrid, path: str | Path, start: dt.datetime) 
     import xarray as xr
 
     dims = ("time", "depth", "latitude", "longitude")
+    # the time axis as dates, written as CF "seconds since <start>": the grid's seconds exactly
+    dates = np.datetime64(start.replace(tzinfo=None), "ns") + (grid.time_s * 1e9).round().astype(
+        "timedelta64[ns]"
+    )
     coords = {
-        "time": ("time", grid.time_s, {"standard_name": "time", "axis": "T"}),
+        "time": ("time", dates, {"standard_name": "time", "axis": "T"}),
         "depth": (
             "depth",
             grid.depth_m,
@@ -164,25 +168,25 @@ def write_current_grid(grid: CurrentGrid, path: str | Path, start: dt.datetime) 
         for key, name in STANDARD_NAMES.items()
     }
     ds = xr.Dataset(data, coords=coords, attrs={"Conventions": "CF-1.8"})
-    # the time axis as CF "seconds since <start>", values exactly the grid's seconds
-    ds = ds.assign_coords(
-        time=(
-            "time",
-            np.datetime64(start.replace(tzinfo=None), "ns")
-            + (grid.time_s * 1e9).round().astype("timedelta64[ns]"),
-            {"standard_name": "time", "axis": "T"},
-        )
-    )
     units = f"seconds since {start.replace(tzinfo=None).isoformat(sep=' ')}"
     ds.to_netcdf(path, engine="netcdf4", encoding={"time": {"units": units, "dtype": "float64"}})
 
 
-def _find(ds, standard_name: str, axis: str | None, where: str):
+def cf_variable(ds, standard_name: str, axis: str | None, where: str, names: tuple[str, ...] = ()):
+    """The variable of an xarray dataset with a CF ``standard_name`` (or ``axis`` attribute),
+    else the first of ``names`` the dataset has.
+
+    Raises:
+        ConfigError: naming the file (``where``) and the standard name when there is none.
+    """
     for name in list(ds.coords) + list(ds.data_vars):
         attrs = ds[name].attrs
         if attrs.get("standard_name") == standard_name or (
             axis is not None and attrs.get("axis") == axis
         ):
+            return ds[name]
+    for name in names:
+        if name in ds.variables:
             return ds[name]
     raise ConfigError(f"{where}: no variable with standard_name '{standard_name}'")
 
@@ -214,10 +218,10 @@ def read_current_grid(path: str | Path, start: dt.datetime) -> CurrentGrid:
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
     with ds:
-        time = _find(ds, "time", "T", where)
-        depth = _find(ds, "depth", "Z", where)
-        lat = _find(ds, "latitude", "Y", where)
-        lon = _find(ds, "longitude", "X", where)
+        time = cf_variable(ds, "time", "T", where)
+        depth = cf_variable(ds, "depth", "Z", where)
+        lat = cf_variable(ds, "latitude", "Y", where)
+        lon = cf_variable(ds, "longitude", "X", where)
         for var, allowed in (
             (lat, ("degrees_north", "degree_north", "degrees")),
             (lon, ("degrees_east", "degree_east", "degrees")),
@@ -235,7 +239,7 @@ def read_current_grid(path: str | Path, start: dt.datetime) -> CurrentGrid:
         comps = {}
         for key, name in STANDARD_NAMES.items():
             try:
-                var = _find(ds, name, None, where)
+                var = cf_variable(ds, name, None, where)
             except ConfigError:
                 if key == "w":
                     continue
@@ -390,12 +394,8 @@ class GriddedCurrent:
             if keep:
                 # a node's own coordinates come back through the projection within ~1e-12 deg
                 eps = 1e-9 * max(1.0, abs(a[-1] - a[0]))
-                np.clip(
-                    c,
-                    np.where(c >= a[0] - eps, a[0], c),
-                    np.where(c <= a[-1] + eps, a[-1], c),
-                    out=c,
-                )
+                c[(c < a[0]) & (c >= a[0] - eps)] = a[0]
+                c[(c > a[-1]) & (c <= a[-1] + eps)] = a[-1]
                 inside &= (c >= a[0]) & (c <= a[-1])
         if not inside.all():
             i = int(np.flatnonzero(~inside)[0])
