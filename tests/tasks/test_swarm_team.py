@@ -202,9 +202,11 @@ def test_the_team_record_is_the_flights_measurements(networked):
 
 
 def test_usbl_fix_covariance_is_the_noise_through_the_inverse_geometry():
-    """``H^-1 R H^-T`` against the covariance of positions inverted from measurements with the
-    stated noise, by finite differences of the inversion (range r along (azimuth, elevation))."""
-    from tasks.missions.swarm.team import usbl_fix_covariance
+    """The covariance the team record gives the leader's USBL fixes
+    (:meth:`nav.models.UsblMeasurement.fix_covariance`, horizontal block) against the covariance
+    of positions inverted from measurements with the stated noise, by finite differences of the
+    inversion (range r along (azimuth, elevation))."""
+    from nav.models import UsblMeasurement
 
     z = np.array([[80.0, 0.7, -0.2], [30.0, 4.0, -0.6]])
     sig = (0.2, np.radians(1.0), np.radians(1.0))
@@ -213,7 +215,8 @@ def test_usbl_fix_covariance_is_the_noise_through_the_inverse_geometry():
         r, az, el = m
         return np.array([r * np.cos(el) * np.sin(az), r * np.cos(el) * np.cos(az)])
 
-    for row, cov in zip(z, usbl_fix_covariance(z, sig), strict=True):
+    covs = UsblMeasurement(np.zeros(3), *sig, min_horizontal_m=0.0).fix_covariance(z)[:, :2, :2]
+    for row, cov in zip(z, covs, strict=True):
         J = np.column_stack([(invert(row + h) - invert(row - h)) / 2e-6 for h in 1e-6 * np.eye(3)])
         np.testing.assert_allclose(cov, J @ np.diag(np.square(sig)) @ J.T, rtol=1e-6)
 

@@ -19,7 +19,8 @@ tick's grid (vehicle 0 the leader, then f1, f2 ...):
 * **the depths**: the pressure depths;
 * **the leader's USBL fixes**: the fix's own position of the reference point at its time of
   validity, its covariance the USBL's measurement noise (the leader's navigation sigmas) mapped
-  through the inverse of the measurement's Jacobian (:func:`usbl_fix_covariance`);
+  by first-order propagation through the inversion
+  (:meth:`nav.models.UsblMeasurement.fix_covariance`);
 * **every range of the network** each vehicle received (its ``network`` table): sender,
   receiver, the stamps by the two clocks and the range, placed on the grid by the stamps (the
   vehicles know no other time: the clocks' offsets, milliseconds, are far below the tick):
@@ -92,26 +93,6 @@ def dr_steps(
     return step, cov + current_covariance(dt, current_sigma_m_s)
 
 
-def usbl_fix_covariance(z: Array, sigmas: tuple[float, float, float]) -> Array:
-    """Covariance of the positions inverted from USBL measurements: ``H^-1 R H^-T`` (the
-    first-order propagation of the range, azimuth and elevation noise, seed 000 section 5's
-    Jacobian :meth:`nav.models.UsblMeasurement.H`), its horizontal block.
-
-    Args:
-        z: measurements (range m, azimuth rad, elevation rad), shape (f, 3).
-        sigmas: their standard deviations (m, rad, rad).
-
-    Returns:
-        Shape (f, 2, 2), m^2 (the Jacobian depends on the offset from the transceiver only).
-    """
-    r, az, el = z[:, 0], z[:, 1], z[:, 2]
-    d = np.stack([r * np.cos(el) * np.sin(az), r * np.cos(el) * np.cos(az), r * np.sin(el)], -1)
-    model = UsblMeasurement(np.zeros(3), *sigmas, min_horizontal_m=0.0)
-    J = np.linalg.inv(model.H(d))  # d position / d measurement, (f, 3, 3)
-    cov = J @ model.R() @ np.swapaxes(J, 1, 2)
-    return cov[:, :2, :2]
-
-
 def team_record(scn: SwarmScenario, flight: MissionRun) -> TeamRecord:
     """The flight's measurements as one team record (module docstring; one run).
 
@@ -148,7 +129,8 @@ def team_record(scn: SwarmScenario, flight: MissionRun) -> TeamRecord:
         )
         fix_tick = np.minimum(np.searchsorted(t, tv[keep] - 1e-9), k - 1)
         fix_m = usbl["position"].values[keep, :2]
-        fix_cov = usbl_fix_covariance(z, sig)
+        fix_cov = UsblMeasurement(np.zeros(3), *sig, min_horizontal_m=0.0).fix_covariance(z)
+        fix_cov = fix_cov[:, :2, :2]
     else:
         fix_tick, fix_m, fix_cov = np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2))
     cols: dict[str, list[Any]] = {c: [] for c in ("s", "r", "tx", "rx", "range", "T", "L")}
