@@ -21,6 +21,7 @@ Vincenty's (1975) inverse formula independently.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -145,5 +146,11 @@ class GeoOriginConfig(Config):
     )
 
     def frame(self) -> LocalFrame:
-        """The scene's frame at this origin."""
-        return LocalFrame(self.latitude_deg, self.longitude_deg)
+        """The scene's frame at this origin (one per origin and process: building PROJ's
+        transformer takes milliseconds)."""
+        return _frame_at(self.latitude_deg, self.longitude_deg)
+
+
+@functools.lru_cache(maxsize=16)
+def _frame_at(latitude_deg: float, longitude_deg: float) -> LocalFrame:
+    return LocalFrame(latitude_deg, longitude_deg)

@@ -14,6 +14,7 @@ from bauv_sim.acoustics import SoundSpeedConfig
 from bauv_sim.autopilot import AutopilotConfig
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
+from bauv_sim.geo import GeoOriginConfig, LocalFrame
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
@@ -214,6 +215,12 @@ class MissionReportConfig(Config):
 class MissionScenario(Config):
     """Scenario of a closed-loop way-point mission."""
 
+    geo: GeoOriginConfig | None = Field(
+        None,
+        description="the scene's origin on the Earth (WGS 84); needed by a bathymetry or "
+        "current file and by positions given in latitude and longitude (default: none, a "
+        "local frame only)",
+    )
     seabed: SeabedConfig = Field(default_factory=SeabedConfig)
     transceiver_east_m: float = 0.0
     transceiver_north_m: float = 0.0
@@ -253,6 +260,10 @@ class MissionScenario(Config):
                     f"tick ({tick:g} s)"
                 )
         return self
+
+    def frame(self) -> LocalFrame | None:
+        """The scene's east/north frame on the Earth, or None without a ``geo`` origin."""
+        return None if self.geo is None else self.geo.frame()
 
 
 def mission_preset(waypoints: list[dict[str, Any]], **sections: Any) -> dict[str, Any]:
