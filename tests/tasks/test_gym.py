@@ -290,3 +290,39 @@ def test_make_imports_the_package_from_the_id():
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert res.stdout.split("\n")[-2] == "(21,) 0"
+
+
+def test_a_physics_failure_terminates_the_episode():
+    """The scenario's injected fault (a NaN in the physics at 1 s of run 0) ends the episode as
+    ``bauv run`` records it: terminated, the failure in the info and the run result, no NaN out."""
+    faults = ["faults.physics_nan_at_s=1", "faults.physics_nan_runs=[0]"]
+    env = make("mission/short", 5.0, faults)
+    u = env.unwrapped
+    last, _ = env.reset(seed=3)
+    steps = 0
+    while True:
+        obs, r, term, trunc, info = env.step(u.autopilot_action())
+        steps += 1
+        if term or trunc:
+            break
+        last = obs
+    assert (term, trunc) == (True, False) and steps < 25
+    assert r == 0.0 and np.array_equal(obs, last) and np.all(np.isfinite(obs))
+    assert info["failure"].startswith("run 0 (seed 3) failed at t = ")
+    assert "PhysicsError" in info["failure"]
+    ref = fly(*u.experiment.flight(u.scenario, 3, 0), 3, 0)
+    assert u.result().failed == ref.failed == info["failure"]
+    with pytest.raises(BauvSimError, match="call reset"):
+        env.step(u.autopilot_action())
+
+
+def test_an_action_beyond_the_limits_is_clipped_to_them():
+    env = make("mission/short", 2.0)
+    high = env.action_space.high
+    env.reset(seed=1)
+    clipped = env.step(high)[0]
+    env.reset(seed=1)
+    beyond = env.step(high + np.array([5.0, 1.0, 1.0, 1.0, 0.5]))[0]
+    env.reset(seed=1)
+    below = env.step(env.action_space.low)[0]
+    assert np.array_equal(beyond, clipped) and not np.array_equal(below, clipped)
