@@ -326,3 +326,22 @@ def test_an_action_beyond_the_limits_is_clipped_to_them():
     env.reset(seed=1)
     below = env.step(env.action_space.low)[0]
     assert np.array_equal(beyond, clipped) and not np.array_equal(below, clipped)
+
+
+def test_an_unseeded_first_reset_draws_the_batch_seed():
+    seeds = [make("mission/short", 1.0).reset()[1]["seed"] for _ in range(2)]
+    assert seeds[0] != seeds[1]
+    assert all(isinstance(s, int) and 0 <= s <= 2**63 - 1 for s in seeds)
+
+
+def test_a_vector_of_environments_flies_the_single_environments_runs():
+    """Gymnasium's vector API seeds sub-environment i with seed + i: each flies the run 0 of its
+    seed, as one environment does."""
+    kwargs = {"overrides": ["timing.max_duration_s=1"]}
+    vec = gymnasium.make_vec("bauv/mission-short-v0", 2, "sync", vector_kwargs={}, **kwargs)
+    obs, info = vec.reset(seed=8)
+    for i in range(2):
+        single, _ = make("mission/short", 1.0).reset(seed=8 + i)
+        assert np.array_equal(obs[i], single)
+    assert list(info["seed"]) == [8, 9]
+    vec.close()
