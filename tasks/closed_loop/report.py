@@ -4,6 +4,7 @@ run, and the run data of every run as Parquet (``data/``, schema in ``docs/run-d
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Literal
 
@@ -115,7 +116,10 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
         ],
     )
     files = [write_metrics(ctx.out_dir, metrics)]
-    files += export_runs(ctx.out_dir, exp.name, runs, frame=scn.frame())
+    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
+    files += export_runs(
+        ctx.out_dir, exp.name, runs, frame=scn.frame(), points=tx if scn.sensors.use_usbl else ()
+    )
     rec_run = next((r for r in runs if r.run == scn.report.record_run), None)
     tables = []
     if rec_run is not None and rec_run.failed is None:
@@ -229,6 +233,7 @@ def export_runs(
     runs: list[MissionRun],
     suffix: str = "",
     frame: LocalFrame | None = None,
+    points: Sequence[tuple[str, float, float]] = (),
 ) -> list[str]:
     """Write every run's data as Parquet: ``data/run-NNNNNN<suffix>/<vehicle>.ticks.parquet``
     (the per-tick columns) and ``<vehicle>.<device>.parquet`` (the fixes of each device).
@@ -236,7 +241,7 @@ def export_runs(
     With the scene's geographic frame, every position column of those tables gets its WGS 84
     latitude/longitude companion (``<name>_geo``, deg; the GPS fixes ``latitude``/``longitude``:
     :func:`tasks.core.geojson.with_geographic`), and each vehicle's tracks (the truth and every
-    estimate) and way-points are written as GeoJSON, ``<vehicle>.tracks.geojson``
+    estimate), way-points and ``points`` are written as GeoJSON, ``<vehicle>.tracks.geojson``
     (:func:`tasks.core.geojson.write_tracks_geojson`). Without one the files are as before.
 
     Args:
@@ -245,6 +250,8 @@ def export_runs(
         runs: the runs.
         suffix: added to each run's folder name (a mission flying several variants per run).
         frame: the scene's frame on the Earth (``scenario.frame()``), or ``None``.
+        points: named positions of the scene for the GeoJSON, ``(name, east m, north m)`` (the
+            USBL transceiver).
 
     Returns:
         The files written, relative to ``out_dir``.
@@ -283,9 +290,7 @@ def export_runs(
                     "vehicle": v.name,
                     "failed": r.failed or "",
                 }
-                points = [
-                    (f"waypoint {w['index']}", w["east_m"], w["north_m"]) for w in v.waypoints
-                ]
-                write_tracks_geojson(out_dir / rel, v.ticks, frame, props, points)
+                wps = [(f"waypoint {w['index']}", w["east_m"], w["north_m"]) for w in v.waypoints]
+                write_tracks_geojson(out_dir / rel, v.ticks, frame, props, [*wps, *points])
                 files.append(str(rel))
     return files

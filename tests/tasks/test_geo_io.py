@@ -6,10 +6,11 @@ import json
 import math
 
 import pytest
+import tomli_w
+from pyproj import Geod
 
 from bauv_sim.config import load_config, to_plain
 from bauv_sim.errors import ConfigError
-from tasks.closed_loop.scenario import MissionScenario
 from tasks.core import cli, registry
 from tests.bauv_sim.test_geo import vincenty_inverse
 
@@ -57,7 +58,6 @@ def test_waypoints_start_and_transceiver_in_latitude_longitude_are_the_geodesic_
     # the resolved scenario is in east/north and loads again to the same scenario
     plain = to_plain(scn)
     assert "latitude_deg" not in plain["start"] and "transceiver_latitude_deg" not in plain
-    assert load_config(MissionScenario, plain) == load_config(MissionScenario, plain)
     assert load_config(SURVEY.scenario_type, plain) == scn
 
 
@@ -265,3 +265,73 @@ def test_a_scenario_without_the_mission_validator_refuses_a_waypoints_file(tmp_p
             (),
             [f"leader.guidance.waypoints_file={json.dumps(f)}"],
         )
+
+
+def test_a_mission_given_in_latitude_longitude_flies_as_the_same_one_in_east_north(
+    tmp_path, capsys
+):
+    """mission/short's way-points, start and transceiver given as their latitude/longitude
+    (from Vincenty's direct problem, pyproj.Geod, not the scenario's frame) fly the same mission
+    as in east/north: the conversion's round trip is a few nanometres."""
+    geod = Geod(ellps="WGS84")
+
+    def lat_lon(east, north):
+        az, s = math.degrees(math.atan2(east, north)), math.hypot(east, north)
+        lon, lat, _ = geod.fwd(LON0, LAT0, az, s)
+        return {"latitude_deg": lat, "longitude_deg": lon}
+
+    wps = [
+        {**lat_lon(0.0, 50.0), "depth_m": 3.0},
+        {**lat_lon(40.0, 80.0), "depth_m": 3.0},
+    ]
+    tx = lat_lon(3.0, -4.0)
+    common = ["--runs", "1", "--quiet", "--set", "report.recording=false"]
+    common += ["--set", "report.figures=false"]
+    code, err = _main(
+        capsys,
+        "run",
+        "mission/short",
+        "--out",
+        str(tmp_path / "en"),
+        *common,
+        "--set",
+        "transceiver_east_m=3.0",
+        "--set",
+        "transceiver_north_m=-4.0",
+    )
+    assert code == 0, err
+    scenario = tmp_path / "geo.toml"
+    scenario.write_text(
+        tomli_w.dumps(
+            {
+                **GEO,
+                "guidance": {"waypoints": wps},
+                "start": lat_lon(0.0, -20.0),
+                "transceiver_latitude_deg": tx["latitude_deg"],
+                "transceiver_longitude_deg": tx["longitude_deg"],
+                "report": {"recording": False, "figures": False},
+            }
+        )
+    )
+    code, err = _main(
+        capsys,
+        "run",
+        "mission/short",
+        "--out",
+        str(tmp_path / "geo"),
+        "--scenario",
+        str(scenario),
+        "--runs",
+        "1",
+        "--quiet",
+    )
+    assert code == 0, err
+    a = json.loads((tmp_path / "en" / "metrics.json").read_text())["runs"][0]
+    b = json.loads((tmp_path / "geo" / "metrics.json").read_text())["runs"][0]
+    assert a["failed"] is None and b["failed"] is None
+    for wa, wb in zip(a["waypoints"], b["waypoints"], strict=True):
+        assert abs(wa["east_m"] - wb["east_m"]) < 1e-6
+        assert abs(wa["north_m"] - wb["north_m"]) < 1e-6
+        assert wa["reached_by_truth"] == wb["reached_by_truth"]
+    for k, v in a["summary"].items():
+        assert b["summary"][k] == pytest.approx(v, rel=1e-6, abs=1e-6), k

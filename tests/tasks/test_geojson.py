@@ -98,6 +98,8 @@ def test_geojson_tracks_read_by_ogr_equal_the_parquet_latitude_longitude(folder)
     for i in range(2):
         p = points[f"waypoint {i}"]
         assert abs(p.y - lat[i]) < DEG_TOL and abs(p.x - lon[i]) < DEG_TOL
+    p = points["usbl transceiver"]  # mission/short's, at the origin
+    assert (p.x, p.y) == (LON0, LAT0) and len(points) == 3
 
 
 def test_gps_fixes_and_fix_positions_carry_latitude_longitude(folder):
