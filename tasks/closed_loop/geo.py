@@ -63,6 +63,10 @@ MAX_WAYPOINTS_FILE_BYTES = MAX_TOML_BYTES
 """The largest way-point file, bytes (the largest scenario file: 4 MiB)."""
 DEPTH_AGREEMENT_M = 1e-3
 """A GeoJSON height and a ``depth_m`` property beside it agree within this, m."""
+MAX_DISTANCE_FROM_ORIGIN_M = 100_000.0
+"""A geographic position farther than this from the ``geo`` origin is refused, m: the scene is
+flat (distances between points away from the origin are off by about (r / R)^2, 2.5e-4 at
+100 km), and a position thousands of kilometres away is a typing error."""
 CRS84 = ("urn:ogc:def:crs:OGC:1.3:CRS84", "urn:ogc:def:crs:OGC::CRS84", "EPSG:4326")
 
 
@@ -205,6 +209,13 @@ def _resolve_point(
     if frame is None:
         return point
     east, north = frame.to_local(lat, lon)
+    r = math.hypot(float(east), float(north))
+    if not r <= MAX_DISTANCE_FROM_ORIGIN_M:
+        raise ValueError(
+            f"{where}{sep}latitude_deg, longitude_deg = {lat!r}, {lon!r}: {r / 1000:.0f} km from "
+            f"the geo origin ({frame.latitude_deg!r}, {frame.longitude_deg!r}); at most "
+            f"{MAX_DISTANCE_FROM_ORIGIN_M / 1000:g} km allowed"
+        )
     out = {k: v for k, v in point.items() if k not in GEO and k not in LOCAL}
     return {"east_m": float(east), "north_m": float(north), **out}
 
@@ -340,6 +351,8 @@ def _read_geojson(text: str, field: str) -> list[dict[str, Any]]:
         doc = json.loads(text, parse_constant=_reject_constant)
     except ValueError as exc:
         raise ValueError(f"{field}: not JSON ({exc})") from None
+    except RecursionError:
+        raise ValueError(f"{field}: arrays or objects nested too deep to be GeoJSON") from None
     if not isinstance(doc, dict):
         raise ValueError(f"{field}: a GeoJSON object is needed, got a {type(doc).__name__}")
     crs = doc.get("crs")

@@ -166,6 +166,11 @@ REFUSED = [
         "start.latitude_deg = 91.0: must be a finite number in [-90, 90]",
     ),
     (
+        {"start": {"latitude_deg": 43.05, "longitude_deg": 59.5}},
+        "start.latitude_deg, longitude_deg = 43.05, 59.5: 4286 km from the geo origin (43.05, "
+        "5.95); at most 100 km allowed",
+    ),
+    (
         {"start": {"latitude_deg": "43N", "longitude_deg": 5.9}},
         "start.latitude_deg = '43N': must be a number (deg)",
     ),
@@ -217,6 +222,7 @@ FILES = [
         '{"type":"Feature","geometry":{"type":"Point","coordinates":[NaN,43]}}',
         "not JSON",
     ),
+    ("a.geojson", "[" * 100_000, "nested too deep"),
 ]
 
 
