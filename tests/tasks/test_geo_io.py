@@ -2,6 +2,7 @@
 (tasks.closed_loop.geo), checked against geodesics computed independently (Vincenty's inverse,
 tests/bauv_sim/test_geo.py) and through the CLI's refusals (exit 2, one line, nothing written)."""
 
+import dataclasses
 import json
 import math
 
@@ -341,3 +342,43 @@ def test_a_mission_given_in_latitude_longitude_flies_as_the_same_one_in_east_nor
         assert wa["reached_by_truth"] == wb["reached_by_truth"]
     for k, v in a["summary"].items():
         assert b["summary"][k] == pytest.approx(v, rel=1e-6, abs=1e-6), k
+
+
+def test_the_gps_reports_latitude_longitude_and_the_navigation_makes_it_east_north():
+    """With the frame in the rig, the GPS device's fix is the same fix (same seed, same error)
+    in WGS 84 latitude/longitude: the geodesic direct problem of its east/north without the
+    frame; the GPS adapter given the frame makes it east/north again (the navigator's input)."""
+    import numpy as np
+
+    from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
+    from bauv_sim.geo import LocalFrame
+    from bauv_sim.sensors.gps import GpsConfig
+    from bauv_sim.sensors.rig import SensorRig
+    from nav.models import HorizontalPositionMeasurement
+    from tasks.closed_loop.navigation import GpsFixes
+
+    frame = LocalFrame(LAT0, LON0)
+    geod = Geod(ellps="WGS84")
+    phys = build_physics(SceneConfig(beacons=(), vehicles=(VehicleSpec(depth_m=1.0),)))
+    cfg = GpsConfig(period_s=0.2, acquisition_s=0.0)
+    adapter = GpsFixes(HorizontalPositionMeasurement(2.5), np.zeros(3), False, frame)
+    n = 0
+    for k, (e, nn) in enumerate([(120.0, -340.0), (-2500.0, 800.0), (10.0, 4000.0)]):
+        phys.set_pose([e, nn, 0.4], [0.0, 0.0, 1.0])
+        plain = SensorRig({"gps": cfg}, phys, "bauv", seed=3, run=k)
+        geo = SensorRig({"gps": cfg}, phys, "bauv", 3, k, extra={"gps": {"frame": frame}})
+        (a,) = plain.sense(0, phys.truth(), phys.commands()).arrived
+        (b,) = geo.sense(0, phys.truth(), phys.commands()).arrived
+        east, north = a.value
+        lon, lat, _ = geod.fwd(
+            LON0, LAT0, math.degrees(math.atan2(east, north)), math.hypot(east, north)
+        )
+        assert abs(b.value[0] - lat) < 1e-10 and abs(b.value[1] - lon) < 1e-10  # 0.01 mm
+        assert abs(east - e) < 15 and abs(north - nn) < 15  # the fix is near the antenna
+        b = dataclasses.replace(b, attitude_rad=np.zeros(3))  # no compass/INS in this rig
+        rec = adapter.apply(None, b, b.t_valid_s)
+        assert (
+            np.abs(rec.z - a.value).max() < 1e-6 and np.abs(rec.reference_m - a.value).max() < 1e-6
+        )
+        n += 1
+    assert n == 3
