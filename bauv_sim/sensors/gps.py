@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from bauv_sim.config import Config
+from bauv_sim.geo import LocalFrame
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs, point_world
 from bauv_sim.sensors.errors import ErrorProcess, LengthErrorConfig
 from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
@@ -88,7 +89,12 @@ class GpsDevice:
     ``max_antenna_depth_m`` + the lever arm's length + :data:`DEEP_MARGIN_M` (the antenna is
     surely under water there): its acquisition clock restarts without a sample. The antenna's
     lever arm is the configured one, or the model's site when it is zero.
-    Value: the antenna's (east, north), shape (2,), m, world (no lever-arm correction).
+
+    Value: the antenna's (east, north), shape (2,), m, world (no lever-arm correction); with the
+    scene's geographic frame in the rig's per-device settings (``extra={"gps": {"frame":
+    frame}}``, a :class:`bauv_sim.geo.LocalFrame`), the antenna's WGS 84 (latitude, longitude),
+    shape (2,), deg, as a receiver reports it: the same fix (errors in metres on the ground)
+    through the frame's inverse projection.
     """
 
     kind = "event"
@@ -101,6 +107,7 @@ class GpsDevice:
         self.every = build.every(cfg.period_s)
         self.deep_m = cfg.max_antenna_depth_m + DEEP_MARGIN_M + float(np.linalg.norm(arm))
         self._gps = Gps(cfg, build.seed, (build.run,), build.stream)
+        self.frame: LocalFrame | None = build.extra.get("frame")
 
     def step(self, ctx: TickContext) -> Measurement | None:
         """A fix at the GPS's ticks when the antenna is up (``None`` otherwise)."""
@@ -112,7 +119,10 @@ class GpsDevice:
         g = self._gps.sample(ctx.record, _FIRST)
         if not g.produced[0, 0]:
             return None
-        return Measurement(self.name, ctx.t_s, ctx.t_s, g.values[0, 0], ctx.measured_attitude_rad)
+        value = g.values[0, 0]
+        if self.frame is not None:
+            value = np.concatenate(self.frame.to_geographic(value[0], value[1]), axis=None)
+        return Measurement(self.name, ctx.t_s, ctx.t_s, value, ctx.measured_attitude_rad)
 
 
 DEEP_MARGIN_M = 0.5

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim.frames import R_from_roll_pitch_heading
+from bauv_sim.geo import LocalFrame
 from bauv_sim.sensors.online import Broadcast
 from bauv_sim.sensors.online import Measurement as Record
 from bauv_sim.sensors.rig import RigTick
@@ -197,14 +198,21 @@ class GpsFixes:
         model: the measurement model.
         antenna_body_m: the antenna's lever arm, shape (3,), m, body FLU.
         apply_to_estimate: whether the navigator fuses them.
+        frame: the scene's geographic frame when the receiver reports WGS 84 (latitude,
+            longitude) in deg (:class:`bauv_sim.sensors.gps.GpsDevice` given the frame): the
+            fix is made east/north with it (the navigator stays east/north; the record's ``z``
+            is that east/north); ``None``: the receiver reports east/north.
     """
 
     model: HorizontalPositionMeasurement
     antenna_body_m: Array
     apply_to_estimate: bool = True
+    frame: LocalFrame | None = None
 
     def apply(self, nav: OnlineNavigator, m: Record, t_s: float) -> FixRecord:
         z = m.value
+        if self.frame is not None:
+            z = np.concatenate(self.frame.to_local(z[0], z[1]), axis=None)
         roll, pitch, h = m.attitude_rad
         arm_world = R_from_roll_pitch_heading(roll, pitch, h) @ self.antenna_body_m
         z_ref = z - arm_world[:2]
@@ -228,6 +236,8 @@ class EkfNavigation:
             without USBL has no USBL device in its rig.
         adapters: the mission's own devices' adapters, by device name in the rig (added to,
             or replacing, the standard ``usbl`` and ``gps``).
+        frame: the scene's geographic frame when the rig's GPS reports latitude/longitude (see
+            :class:`GpsFixes`), else ``None``.
     """
 
     def __init__(
@@ -238,6 +248,7 @@ class EkfNavigation:
         lever_arms_body_m: dict[str, tuple[float, float, float]],
         use_gps: bool = True,
         adapters: Mapping[str, FixAdapter] | None = None,
+        frame: LocalFrame | None = None,
     ):
         n = cfg
         self.use_gps = use_gps
@@ -258,7 +269,7 @@ class EkfNavigation:
         self.antenna_arm = np.asarray(lever_arms_body_m.get("gps", zero), dtype=float)
         self.adapters: dict[str, FixAdapter] = {
             "usbl": UsblFixes(self.usbl_model, self.transponder_arm),
-            "gps": GpsFixes(self.gps_model, self.antenna_arm, use_gps),
+            "gps": GpsFixes(self.gps_model, self.antenna_arm, use_gps, frame),
             **(adapters or {}),
         }
         self.nav = Navigator(

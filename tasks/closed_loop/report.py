@@ -4,12 +4,14 @@ run, and the run data of every run as Parquet (``data/``, schema in ``docs/run-d
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, Field
 
+from bauv_sim.geo import LocalFrame
 from tasks.closed_loop.figures import circle, current_arrow, mission_figures
 from tasks.closed_loop.recording import record_mission
 from tasks.closed_loop.result import MissionRun
@@ -114,7 +116,10 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
         ],
     )
     files = [write_metrics(ctx.out_dir, metrics)]
-    files += export_runs(ctx.out_dir, exp.name, runs)
+    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
+    files += export_runs(
+        ctx.out_dir, exp.name, runs, frame=scn.frame(), points=tx if scn.sensors.use_usbl else ()
+    )
     rec_run = next((r for r in runs if r.run == scn.report.record_run), None)
     tables = []
     if rec_run is not None and rec_run.failed is None:
@@ -222,14 +227,37 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
     return ReportSummary(text, tuple(files), tuple(failures))
 
 
-def export_runs(out_dir: Path, name: str, runs: list[MissionRun], suffix: str = "") -> list[str]:
+def export_runs(
+    out_dir: Path,
+    name: str,
+    runs: list[MissionRun],
+    suffix: str = "",
+    frame: LocalFrame | None = None,
+    points: Sequence[tuple[str, float, float]] = (),
+) -> list[str]:
     """Write every run's data as Parquet: ``data/run-NNNNNN<suffix>/<vehicle>.ticks.parquet``
     (the per-tick columns) and ``<vehicle>.<device>.parquet`` (the fixes of each device).
+
+    With the scene's geographic frame, every position column of those tables gets its WGS 84
+    latitude/longitude companion (``<name>_geo``, deg; the GPS fixes ``latitude``/``longitude``:
+    :func:`tasks.core.geojson.with_geographic`), and each vehicle's tracks (the truth and every
+    estimate), way-points and ``points`` are written as GeoJSON, ``<vehicle>.tracks.geojson``
+    (:func:`tasks.core.geojson.write_tracks_geojson`). Without one the files are as before.
+
+    Args:
+        out_dir: the report's folder.
+        name: the experiment's name (in the files' metadata).
+        runs: the runs.
+        suffix: added to each run's folder name (a mission flying several variants per run).
+        frame: the scene's frame on the Earth (``scenario.frame()``), or ``None``.
+        points: named positions of the scene for the GeoJSON, ``(name, east m, north m)`` (the
+            USBL transceiver).
 
     Returns:
         The files written, relative to ``out_dir``.
     """
     from tasks.core.export import write_parquet
+    from tasks.core.geojson import with_geographic, write_tracks_geojson
 
     files = []
     for r in runs:
@@ -243,10 +271,26 @@ def export_runs(out_dir: Path, name: str, runs: list[MissionRun], suffix: str = 
             }
             folder = Path("data") / f"run-{r.run:06d}{suffix}"
             rel = folder / f"{v.name}.ticks.parquet"
-            write_parquet(out_dir / rel, v.ticks, {**meta, "table": "ticks"})
+            ticks = v.ticks if frame is None else with_geographic(v.ticks, frame)
+            write_parquet(out_dir / rel, ticks, {**meta, "table": "ticks"})
             files.append(str(rel))
             for device, cols in v.fixes.items():
                 rel = folder / f"{v.name}.{device}.parquet"
+                if frame is not None:
+                    cols = with_geographic(cols, frame)
                 write_parquet(out_dir / rel, cols, {**meta, "table": device})
+                files.append(str(rel))
+            if frame is not None and v.ticks:
+                rel = folder / f"{v.name}.tracks.geojson"
+                props = {
+                    "experiment": name,
+                    "seed": r.seed,
+                    "run": r.run,
+                    "variant": suffix.lstrip("-"),
+                    "vehicle": v.name,
+                    "failed": r.failed or "",
+                }
+                wps = [(f"waypoint {w['index']}", w["east_m"], w["north_m"]) for w in v.waypoints]
+                write_tracks_geojson(out_dir / rel, v.ticks, frame, props, [*wps, *points])
                 files.append(str(rel))
     return files

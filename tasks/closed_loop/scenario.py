@@ -30,6 +30,7 @@ from bauv_sim.sensors import (
     check_multiple,
 )
 from bauv_sim.sensors.ins import InsConfig
+from tasks.closed_loop.geo import resolve_geographic
 
 MODES = ("transit", "ascend", "surface", "dive", "done")
 
@@ -40,7 +41,9 @@ PHYSICS_TIMESTEP_S = 0.004
 
 
 class WaypointConfig(Config):
-    """A way-point of the mission."""
+    """A way-point of the mission (in a scenario file it may be given as ``latitude_deg`` and
+    ``longitude_deg`` instead of ``east_m`` and ``north_m``, with the scenario's ``geo`` origin;
+    :mod:`tasks.closed_loop.geo` converts them before validation)."""
 
     east_m: float
     north_m: float
@@ -50,7 +53,9 @@ class WaypointConfig(Config):
 
 
 class StartConfig(Config):
-    """Where the vehicle starts (after a GNSS fix at the surface, already dived)."""
+    """Where the vehicle starts (after a GNSS fix at the surface, already dived); in a scenario
+    file ``latitude_deg`` and ``longitude_deg``, with the scenario's ``geo`` origin, replace
+    ``east_m`` and ``north_m`` (:mod:`tasks.closed_loop.geo`)."""
 
     east_m: float = 0.0
     north_m: float = 0.0
@@ -147,6 +152,12 @@ class GuidanceConfig(Config):
     """Way-points and how to fly them."""
 
     waypoints: tuple[WaypointConfig, ...] = Field(min_length=1)
+    waypoints_file: str | None = Field(
+        None,
+        description="a CSV or GeoJSON file of way-points that replace `waypoints` (read when "
+        "the scenario is loaded; the resolved scenario holds its way-points, not the file: "
+        "formats in tasks.closed_loop.geo)",
+    )
     speed_m_s: float = Field(1.0, gt=0, le=2)
     surface_speed_m_s: float = Field(0.5, gt=0, le=2)
     surface_depth_m: float | None = Field(
@@ -166,6 +177,15 @@ class GuidanceConfig(Config):
         "circle with this probability given the estimate (see nav.guidance)",
     )
     min_reach_m: float = Field(1.0, gt=0, description="else pass within this distance, m")
+
+    @model_validator(mode="after")
+    def _file_read(self) -> GuidanceConfig:
+        if self.waypoints_file is not None:
+            raise ValueError(
+                f"waypoints_file = {self.waypoints_file!r}: read by a mission scenario "
+                "(MissionScenario) only; this scenario takes guidance.waypoints"
+            )
+        return self
 
 
 class TimingConfig(Config):
@@ -222,7 +242,11 @@ class MissionScenario(Config):
         "local frame only)",
     )
     seabed: SeabedConfig = Field(default_factory=SeabedConfig)
-    transceiver_east_m: float = 0.0
+    transceiver_east_m: float = Field(
+        0.0,
+        description="the USBL transceiver, m (or transceiver_latitude_deg and "
+        "transceiver_longitude_deg with geo)",
+    )
     transceiver_north_m: float = 0.0
     start: StartConfig = Field(default_factory=StartConfig)
     current: CurrentConfig = Field(
@@ -242,6 +266,13 @@ class MissionScenario(Config):
     timing: TimingConfig = Field(default_factory=TimingConfig)
     faults: FaultConfig = Field(default_factory=FaultConfig)
     report: MissionReportConfig = Field(default_factory=MissionReportConfig)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _geographic(cls, data: Any) -> Any:
+        """Way-points from ``guidance.waypoints_file`` and positions in latitude/longitude, made
+        east/north with the ``geo`` origin (:func:`tasks.closed_loop.geo.resolve_geographic`)."""
+        return resolve_geographic(data)
 
     @model_validator(mode="after")
     def _check(self) -> MissionScenario:

@@ -126,6 +126,8 @@ def standard_vehicle(
     devices["gps"] = s.gps
     if s.use_dvl:
         devices["dvl"] = s.dvl
+    # with a geo origin the GPS reports latitude/longitude and the navigation converts it back
+    frame = scn.frame() if isinstance(scn, MissionScenario) else None
     rig = SensorRig(
         devices,
         physics,
@@ -133,14 +135,14 @@ def standard_vehicle(
         seed,
         run,
         prefix,
-        extra={"odometry": {"speed_table": table}},
+        extra={"odometry": {"speed_table": table}, **({"gps": {"frame": frame}} if frame else {})},
         propagation=propagation,  # type: ignore[arg-type]
     )
     n = scn.navigation
     P0 = initial_covariance(n)
     e0 = rng_mod.generator(seed, run, *streams(prefix, "initial")).standard_normal(3) @ np.sqrt(P0)
     navigation = EkfNavigation(
-        n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, s.use_gps
+        n, pos + e0, physics.transceiver_world(), rig.lever_arms_body_m, s.use_gps, frame=frame
     )
     if guidance is None:
         guidance = P.WaypointSteering(waypoint_guidance(scn, rig), n.steer_on)
