@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+import numpy as np
+
 from bauv_sim import seabed
 from bauv_sim.build import VEHICLE_CLEARANCE_M
 from bauv_sim.errors import ConfigError, GeometryError
@@ -56,6 +58,57 @@ def check_in_water(scenario: MissionScenario) -> None:
             )
 
 
+CURRENT_MARGIN_M = 100.0
+"""How far a track may stray beyond the way-points, the start and the transceiver, m, in the box a
+gridded current must cover (:func:`check_current_covers`; :data:`MESH_MARGIN_M`'s excursions)."""
+
+CURRENT_DEPTH_MARGIN_M = 5.0
+"""How far below the deepest way-point or start the vehicle may go, m (its depth loop's
+overshoot and the dives of a surfacing), in the depth a gridded current must cover."""
+
+
+def check_current_covers(
+    scenario: MissionScenario, points_en_m: list[tuple[float, float]] | None = None
+) -> None:
+    """Refuse a mission a gridded current (``current.kind = "gridded"``) does not cover, before
+    anything is written: the file is read (once per process,
+    :func:`bauv_sim.ocean.load_current_grid`) and must cover the mission's time
+    ``[0, timing.max_duration_s]``, the box of the start, the way-points and the transceiver
+    (and ``points_en_m``) widened by :data:`CURRENT_MARGIN_M`, and the deepest of their depths
+    plus :data:`CURRENT_DEPTH_MARGIN_M`. Other current kinds are not checked.
+
+    Args:
+        scenario: the mission's scenario (its ``current``, ``geo``, ``timing``, ``start``,
+            ``guidance.waypoints`` and transceiver).
+        points_en_m: more points the mission reaches (east, north), m: way-points made per run.
+
+    Raises:
+        ConfigError: one line naming ``current.file``, the file, the variable and what is wrong
+            (a bad file: :func:`bauv_sim.ocean.read_current_grid`), or what the grid does not
+            cover and its extent; a gridded current without a ``geo`` origin.
+    """
+    from bauv_sim.currents import GriddedCurrentConfig, make_current
+
+    if not isinstance(scenario.current, GriddedCurrentConfig):
+        return
+    field = make_current(scenario.current, None, scenario.frame())
+    wps = scenario.guidance.waypoints
+    pts = [(w.east_m, w.north_m) for w in wps] + list(points_en_m or [])
+    pts.append((scenario.start.east_m, scenario.start.north_m))
+    pts.append((scenario.transceiver_east_m, scenario.transceiver_north_m))
+    e, n = np.array(pts, dtype=float).T
+    m = CURRENT_MARGIN_M
+    corners_e = [e.min() - m, e.max() + m, e.max() + m, e.min() - m]
+    corners_n = [n.min() - m, n.min() - m, n.max() + m, n.max() + m]
+    deepest = max([scenario.start.depth_m] + [w.depth_m for w in wps])
+    field.check_covers(
+        scenario.timing.max_duration_s,
+        np.array(corners_e),
+        np.array(corners_n),
+        deepest + CURRENT_DEPTH_MARGIN_M,
+    )
+
+
 def _mesh_bytes(scenario: MissionScenario) -> float:
     """Memory of the recording's seabed mesh, bytes: the grid cells of the mission area (the
     way-points, the start and the transceiver, :data:`MESH_MARGIN_M` around them, within the
@@ -100,7 +153,8 @@ class MissionExperiment(Experiment):
     def check(self, scenario: MissionScenario, n_runs: int) -> None:
         """Checks of a batch: the recorded run and the faulty runs are runs of the batch; the
         start and every way-point are in the water (above the scene's seabed by at least
-        :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` where the seabed grid covers them).
+        :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` where the seabed grid covers them); a
+        gridded current covers the mission (:func:`check_current_covers`).
 
         Raises:
             ConfigError: naming the field, its value and what is allowed; or a batch whose
@@ -121,6 +175,7 @@ class MissionExperiment(Experiment):
                 f"{bad[0]} is not a run of this batch (0 <= run < runs = {n_runs})"
             )
         check_in_water(scenario)
+        check_current_covers(scenario)
 
     def memory(self, scenario: MissionScenario, n_runs: int) -> list[MemoryTerm]:
         """Estimated peak memory, bytes: a run of ``timing.max_duration_s`` in the worker that
