@@ -68,19 +68,22 @@ overshoot and the dives of a surfacing), in the depth a gridded current must cov
 
 
 def check_current_covers(
-    scenario: MissionScenario, points_en_m: list[tuple[float, float]] | None = None
+    scenario: MissionScenario,
+    points_en_m: list[tuple[float, float]] | None = None,
+    depths_m: tuple[float, ...] = (),
 ) -> None:
     """Refuse a mission a gridded current (``current.kind = "gridded"``) does not cover, before
     anything is written: the file is read (once per process,
     :func:`bauv_sim.ocean.load_current_grid`) and must cover the mission's time
     ``[0, timing.max_duration_s]``, the box of the start, the way-points and the transceiver
     (and ``points_en_m``) widened by :data:`CURRENT_MARGIN_M`, and the deepest of their depths
-    plus :data:`CURRENT_DEPTH_MARGIN_M`. Other current kinds are not checked.
+    (and ``depths_m``) plus :data:`CURRENT_DEPTH_MARGIN_M`. Other current kinds are not checked.
 
     Args:
         scenario: the mission's scenario (its ``current``, ``geo``, ``timing``, ``start``,
             ``guidance.waypoints`` and transceiver).
         points_en_m: more points the mission reaches (east, north), m: way-points made per run.
+        depths_m: more depths the mission reaches, m (positive down).
 
     Raises:
         ConfigError: one line naming ``current.file``, the file, the variable and what is wrong
@@ -100,7 +103,7 @@ def check_current_covers(
     m = CURRENT_MARGIN_M
     corners_e = [e.min() - m, e.max() + m, e.max() + m, e.min() - m]
     corners_n = [n.min() - m, n.min() - m, n.max() + m, n.max() + m]
-    deepest = max([scenario.start.depth_m] + [w.depth_m for w in wps])
+    deepest = max([scenario.start.depth_m] + [w.depth_m for w in wps] + list(depths_m))
     field.check_covers(
         scenario.timing.max_duration_s,
         np.array(corners_e),

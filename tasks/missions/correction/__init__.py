@@ -31,21 +31,28 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bauv_sim.errors import ConfigError
-from tasks.closed_loop.experiment import MissionExperiment
+from tasks.closed_loop.experiment import MissionExperiment, check_current_covers
 from tasks.core.registry import ReportContext, ReportSummary, register
-from tasks.missions.correction.figures import correction_figure, record_correction
+from tasks.missions.correction.figures import (
+    correction_figure,
+    current_figure,
+    record_correction,
+)
 from tasks.missions.correction.report import (
     CorrectionMetrics,
     CorrectionRunMetrics,
+    along_track_table,
     report_correction,
 )
 from tasks.missions.correction.run import (
     EXTRA_COLUMNS,
+    SPANS,
     CorrectionMission,
     CorrectionNavigation,
     CorrectionReport,
     CorrectionRunResult,
     LegGuidance,
+    current_along_track,
     current_metrics,
     fly_run,
     leg3_metrics,
@@ -63,6 +70,7 @@ __all__ = [
     "EN",
     "EXTRA_COLUMNS",
     "METHODS",
+    "SPANS",
     "CorrectionConfig",
     "CorrectionExperiment",
     "CorrectionMetrics",
@@ -73,7 +81,10 @@ __all__ = [
     "CorrectionRunResult",
     "CorrectionScenario",
     "LegGuidance",
+    "along_track_table",
     "correction_figure",
+    "current_along_track",
+    "current_figure",
     "current_metrics",
     "fly_run",
     "leg3_metrics",
@@ -97,6 +108,14 @@ class CorrectionExperiment(MissionExperiment):
 
     def check(self, scenario: CorrectionScenario, n_runs: int) -> None:
         super().check(scenario, n_runs)
+        # the legs are made per run: a gridded current covers every leg on any course
+        st, c = scenario.start, scenario.correction
+        reach = 3.0 * c.leg_length_m
+        check_current_covers(
+            scenario,
+            [(st.east_m + sx * reach, st.north_m + sy * reach) for sx in (-1, 1) for sy in (-1, 1)],
+            (c.depth_m,),
+        )
         if scenario.sensors.use_usbl:
             raise ConfigError("sensors.use_usbl = true: seed 001's vehicle has no USBL")
 

@@ -75,6 +75,46 @@ def _draw_tracks(name: str, scn: CorrectionScenario, rec: CorrectionRunResult, o
     return style.save(fig, out / "tracks.png")
 
 
+def current_figure(name: str, scn: CorrectionScenario, rec: CorrectionRunResult, out) -> list[str]:
+    """The current along the recorded run's compensated flight: the true current at the vehicle
+    and the correction's estimate (east and north against time; legs 1-2 carry the estimate made
+    when leg 2 closed, :func:`~tasks.missions.correction.run.current_along_track`), and their
+    difference's magnitude (PNG and PDF, project style)."""
+    from tasks.core import style
+
+    with style.context():
+        return _draw_current(scn, rec, out, style)
+
+
+def _draw_current(scn: CorrectionScenario, rec: CorrectionRunResult, out, style):
+    v = rec.flights["compensated"].lead
+    t = v["t"]
+    true = np.asarray(v["truth_current"], dtype=float)[:, :2]
+    est = np.array(v["cp_current"], dtype=float)
+    t3 = v.outcome["leg3_start_s"]
+    c = v.outcome["current_estimate_m_s"]
+    if c is not None and t3 is not None:
+        est[t < t3] = np.asarray(c, dtype=float)
+    p = scn.correction.procedure.upper()
+    fig, axs = style.subplots("page", 5.0, 3, 1, sharex=True)
+    for ax, i, comp in zip(axs[:2], (0, 1), ("east", "north"), strict=True):
+        ax.plot(t, true[:, i], **style.line("truth", label="true current at the vehicle"))
+        ax.plot(t, est[:, i], **style.line(p, label=f"{p} estimate"))
+        ax.set_ylabel(style.label(f"current {comp}", "m/s"))
+    err = np.linalg.norm(est - true, axis=1)
+    axs[2].plot(t, err, **style.line(p, label="|estimate - true|", ls="--"))
+    axs[2].set_ylabel(style.label("difference", "m/s"))
+    axs[2].set_xlabel(style.label("time", "s"))
+    if t3 is not None:
+        for ax in axs:
+            ax.axvline(t3, color="0.5", lw=0.6, ls=":")
+        style.title(axs[0], f"{scn.current.kind} current; leg 3 from {t3:.0f} s")
+    style.panel_letters(axs)
+    fig.suptitle(f"Current along the track, run {rec.run}")
+    style.figure_legend(fig, axs, ncol=3)
+    return style.save(fig, out / "current-along-track.png")
+
+
 def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, out) -> list[str]:
     """The recordings of the recorded run's compensated flight: the mission recording, and a
     second one with the DR tracks and the estimated current beside the true one."""

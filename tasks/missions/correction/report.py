@@ -11,8 +11,8 @@ from pydantic import BaseModel, Field
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.closed_loop.report import export_runs
 from tasks.core.registry import ReportContext, ReportSummary
-from tasks.missions.correction.figures import correction_figure, record_correction
-from tasks.missions.correction.run import CorrectionRunResult
+from tasks.missions.correction.figures import correction_figure, current_figure, record_correction
+from tasks.missions.correction.run import SPANS, CorrectionRunResult, current_along_track
 from tasks.missions.correction.scenario import CorrectionScenario, run_scenario
 
 
@@ -156,7 +156,8 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
         slug="current",
         note=f"Mean error {mean('compensated', 'current_error_m_s'):.3f} m/s.",
     )
-    tables = [t1, t3, tc]
+    ta = along_track_table(p, ok)
+    tables = [t1, t3, tc, ta]
     failures = [r.failed for r in runs if r.failed]
     if failures:
         tables.append(
@@ -173,9 +174,59 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
         flight = rec.flights["compensated"]
         if scn.report.figures:
             files += correction_figure(exp.name, scn, rec, ctx.out_dir)
+            files += current_figure(exp.name, scn, rec, ctx.out_dir)
         if scn.report.recording and flight.vehicles:
             flown = run_scenario(scn, ctx.seed, rec.run)
             files += record_correction(exp.name, flown, flight, ctx.out_dir)
     text = "".join(t.to_text() + "\n" for t in tables[:2])
-    text += tc.note + "\n" + f"wrote {len(files)} files to {ctx.out_dir}\n"
+    text += tc.note + "\n" + ta.note + "\n" + f"wrote {len(files)} files to {ctx.out_dir}\n"
     return ReportSummary(text, tuple(files))
+
+
+ALONG_TRACK_COLUMNS = (
+    ("mean_error_m_s", "Mean error (m/s)"),
+    ("rms_error_m_s", "RMS error (m/s)"),
+    ("max_error_m_s", "Max error (m/s)"),
+    ("bias_east_m_s", "Mean error east (m/s)"),
+    ("bias_north_m_s", "Mean error north (m/s)"),
+    ("true_mean_speed_m_s", "True mean speed (m/s)"),
+    ("true_rms_variation_m_s", "True RMS variation (m/s)"),
+    ("true_max_variation_m_s", "True max variation (m/s)"),
+)
+"""The along-track comparison's quantities (:func:`~tasks.missions.correction.run.
+current_along_track`) and their column headers."""
+
+
+def along_track_table(procedure: str, ok: list[CorrectionRunResult]):
+    """The correction's estimated current against the true current at the vehicle, per tick of
+    legs 1-3 of the compensated flights (:func:`~tasks.missions.correction.run.
+    current_along_track`), each quantity the mean over the successful runs."""
+    from tasks.core.report import Table
+
+    per_run = [current_along_track(r.flights["compensated"].lead) for r in ok]
+    rows = []
+    for span in SPANS:
+        vals = [a[span] for a in per_run if span in a]
+        rows.append(
+            [span]
+            + [
+                float(np.mean([v[k] for v in vals])) if vals else None
+                for k, _ in ALONG_TRACK_COLUMNS
+            ]
+        )
+    whole = [math.nan if x is None else x for x in rows[-1][1:]]
+    note = (
+        "Error: the estimate minus the true current at the vehicle (mean, RMS, max: of its "
+        f"size). Along the track (legs 1-3, every tick) the estimate is {whole[0]:.3f} m/s off "
+        f"on average (RMS {whole[1]:.3f}, max {whole[2]:.3f} m/s); the true current varied by "
+        f"{whole[6]:.3f} m/s RMS about its mean."
+    )
+    return Table(
+        f"Current estimated by {procedure} against the true current at the vehicle, tick by tick "
+        f"along the track ({len(per_run)} runs, compensated flights; means over runs)",
+        ["Span", *(h for _, h in ALONG_TRACK_COLUMNS)],
+        rows,
+        digits=3,
+        slug="current-along-track",
+        note=note,
+    )

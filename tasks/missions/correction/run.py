@@ -287,6 +287,56 @@ def current_metrics(v: VehicleRun) -> dict[str, float]:
     }
 
 
+SPANS = ("legs 1-2", "leg 3", "legs 1-3")
+"""The spans of a flight the along-track comparison of the current is reduced over."""
+
+
+def current_along_track(v: VehicleRun) -> dict[str, dict[str, float]]:
+    """The correction procedure's estimated current against the true current at the vehicle,
+    tick by tick along the track (issue 25 check 4).
+
+    At each control tick the true current is the water's velocity at the vehicle (the run's
+    ``truth_current``, east/north) and the estimate is the procedure's: on legs 1-2 the estimate
+    made from them when leg 2 closed (``outcome()["current_estimate_m_s"]``, for leg 1's course:
+    the same for every course under the physics world's uniform hull response), on leg 3 the
+    estimate for the measured heading at the tick (``cp_current``). Per span (:data:`SPANS`):
+    the difference ``d = estimate - true`` as the mean, RMS and largest ``|d|`` and the mean
+    ``d`` (east, north), and how much the true current varied: the RMS and the largest
+    ``|true - mean true|`` over the span, and the mean true speed. All in m/s.
+
+    Returns:
+        ``{span: {quantity: value}}``; empty when the procedure made no estimate.
+    """
+    c, leg3_start_s = v.outcome["current_estimate_m_s"], v.outcome["leg3_start_s"]
+    if c is None or leg3_start_s is None:
+        return {}
+    t = v["t"]
+    true = np.asarray(v["truth_current"], dtype=float)[:, :2]
+    est = np.array(v["cp_current"], dtype=float)
+    before = t < leg3_start_s
+    est[before] = np.asarray(c, dtype=float)
+    valid = np.isfinite(est).all(axis=1)
+    out: dict[str, dict[str, float]] = {}
+    for span, m in zip(SPANS, (before, ~before, np.ones_like(before)), strict=True):
+        m = m & valid
+        if not m.any():
+            continue
+        d = est[m] - true[m]
+        err = np.linalg.norm(d, axis=1)
+        dev = np.linalg.norm(true[m] - true[m].mean(axis=0), axis=1)
+        out[span] = {
+            "mean_error_m_s": float(err.mean()),
+            "rms_error_m_s": float(np.sqrt(np.mean(err**2))),
+            "max_error_m_s": float(err.max()),
+            "bias_east_m_s": float(d[:, 0].mean()),
+            "bias_north_m_s": float(d[:, 1].mean()),
+            "true_rms_variation_m_s": float(np.sqrt(np.mean(dev**2))),
+            "true_max_variation_m_s": float(dev.max()),
+            "true_mean_speed_m_s": float(np.linalg.norm(true[m], axis=1).mean()),
+        }
+    return out
+
+
 @store.plain_data("missions.correction.CorrectionRunResult")
 @dataclass
 class CorrectionRunResult:
