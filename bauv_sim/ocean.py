@@ -439,3 +439,25 @@ def load_current_grid(path: str | Path, start: dt.datetime | None = None) -> Cur
         raise ConfigError(f"{path}: no such file")
     st = p.stat()
     return _cached_grid(str(p.resolve()), st.st_mtime_ns, st.st_size, start)
+
+
+def current_grid_cells(path: str | Path) -> int:
+    """The number of cells of a current file's grid (time x depth x latitude x longitude of its
+    eastward velocity), read from its header without reading the velocities: for a memory
+    estimate before the file is read.
+
+    Raises:
+        ConfigError: the file is missing or unreadable, or has no eastward velocity (one line
+            naming the file).
+    """
+    import xarray as xr
+
+    where = str(path)
+    if not Path(path).is_file():
+        raise ConfigError(f"{where}: no such file")
+    try:
+        ds = xr.open_dataset(path, engine="netcdf4", decode_times=False)
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
+    with ds:
+        return math.prod(cf_variable(ds, STANDARD_NAMES["u"], None, where).shape)

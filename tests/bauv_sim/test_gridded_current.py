@@ -66,6 +66,22 @@ def test_a_bad_file_is_one_line_naming_the_field_and_the_file(tmp_path):
         currents.make_current(cfg, None, FRAME)
 
 
+def test_a_grid_too_large_is_refused_from_its_header(tmp_path):
+    """A real file declaring 2 x 2 x 12000 x 12000 cells (12.9 GiB as a float64 grid of three
+    components): refused by the reader before its velocities are read; its size is known from the
+    header alone (the batch's memory estimate)."""
+    from tests.tasks.test_site_current import write_declared
+
+    path = tmp_path / "big.nc"
+    write_declared(path, 12000)
+    assert path.stat().st_size < 10e6
+    assert ocean.current_grid_cells(path) == 2 * 2 * 12000 * 12000
+    with pytest.raises(
+        ConfigError, match=r"variable 'u' of shape \(2, 2, 12000, 12000\) needs 12.9 GiB"
+    ):
+        ocean.read_current_grid(path)
+
+
 def test_start_time_places_the_mission_in_the_files_time(tmp_path):
     """A field varying in time, written from START: with start_time 10 min after, the mission's
     t = 0 is the file's 600 s (default: the file's first time)."""

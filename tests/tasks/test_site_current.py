@@ -95,35 +95,40 @@ def test_correction_runs_under_a_time_varying_current_from_a_file(tmp_path):
     assert (out / "current-along-track.png").is_file()
 
 
+def write_declared(path: Path, n: int) -> None:
+    """A real current file declaring 2 x 2 x n x n cells of u and v, nothing written into them
+    (HDF5 allocates no chunk that is not written: the file is small)."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "w") as ds:
+        for name, size, std, units in (
+            ("time", 2, "time", "seconds since 2026-06-01 06:00:00"),
+            ("depth", 2, "depth", "m"),
+            ("latitude", n, "latitude", "degrees_north"),
+            ("longitude", n, "longitude", "degrees_east"),
+        ):
+            ds.createDimension(name, size)
+            var = ds.createVariable(name, "f8", (name,))
+            var.standard_name, var.units = std, units
+        ds["time"][:] = [0.0, 3600.0]
+        ds["depth"][:] = [0.0, 30.0]
+        ds["latitude"][:] = LAT + np.linspace(-0.05, 0.05, n)
+        ds["longitude"][:] = LON + np.linspace(-0.05, 0.05, n)
+        dims = ("time", "depth", "latitude", "longitude")
+        for key, std in list(ocean.STANDARD_NAMES.items())[:2]:
+            var = ds.createVariable(key, "f4", dims, chunksizes=(1, 1, 500, 500))
+            var.standard_name, var.units = std, "m s-1"
+
+
 def _write_bad(tmp_path: Path, what: str) -> Path:
     """A current file with one thing wrong (``what``)."""
     import xarray as xr
 
     path = tmp_path / f"{what}.nc"
     if what == "too-large":
-        # a real file declaring 2 x 2 x 12000 x 12000 cells of u and v (41 GiB as a grid);
-        # nothing is written into the variables (HDF5 allocates no chunk that is not written)
-        import netCDF4
-
-        with netCDF4.Dataset(path, "w") as ds:
-            for name, n, std, units in (
-                ("time", 2, "time", "seconds since 2026-06-01 06:00:00"),
-                ("depth", 2, "depth", "m"),
-                ("latitude", 12000, "latitude", "degrees_north"),
-                ("longitude", 12000, "longitude", "degrees_east"),
-            ):
-                ds.createDimension(name, n)
-                var = ds.createVariable(name, "f8", (name,))
-                var.standard_name, var.units = std, units
-            ds["time"][:] = [0.0, 3600.0]
-            ds["depth"][:] = [0.0, 30.0]
-            ds["latitude"][:] = LAT + np.linspace(-0.05, 0.05, 12000)
-            ds["longitude"][:] = LON + np.linspace(-0.05, 0.05, 12000)
-            dims = ("time", "depth", "latitude", "longitude")
-            for key, std in list(ocean.STANDARD_NAMES.items())[:2]:
-                var = ds.createVariable(key, "f4", dims, chunksizes=(1, 1, 500, 500))
-                var.standard_name, var.units = std, "m s-1"
+        write_declared(path, 60000)
         return path
+
     grid = ramp_grid(
         half_m=200.0 if what == "small" else 1500.0, end_s=300.0 if what == "short" else RAMP_S
     )
@@ -149,7 +154,9 @@ def _write_bad(tmp_path: Path, what: str) -> Path:
         ("nan", "variable 'v' has 1 NaN or missing cells"),
         ("small", "is outside the grid's latitude"),
         ("short", "the mission's time [0, 900] s is outside the grid's [0, 300] s"),
-        ("too-large", "variable 'u' of shape (2, 2, 12000, 12000) needs 12.9 GiB"),
+        # the batch's memory estimate refuses it first (the reader's own limit where the
+        # machine has the memory: tests/bauv_sim/test_gridded_current.py)
+        ("too-large", "current.file = too-large.nc (1.44e+10 grid cells): the batch would need"),
         ("no-geo", "needs the scenario's geo origin (geo.latitude_deg, geo.longitude_deg)"),
     ],
 )
