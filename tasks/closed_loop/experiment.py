@@ -67,23 +67,25 @@ CURRENT_DEPTH_MARGIN_M = 5.0
 overshoot and the dives of a surfacing), in the depth a gridded current must cover."""
 
 
-def check_current_covers(
-    scenario: MissionScenario,
-    points_en_m: list[tuple[float, float]] | None = None,
-    depths_m: tuple[float, ...] = (),
+def check_gridded_current(
+    current,
+    frame,
+    t_end_s: float,
+    points_en_m: list[tuple[float, float]],
+    depths_m: list[float],
 ) -> None:
-    """Refuse a mission a gridded current (``current.kind = "gridded"``) does not cover, before
-    anything is written: the file is read (once per process,
-    :func:`bauv_sim.ocean.load_current_grid`) and must cover the mission's time
-    ``[0, timing.max_duration_s]``, the box of the start, the way-points and the transceiver
-    (and ``points_en_m``) widened by :data:`CURRENT_MARGIN_M`, and the deepest of their depths
-    (and ``depths_m``) plus :data:`CURRENT_DEPTH_MARGIN_M`. Other current kinds are not checked.
+    """Refuse a gridded current (``current.kind = "gridded"``) that cannot serve a mission,
+    before anything is written: the file is read (once per process,
+    :func:`bauv_sim.ocean.load_current_grid`) and must cover the time ``[0, t_end_s]``, the box
+    of ``points_en_m`` widened by :data:`CURRENT_MARGIN_M`, and the deepest of ``depths_m`` plus
+    :data:`CURRENT_DEPTH_MARGIN_M`. Other current kinds are not checked.
 
     Args:
-        scenario: the mission's scenario (its ``current``, ``geo``, ``timing``, ``start``,
-            ``guidance.waypoints`` and transceiver).
-        points_en_m: more points the mission reaches (east, north), m: way-points made per run.
-        depths_m: more depths the mission reaches, m (positive down).
+        current: the scenario's current configuration.
+        frame: the scenario's geographic frame (:class:`bauv_sim.geo.LocalFrame`), or None.
+        t_end_s: the mission's longest duration, s.
+        points_en_m: the points the mission reaches (east, north), m.
+        depths_m: the depths it reaches, m (positive down).
 
     Raises:
         ConfigError: one line naming ``current.file``, the file, the variable and what is wrong
@@ -92,23 +94,43 @@ def check_current_covers(
     """
     from bauv_sim.currents import GriddedCurrentConfig, make_current
 
-    if not isinstance(scenario.current, GriddedCurrentConfig):
+    if not isinstance(current, GriddedCurrentConfig):
         return
-    field = make_current(scenario.current, None, scenario.frame())
+    field = make_current(current, None, frame)
+    e, n = np.array(points_en_m, dtype=float).T
+    m = CURRENT_MARGIN_M
+    corners_e = [e.min() - m, e.max() + m, e.max() + m, e.min() - m]
+    corners_n = [n.min() - m, n.min() - m, n.max() + m, n.max() + m]
+    field.check_covers(
+        t_end_s, np.array(corners_e), np.array(corners_n), max(depths_m) + CURRENT_DEPTH_MARGIN_M
+    )
+
+
+def check_current_covers(
+    scenario: MissionScenario,
+    points_en_m: list[tuple[float, float]] | None = None,
+    depths_m: tuple[float, ...] = (),
+) -> None:
+    """:func:`check_gridded_current` for a mission scenario: its time
+    ``[0, timing.max_duration_s]``, the box of the start, the way-points and the transceiver
+    (and ``points_en_m``), and the deepest of their depths (and ``depths_m``).
+
+    Args:
+        scenario: the mission's scenario (its ``current``, ``geo``, ``timing``, ``start``,
+            ``guidance.waypoints`` and transceiver).
+        points_en_m: more points the mission reaches (east, north), m: way-points made per run.
+        depths_m: more depths the mission reaches, m (positive down).
+
+    Raises:
+        ConfigError: as :func:`check_gridded_current`.
+    """
     wps = scenario.guidance.waypoints
     pts = [(w.east_m, w.north_m) for w in wps] + list(points_en_m or [])
     pts.append((scenario.start.east_m, scenario.start.north_m))
     pts.append((scenario.transceiver_east_m, scenario.transceiver_north_m))
-    e, n = np.array(pts, dtype=float).T
-    m = CURRENT_MARGIN_M
-    corners_e = [e.min() - m, e.max() + m, e.max() + m, e.min() - m]
-    corners_n = [n.min() - m, n.min() - m, n.max() + m, n.max() + m]
-    deepest = max([scenario.start.depth_m] + [w.depth_m for w in wps] + list(depths_m))
-    field.check_covers(
-        scenario.timing.max_duration_s,
-        np.array(corners_e),
-        np.array(corners_n),
-        deepest + CURRENT_DEPTH_MARGIN_M,
+    depths = [scenario.start.depth_m] + [w.depth_m for w in wps] + list(depths_m)
+    check_gridded_current(
+        scenario.current, scenario.frame(), scenario.timing.max_duration_s, pts, depths
     )
 
 

@@ -172,3 +172,15 @@ def test_a_bad_current_file_is_refused_in_one_line(tmp_path, what, pattern):
     assert len(lines) == 1 and "Traceback" not in res.stderr, lines
     assert pattern in lines[0] and "current.file" in lines[0] and path.name in lines[0], lines
     assert not (tmp_path / "refused").exists()
+
+
+def test_swarm_refuses_a_gridded_current_it_cannot_place(tmp_path):
+    """mission/swarm builds its sea with the same scenario_sea: a gridded current is checked
+    before anything is written (here: no geo origin to place the file's latitude/longitude)."""
+    ocean.write_current_grid(ramp_grid(), tmp_path / "currents.nc", START)
+    args = ["--set", "current.kind=gridded", "--set", "current.file=currents.nc"]
+    res = _bauv(tmp_path, "mission/swarm", "--out", "refused", *args)
+    assert res.returncode == 2, res.stderr[-2000:]
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "current.file = currents.nc" in lines[0], lines
+    assert "geo.latitude_deg" in lines[0] and not (tmp_path / "refused").exists()
