@@ -1,4 +1,5 @@
-"""Sea current fields: uniform, seed 001's randomised current, and spatially varying fields.
+"""Sea current fields: uniform, seed 001's randomised current, spatially varying fields, and an
+ocean model's current from a file (``gridded``, :mod:`bauv_sim.ocean`).
 
 Every field answers one question, :meth:`CurrentField.velocity_world`: the water velocity (world
 frame, m/s) at given times and positions. The physics world evaluates it at the vehicle at each
@@ -11,15 +12,20 @@ seed 001 (alpha_c) and nautical practice.
 
 from __future__ import annotations
 
+import datetime as dt
 import math
-from typing import Annotated, Literal, Protocol
+from typing import TYPE_CHECKING, Annotated, Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from bauv_sim.config import Config
+from bauv_sim.errors import ConfigError
 from bauv_sim.frames import velocity_from_course_speed
+
+if TYPE_CHECKING:
+    from bauv_sim.geo import LocalFrame
 
 
 class CurrentField(Protocol):
@@ -302,23 +308,87 @@ class GyreCurrentConfig(Config):
     tidal_period_s: float | None = Field(None, gt=0)
 
 
+class GriddedCurrentConfig(Config):
+    """A current from an ocean model's file: ``u``, ``v`` (and ``w``) on (time, depth, latitude,
+    longitude) in a CF-convention netCDF file, interpolated linearly in space and time
+    (:class:`bauv_sim.ocean.GriddedCurrent`). The scenario needs a geographic origin (``geo``)
+    to place the scene's east/north on the file's latitude and longitude.
+    """
+
+    kind: Literal["gridded"] = "gridded"
+    file: str = Field(
+        description="the netCDF file (a path, relative to the current directory); read once per "
+        "process"
+    )
+    start_time: str | None = Field(
+        None,
+        description="the date and time of the mission's t = 0, ISO 8601 in UTC "
+        "(e.g. 2026-06-01T06:00:00Z; without a zone, UTC; another offset is converted); "
+        "default the file's first time",
+    )
+
+    @field_validator("start_time")
+    @classmethod
+    def _iso(cls, v: str | None) -> str | None:
+        if v is not None:
+            parse_utc(v)
+        return v
+
+    def start(self) -> dt.datetime | None:
+        """The mission's t = 0 as a naive UTC date and time, or ``None`` (the file's first)."""
+        return None if self.start_time is None else parse_utc(self.start_time)
+
+
+def parse_utc(text: str) -> dt.datetime:
+    """An ISO 8601 date and time as a naive UTC datetime (no zone: UTC).
+
+    Raises:
+        ValueError: for text that is not ISO 8601.
+    """
+    try:
+        t = dt.datetime.fromisoformat(text.strip().replace("Z", "+00:00"))
+    except ValueError:
+        raise ValueError(
+            f"{text!r} is not an ISO 8601 date and time (e.g. 2026-06-01T06:00:00Z)"
+        ) from None
+    if t.tzinfo is not None:
+        t = t.astimezone(dt.timezone.utc).replace(tzinfo=None)
+    return t
+
+
 CurrentConfig = Annotated[
-    UniformCurrentConfig | RandomisedCurrentConfig | ShearCurrentConfig | GyreCurrentConfig,
+    UniformCurrentConfig
+    | RandomisedCurrentConfig
+    | ShearCurrentConfig
+    | GyreCurrentConfig
+    | GriddedCurrentConfig,
     Field(discriminator="kind"),
 ]
 """Any current configuration, chosen by its ``kind`` field."""
 
 
-def make_current(cfg: CurrentConfig, rng: np.random.Generator | None = None) -> CurrentField:
+def make_current(
+    cfg: CurrentConfig,
+    rng: np.random.Generator | None = None,
+    frame: LocalFrame | None = None,
+) -> CurrentField:
     """Build a current field from its configuration.
 
     Args:
         cfg: a current configuration.
         rng: the current's own stream (required for ``randomised``).
+        frame: the scene's geographic frame (required for ``gridded``; the other kinds ignore
+            it).
 
     Returns:
         The field.
+
+    Raises:
+        ConfigError: a gridded current without a frame, or whose file cannot be used (one line
+            naming ``current.file``, the file, the variable and what is wrong).
     """
+    if isinstance(cfg, GriddedCurrentConfig):
+        return _gridded(cfg, frame)
     if isinstance(cfg, UniformCurrentConfig):
         return UniformCurrent(cfg.speed_m_s, math.radians(cfg.direction_deg))
     if isinstance(cfg, RandomisedCurrentConfig):
@@ -349,3 +419,18 @@ def make_current(cfg: CurrentConfig, rng: np.random.Generator | None = None) -> 
             cfg.tidal_period_s,
         )
     raise TypeError(f"unknown current configuration {cfg!r}")
+
+
+def _gridded(cfg: GriddedCurrentConfig, frame: LocalFrame | None) -> CurrentField:
+    from bauv_sim.ocean import GriddedCurrent, load_current_grid
+
+    if frame is None:
+        raise ConfigError(
+            f"current.file = {cfg.file}: a gridded current needs the scenario's geo origin "
+            "(geo.latitude_deg, geo.longitude_deg)"
+        )
+    try:
+        grid = load_current_grid(cfg.file, cfg.start())
+    except ConfigError as exc:
+        raise ConfigError(f"current.file: {exc}") from None
+    return GriddedCurrent(grid, frame, name=f"current.file = {cfg.file}")

@@ -27,6 +27,7 @@ each control tick along the vehicle's motion.
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -191,12 +192,13 @@ def cf_variable(ds, standard_name: str, axis: str | None, where: str, names: tup
     raise ConfigError(f"{where}: no variable with standard_name '{standard_name}'")
 
 
-def read_current_grid(path: str | Path, start: dt.datetime) -> CurrentGrid:
+def read_current_grid(path: str | Path, start: dt.datetime | None = None) -> CurrentGrid:
     """Read an ocean model's current from a CF-convention netCDF file.
 
     Args:
         path: the file.
-        start: the date and time of the mission's t = 0 (UTC), to place the file's times.
+        start: the date and time of the mission's t = 0 (UTC), to place the file's times;
+            ``None`` for the file's first time.
 
     Returns:
         The grid (velocities in m/s, depth positive down, axes increasing).
@@ -272,9 +274,12 @@ def read_current_grid(path: str | Path, start: dt.datetime) -> CurrentGrid:
             comps[key] = values
         t = time.values
         if np.issubdtype(t.dtype, np.datetime64):
-            t_s = (t - np.datetime64(start.replace(tzinfo=None), "ns")) / np.timedelta64(1, "s")
+            t0 = t.min() if start is None else np.datetime64(start.replace(tzinfo=None), "ns")
+            t_s = (t - t0) / np.timedelta64(1, "s")
         else:
             t_s = np.asarray(t, dtype=float)
+            if start is None:
+                t_s = t_s - t_s.min()
         d = np.asarray(depth.values, dtype=float)
         if depth.attrs.get("positive", "down") == "up":
             d = -d
@@ -406,3 +411,53 @@ class GriddedCurrent:
             )
         vel = self._query(*cols)
         return vel.reshape(pos.shape)
+
+
+@functools.lru_cache(maxsize=4)
+def _cached_grid(path: str, mtime_ns: int, size: int, start: dt.datetime | None) -> CurrentGrid:
+    return read_current_grid(path, start)
+
+
+def load_current_grid(path: str | Path, start: dt.datetime | None = None) -> CurrentGrid:
+    """:func:`read_current_grid`, read once per process for a file as it is on disk.
+
+    The grid is cached on the file's resolved path, its modification time and size and the
+    start (the last four grids): every run of a batch in a worker process builds its sea from the
+    same grid without reading the file again, and a file rewritten between batches is read anew.
+    The grid's arrays are shared between the runs; nothing writes to them.
+
+    Args:
+        path: the file.
+        start: the date and time of the mission's t = 0 (UTC), or ``None`` for the file's first
+            time.
+
+    Raises:
+        ConfigError: as :func:`read_current_grid`.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(f"{path}: no such file")
+    st = p.stat()
+    return _cached_grid(str(p.resolve()), st.st_mtime_ns, st.st_size, start)
+
+
+def current_grid_cells(path: str | Path) -> int:
+    """The number of cells of a current file's grid (time x depth x latitude x longitude of its
+    eastward velocity), read from its header without reading the velocities: for a memory
+    estimate before the file is read.
+
+    Raises:
+        ConfigError: the file is missing or unreadable, or has no eastward velocity (one line
+            naming the file).
+    """
+    import xarray as xr
+
+    where = str(path)
+    if not Path(path).is_file():
+        raise ConfigError(f"{where}: no such file")
+    try:
+        ds = xr.open_dataset(path, engine="netcdf4", decode_times=False)
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
+    with ds:
+        return math.prod(cf_variable(ds, STANDARD_NAMES["u"], None, where).shape)

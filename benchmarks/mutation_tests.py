@@ -219,7 +219,7 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "tasks/missions/swarm/team.py": ("tests/tasks/test_swarm_team.py",),
     "tasks/missions/swarm/relay.py": ("tests/tasks/test_swarm_team.py",),
     "tasks/missions/swarm/report.py": ("tests/tasks/test_run_data.py", "tests/tasks/test_swarm.py"),
-    "tasks/missions/correction.py": (
+    "tasks/missions/correction/run.py": (
         "tests/tasks/test_run_data.py",
         "tests/tasks/test_missions.py",
     ),
@@ -795,7 +795,7 @@ OWN_ROUND2: list[Mutation] = [
         "correction-dr-track-unit-m-s",
         "own",
         "unit",
-        "tasks/missions/correction.py",
+        "tasks/missions/correction/run.py",
         '"dr_uncorrected": ("dr_uncorrected", "m",',
         '"dr_uncorrected": ("dr_uncorrected", "m/s",',
         "mission/correction's uncorrected DRNS track labelled m/s",

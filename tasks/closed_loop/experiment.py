@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+import numpy as np
+
 from bauv_sim import seabed
 from bauv_sim.build import VEHICLE_CLEARANCE_M
 from bauv_sim.errors import ConfigError, GeometryError
@@ -56,6 +58,112 @@ def check_in_water(scenario: MissionScenario) -> None:
             )
 
 
+CURRENT_MARGIN_M = 100.0
+"""How far a track may stray beyond the way-points, the start and the transceiver, m, in the box a
+gridded current must cover (:func:`check_current_covers`; :data:`MESH_MARGIN_M`'s excursions)."""
+
+CURRENT_DEPTH_MARGIN_M = 5.0
+"""How far below the deepest way-point or start the vehicle may go, m (its depth loop's
+overshoot and the dives of a surfacing), in the depth a gridded current must cover."""
+
+
+def check_gridded_current(
+    current,
+    frame,
+    t_end_s: float,
+    points_en_m: list[tuple[float, float]],
+    depths_m: list[float],
+) -> None:
+    """Refuse a gridded current (``current.kind = "gridded"``) that cannot serve a mission,
+    before anything is written: the file is read (once per process,
+    :func:`bauv_sim.ocean.load_current_grid`) and must cover the time ``[0, t_end_s]``, the box
+    of ``points_en_m`` widened by :data:`CURRENT_MARGIN_M`, and the deepest of ``depths_m`` plus
+    :data:`CURRENT_DEPTH_MARGIN_M`. Other current kinds are not checked.
+
+    Args:
+        current: the scenario's current configuration.
+        frame: the scenario's geographic frame (:class:`bauv_sim.geo.LocalFrame`), or None.
+        t_end_s: the mission's longest duration, s.
+        points_en_m: the points the mission reaches (east, north), m.
+        depths_m: the depths it reaches, m (positive down).
+
+    Raises:
+        ConfigError: one line naming ``current.file``, the file, the variable and what is wrong
+            (a bad file: :func:`bauv_sim.ocean.read_current_grid`), or what the grid does not
+            cover and its extent; a gridded current without a ``geo`` origin.
+    """
+    from bauv_sim.currents import GriddedCurrentConfig, make_current
+
+    if not isinstance(current, GriddedCurrentConfig):
+        return
+    field = make_current(current, None, frame)
+    e, n = np.array(points_en_m, dtype=float).T
+    m = CURRENT_MARGIN_M
+    corners_e = [e.min() - m, e.max() + m, e.max() + m, e.min() - m]
+    corners_n = [n.min() - m, n.min() - m, n.max() + m, n.max() + m]
+    field.check_covers(
+        t_end_s, np.array(corners_e), np.array(corners_n), max(depths_m) + CURRENT_DEPTH_MARGIN_M
+    )
+
+
+def check_current_covers(
+    scenario: MissionScenario,
+    points_en_m: list[tuple[float, float]] | None = None,
+    depths_m: tuple[float, ...] = (),
+) -> None:
+    """:func:`check_gridded_current` for a mission scenario: its time
+    ``[0, timing.max_duration_s]``, the box of the start, the way-points and the transceiver
+    (and ``points_en_m``), and the deepest of their depths (and ``depths_m``).
+
+    Args:
+        scenario: the mission's scenario (its ``current``, ``geo``, ``timing``, ``start``,
+            ``guidance.waypoints`` and transceiver).
+        points_en_m: more points the mission reaches (east, north), m: way-points made per run.
+        depths_m: more depths the mission reaches, m (positive down).
+
+    Raises:
+        ConfigError: as :func:`check_gridded_current`.
+    """
+    wps = scenario.guidance.waypoints
+    pts = [(w.east_m, w.north_m) for w in wps] + list(points_en_m or [])
+    pts.append((scenario.start.east_m, scenario.start.north_m))
+    pts.append((scenario.transceiver_east_m, scenario.transceiver_north_m))
+    depths = [scenario.start.depth_m] + [w.depth_m for w in wps] + list(depths_m)
+    check_gridded_current(
+        scenario.current, scenario.frame(), scenario.timing.max_duration_s, pts, depths
+    )
+
+
+CURRENT_BYTES_PER_CELL = 100.0
+"""Memory of a gridded current per cell of its file's grid, bytes: the grid's three velocity
+components and the interpolator's copies, 97 B per cell measured with tracemalloc reading a
+12 x 5 x 60 x 60 file and building its field (:class:`bauv_sim.ocean.GriddedCurrent`)."""
+
+
+def current_memory_terms(scenario: MissionScenario) -> list[MemoryTerm]:
+    """The memory of a gridded current (none for the other kinds): held by every worker (its
+    runs share the grid read once per process) and by the process that checks the batch
+    (:data:`CURRENT_BYTES_PER_CELL` per cell of the file's grid, read from its header).
+
+    Raises:
+        ConfigError: the file is missing or has no eastward velocity (one line naming
+            ``current.file``).
+    """
+    from bauv_sim.currents import GriddedCurrentConfig
+    from bauv_sim.ocean import current_grid_cells
+
+    cur = scenario.current
+    if not isinstance(cur, GriddedCurrentConfig):
+        return []
+    try:
+        cells = current_grid_cells(cur.file)
+    except ConfigError as exc:
+        raise ConfigError(f"current.file: {exc}") from None
+    what = f"current.file = {cur.file} ({cells:.3g} grid cells)"
+    b = CURRENT_BYTES_PER_CELL * cells
+    return [MemoryTerm(b, True, what), MemoryTerm(b, False, what)]
+
+
 def _mesh_bytes(scenario: MissionScenario) -> float:
     """Memory of the recording's seabed mesh, bytes: the grid cells of the mission area (the
     way-points, the start and the transceiver, :data:`MESH_MARGIN_M` around them, within the
@@ -100,7 +208,8 @@ class MissionExperiment(Experiment):
     def check(self, scenario: MissionScenario, n_runs: int) -> None:
         """Checks of a batch: the recorded run and the faulty runs are runs of the batch; the
         start and every way-point are in the water (above the scene's seabed by at least
-        :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` where the seabed grid covers them).
+        :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` where the seabed grid covers them); a
+        gridded current covers the mission (:func:`check_current_covers`).
 
         Raises:
             ConfigError: naming the field, its value and what is allowed; or a batch whose
@@ -121,13 +230,15 @@ class MissionExperiment(Experiment):
                 f"{bad[0]} is not a run of this batch (0 <= run < runs = {n_runs})"
             )
         check_in_water(scenario)
+        check_current_covers(scenario)
 
     def memory(self, scenario: MissionScenario, n_runs: int) -> list[MemoryTerm]:
         """Estimated peak memory, bytes: a run of ``timing.max_duration_s`` in the worker that
         flies it, and every run in the report (which reads them all); the seabed grid of the
         scene, generated in the worker for every run (:attr:`~bauv_sim.seabed.SeabedConfig.
         grid_bytes`), and in the process that checks the batch and writes the report, with the
-        recording's mesh of the mission area (:data:`MESH_BYTES_PER_CELL`)."""
+        recording's mesh of the mission area (:data:`MESH_BYTES_PER_CELL`); a gridded current's
+        grid in both (:func:`current_memory_terms`)."""
         t = scenario.timing
         ticks = t.max_duration_s / t.control_tick_s + 1
         what = (
@@ -142,7 +253,7 @@ class MissionExperiment(Experiment):
         ]
         if self.report_seabed:
             terms.append(MemoryTerm(bed.grid_bytes + _mesh_bytes(scenario), False, bed.grid_text))
-        return terms
+        return terms + current_memory_terms(scenario)
 
     def run_block(
         self, scenario: MissionScenario, seed: int, runs: tuple[int, ...]

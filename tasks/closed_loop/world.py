@@ -174,9 +174,11 @@ def waypoint_guidance(scn: MissionScenario, rig: SensorRig) -> WaypointGuidance:
 
 
 def scenario_sea(scn, seed: int, run: int) -> Sea:
-    """The sea of a run: the scenario's current field (its own ``current`` stream) and the free
-    surface."""
-    return Sea(make_current(scn.current, rng_mod.generator(seed, run, "current")))
+    """The sea of a run: the scenario's current field (its own ``current`` stream; a gridded
+    current placed with the scenario's geographic frame, ``scn.frame()``, where the scenario has
+    one) and the free surface."""
+    frame = scn.frame() if hasattr(scn, "frame") else None
+    return Sea(make_current(scn.current, rng_mod.generator(seed, run, "current"), frame))
 
 
 def single_vehicle_scene(

@@ -100,7 +100,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from bauv_sim.errors import ConfigError
-from tasks.closed_loop.experiment import MissionExperiment
+from tasks.closed_loop.experiment import MissionExperiment, check_gridded_current
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 from tasks.missions.swarm.design import SwarmMission
 from tasks.missions.swarm.figures import record_swarm, swarm_figure
@@ -204,6 +204,19 @@ class SwarmExperiment(MissionExperiment):
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
             )
+        # issue 25: a gridded current covers the leader's start, way-points and transceiver (the
+        # followers keep station within the check's margin); without geo it is refused
+        ld = scenario.leader
+        wps = ld.guidance.waypoints
+        check_gridded_current(
+            scenario.current,
+            scenario.frame() if hasattr(scenario, "frame") else None,
+            scenario.timing.max_duration_s,
+            [(ld.start.east_m, ld.start.north_m)]
+            + [(w.east_m, w.north_m) for w in wps]
+            + [(scenario.transceiver_east_m, scenario.transceiver_north_m)],
+            [ld.start.depth_m] + [w.depth_m for w in wps],
+        )
 
     def memory(self, scenario: SwarmScenario, n_runs: int) -> list[MemoryTerm]:
         """The mission's estimate (:meth:`MissionExperiment.memory`, one vehicle's per-tick
