@@ -85,8 +85,9 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
     )
     files = [write_metrics(ctx.out_dir, metrics)]
     for law in ("compensated", "direct"):
-        # issue 25: frame (pass frame=scn.frame() once export_runs takes it, part C)
-        files += export_runs(ctx.out_dir, exp.name, [r.flights[law] for r in runs], f"-{law}")
+        files += export_runs(
+            ctx.out_dir, exp.name, [r.flights[law] for r in runs], f"-{law}", frame=scn.frame()
+        )
     p = scn.correction.procedure.upper()
     t1 = Table(
         f"Leg 3 dead-reckoning error after {p} ({len(ok)} runs, {scn.current.kind} current; "
