@@ -34,12 +34,15 @@ def check_in_water(scenario: MissionScenario) -> None:
     """Refuse a start or a way-point below the seabed of the scene (or within
     :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` of it): a depth the vehicle cannot reach, whose
     way-point would still count as reached since the acceptance radius is judged horizontally.
-    Points outside the seabed grid are not checked (as when the scene is built).
+    Points outside the seabed grid are not checked (as when the scene is built). A seabed from
+    a bathymetry file is read and resampled here, so that a file that cannot serve is refused
+    before anything is written.
 
     Raises:
-        ConfigError: naming the field, its value and the water depth there.
+        ConfigError: naming the field, its value and the water depth there; or the bathymetry
+            file, its variable and what is wrong with it (:func:`bauv_sim.seabed.generate`).
     """
-    bed = seabed.generate(scenario.seabed)
+    bed = seabed.generate(scenario.seabed, scenario.frame())
     points = [("start.depth_m", scenario.start)] + [
         (f"guidance.waypoints.{i}.depth_m", w) for i, w in enumerate(scenario.guidance.waypoints)
     ]

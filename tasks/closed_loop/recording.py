@@ -28,7 +28,7 @@ def record_mission(name: str, scn: MissionScenario, run: MissionRun, out) -> str
     rec = Recording(out / "recording.rrd", name, f"{name}/seed{run.seed}/run{run.run}")
     r = rec.rec
     # seabed mesh around the mission area
-    bed = generate(scn.seabed)
+    bed = generate(scn.seabed, scn.frame())
     c = bed.config
     pts = np.array(
         [[w.east_m, w.north_m] for w in scn.guidance.waypoints]
