@@ -99,6 +99,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from bauv_sim import seabed
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
@@ -204,6 +205,8 @@ class SwarmExperiment(MissionExperiment):
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
             )
+        if scenario.seabed.file is not None:  # read before anything is written
+            seabed.generate(scenario.seabed, scenario.frame())
 
     def memory(self, scenario: SwarmScenario, n_runs: int) -> list[MemoryTerm]:
         """The mission's estimate (:meth:`MissionExperiment.memory`, one vehicle's per-tick
