@@ -16,9 +16,10 @@ from tasks.closed_loop.world import WaypointMission, fly
 from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary
 
 MESH_BYTES_PER_CELL = 600.0
-"""Memory of the recording's seabed mesh per grid cell of the mission area, bytes (the report
-builds it from Python tuples, :func:`tasks.closed_loop.report.record_mission`: 512 B per cell
-measured with tracemalloc on 600 x 600 points, plus the arrays rerun is given)."""
+"""Memory of the recording's seabed mesh per grid cell of the mission area, bytes, an upper
+bound (:func:`tasks.closed_loop.recording.seabed_mesh`: its vertices, triangles, normals and
+colours and rerun's copies of them, 273 B per cell at the peak, tracemalloc on 600 x 600 cells;
+600 B is the bound of the mesh the report built from Python tuples before, 512 B per cell)."""
 
 MESH_MARGIN_M = 160.0
 """How far the recorded mission area reaches beyond the way-points, the start and the transceiver,
