@@ -219,3 +219,34 @@ def test_a_grid_too_large_for_memory_is_refused(tmp_path):
         "huge.nc",
         "seabed.file = huge.nc (variable 'elevation' of 100000 x 100000 nodes)",
     )
+
+
+def test_trn_navigator_map_is_a_degraded_copy_of_the_file(tmp_path):
+    """mission/trn on a site file: the true map is the file's seabed (the site's heights at its
+    nodes, from the analytic site the file was written from) and the navigator's map is the
+    degraded copy of it (its offset and node noise), not of a generated seabed."""
+    from bauv_sim.geo import GeoOriginConfig
+    from tasks.missions.trn.scenario import PRESET, SEABED_PRESET, TrnScenario
+    from tasks.missions.trn.terrain import navigator_map, true_map
+    from tests.bauv_sim.test_seabed_file import site_depth
+
+    write_netcdf(site_grid(step_deg=0.0002, pad_deg=0.005), tmp_path / "site.nc")
+    scn = TrnScenario.model_validate(
+        {
+            **PRESET,
+            "geo": {"latitude_deg": GEO.latitude_deg, "longitude_deg": GEO.longitude_deg},
+            "seabed": {**SEABED_PRESET, "file": str(tmp_path / "site.nc")},
+        }
+    )
+    assert scn.geo == GeoOriginConfig(latitude_deg=43.05, longitude_deg=5.95)
+    frame = scn.frame()
+    truth = true_map(scn.seabed, frame=frame)
+    X, Y = np.meshgrid(truth.x_m, truth.y_m)
+    site = site_depth(*frame.to_geographic(X, Y))
+    assert np.abs(truth.depth_m - site).max() < 0.01
+    nav = navigator_map(scn, seed=3)
+    assert nav.x_m[1] - nav.x_m[0] == pytest.approx(scn.map.cell_m)
+    Xn, Yn = np.meshgrid(nav.x_m, nav.y_m)
+    err = nav.depth_m - site_depth(*frame.to_geographic(Xn, Yn))
+    assert abs(err.mean() - scn.map.offset_m) < 0.005, err.mean()
+    assert abs(err.std() - scn.map.vertical_sigma_m) < 0.005, err.std()
