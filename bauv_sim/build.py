@@ -7,7 +7,8 @@ of ``models/bauv/bauv.xml`` attached under its own name, so that every element o
 vehicle's free joint moves from its hull to the attachment frame and its keyframes are dropped
 (initial poses are set on the compiled physics instead).
 
-A :class:`SceneConfig` may replace the seabed (generated in memory, :mod:`bauv_sim.seabed`), move
+A :class:`SceneConfig` may replace the seabed (generated in memory, or resampled from the site's
+bathymetry file around the scene's geographic origin ``geo``, :mod:`bauv_sim.seabed`), move
 the transceiver and replace the beacons; sites are placed on the seabed surface of the scene's own
 heightfield.
 """
@@ -25,6 +26,7 @@ from bauv_sim import seabed as sb
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError, GeometryError
 from bauv_sim.frames import unit_vector_scalar
+from bauv_sim.geo import GeoOriginConfig
 from bauv_sim.hull import MODEL_DIR
 from bauv_sim.physics import DEFAULT_CONTROL_TICK_S, BauvPhysics, mjcf
 
@@ -87,7 +89,9 @@ class SceneConfig(Config):
 
     Attributes:
         vehicles: the vehicles, at least one, distinct names.
-        seabed: the generated seabed.
+        seabed: the seabed (generated, or from a bathymetry file).
+        geo: the scene's origin on the Earth (WGS 84), needed by a bathymetry file
+            (``seabed.file``); None: a local frame only.
         transceiver_east_m: USBL transceiver position east, m.
         transceiver_north_m: USBL transceiver position north, m.
         transceiver_height_above_seabed_m: height of the transceiver's transducer, m.
@@ -96,6 +100,7 @@ class SceneConfig(Config):
 
     vehicles: tuple[VehicleSpec, ...] = (VehicleSpec(),)
     seabed: sb.SeabedConfig = sb.SeabedConfig()
+    geo: GeoOriginConfig | None = None
     transceiver_east_m: float = 0.0
     transceiver_north_m: float = 0.0
     transceiver_height_above_seabed_m: float = Field(0.0, ge=0.0)
@@ -150,10 +155,11 @@ def build_scene(config: SceneConfig | None = None) -> tuple[mjcf.RootElement, sb
     Raises:
         GeometryError: if a site or vehicle would lie outside the seabed grid, or a vehicle below
             or too close to the seabed.
+        ConfigError: for a bathymetry file that cannot serve (:func:`bauv_sim.seabed.generate`).
     """
     cfg = config or SceneConfig()
     root = _environment()
-    bed = sb.generate(cfg.seabed)
+    bed = sb.generate(cfg.seabed, None if cfg.geo is None else cfg.geo.frame())
     if cfg.seabed != sb.SeabedConfig():
         hf = root.find("hfield", "seabed")
         hf.file = mjcf.Asset(bed.to_bytes(), ".bin")

@@ -1,4 +1,5 @@
-"""The seabed: a generated, gently varying bathymetry stored as a MuJoCo heightfield.
+"""The seabed: a generated, gently varying bathymetry, or the site's own from a bathymetry file,
+stored as a MuJoCo heightfield.
 
 Depth below the surface (positive down) at horizontal position (x east, y north):
 
@@ -11,6 +12,12 @@ at least ``min_depth_m``. The defaults follow seed 000's test geometry: the USBL
 origin lies on the seabed at 6 m depth, and the bottom falls away gently (5 m per km) with about
 1 m of relief, so that a vehicle at 3 m depth clears it everywhere.
 
+With ``file`` set (a CF netCDF or a GeoTIFF, :mod:`bauv_sim.bathymetry`), the depths are the
+file's instead, resampled onto the same square grid (``half_extent_m``, ``cell_m``) around the
+scene's geographic origin (:class:`~bauv_sim.geo.LocalFrame`, from the scenario's ``geo``):
+``depth(x, y)`` is the file's depth at the latitude/longitude of (x, y), and the relief's fields
+are not used.
+
 The grid is a MuJoCo heightfield in its custom binary format (int32 nrow, int32 ncol, float32
 data, row 0 at the smallest y, column 0 at the smallest x), normalised to [0, 1]; the geom's z is
 the deepest point and its elevation range the depth range. :func:`height_world` interpolates the
@@ -22,9 +29,11 @@ from __future__ import annotations
 
 import argparse
 import functools
+import math
 import struct
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -32,7 +41,8 @@ from pydantic import Field, model_validator
 
 from bauv_sim import PROJECT_ROOT
 from bauv_sim.config import Config
-from bauv_sim.errors import GeometryError
+from bauv_sim.errors import ConfigError, GeometryError
+from bauv_sim.geo import LocalFrame
 from bauv_sim.rng import generator
 
 SEABED_DIR = PROJECT_ROOT / "assets" / "seabed"
@@ -59,9 +69,21 @@ the working arrays of one plane wave, six float64 arrays at once (tracemalloc: 4
 a 2001 x 2001 grid). Building a scene holds less on top of the finished grid (the float32
 heightfield and its bytes), so this is the peak of a process that builds one."""
 
+RESAMPLE_BYTES_PER_POINT = 60.0
+"""Peak memory of resampling a bathymetry file onto the seabed grid per grid point, bytes
+(:func:`bauv_sim.bathymetry.resample`: the points' east/north, latitude/longitude and depth,
+float64; tracemalloc: 48.0 B per point on 1001 x 1001 and 2001 x 2001 grids, 58.5 B at most)."""
+
+FILE_BYTES_PER_NODE = 34.0
+"""Peak memory of a bathymetry file per node of its grid, bytes: the grid read (8 B per node,
+24 B while it is read and converted) stays in memory while the spline through its nodes around
+the scene is built (25 B per node, tracemalloc on 1e5 to 7e5 nodes); counted over the whole file,
+an upper bound of the part around the scene."""
+
 
 class SeabedConfig(Config):
-    """Parameters of a generated seabed (see the module docstring)."""
+    """Parameters of a generated seabed, or of one resampled from a bathymetry file (see the
+    module docstring)."""
 
     half_extent_m: float = Field(
         1000.0,
@@ -80,6 +102,25 @@ class SeabedConfig(Config):
     min_depth_m: float = Field(4.5, gt=0, description="shallowest allowed depth, m")
     base_m: float = Field(1.0, gt=0, description="thickness of the heightfield's base, m")
     seed: int = Field(1, ge=0, description="seed of the relief's random stream")
+    file: str | None = Field(
+        None,
+        description="the site's bathymetry: a CF netCDF (.nc, latitude/longitude, elevation or "
+        "depth in m) or a GeoTIFF (.tif, any reference system), resolved against the current "
+        "directory; the grid (half_extent_m, cell_m around the scenario's geo origin, which it "
+        "needs) is resampled from it and the generated relief's fields (depth_at_origin_m, "
+        "slope, relief_std_m, n_modes, min/max_wavelength_m, min_depth_m, seed) are not used "
+        "(default: none, the generated seabed)",
+    )
+    variable: str | None = Field(
+        None,
+        description="the netCDF variable of the bathymetry (default: the one whose "
+        "standard_name is an elevation or a depth); with a netCDF file only",
+    )
+    values: Literal["elevation", "depth"] = Field(
+        "elevation",
+        description="what a GeoTIFF's band holds: elevation positive up (a DEM's convention) or "
+        "depth positive down; a netCDF says it by its attributes",
+    )
 
     @model_validator(mode="after")
     def _grid(self) -> SeabedConfig:
@@ -93,6 +134,17 @@ class SeabedConfig(Config):
             raise ValueError("max_wavelength_m must be >= min_wavelength_m")
         if self.depth_at_origin_m < self.min_depth_m:
             raise ValueError("depth_at_origin_m must be >= min_depth_m")
+        kind = None if self.file is None else _file_kind(self.file)
+        if self.variable is not None and kind != "netcdf":
+            raise ValueError(
+                f"variable = {self.variable!r}: names a variable of a netCDF seabed.file "
+                f"(file = {self.file!r})"
+            )
+        if self.values != "elevation" and kind != "geotiff":
+            raise ValueError(
+                f"values = {self.values!r}: is the band of a GeoTIFF seabed.file "
+                f"(file = {self.file!r}); a netCDF says it by its attributes"
+            )
         return self
 
     @property
@@ -103,16 +155,39 @@ class SeabedConfig(Config):
     @property
     def grid_bytes(self) -> float:
         """Peak memory of generating this seabed, bytes (:data:`GRID_BYTES_PER_POINT` per grid
-        point), for the batch's memory check before any grid is allocated."""
-        return GRID_BYTES_PER_POINT * float(self.n) ** 2
+        point; from a file, :data:`RESAMPLE_BYTES_PER_POINT` per grid point and
+        :data:`FILE_BYTES_PER_NODE` per node of the file's grid, read from its header), for the
+        batch's memory check before any grid is allocated.
+
+        Raises:
+            ConfigError: for a file that cannot be read (naming it).
+        """
+        if self.file is None:
+            return GRID_BYTES_PER_POINT * float(self.n) ** 2
+        return RESAMPLE_BYTES_PER_POINT * float(self.n) ** 2 + FILE_BYTES_PER_NODE * float(
+            math.prod(self._file_shape()[0])
+        )
 
     @property
     def grid_text(self) -> str:
         """The fields that size the grid, as a memory check names them."""
-        return (
+        text = (
             f"seabed.half_extent_m = {self.half_extent_m:g} with seabed.cell_m = "
             f"{self.cell_m:g} m ({self.n} x {self.n} grid points)"
         )
+        if self.file is None:
+            return text
+        shape, name = self._file_shape()
+        return (
+            f"seabed.file = {self.file} (variable '{name}' of "
+            f"{' x '.join(str(k) for k in shape)} nodes) and {text}"
+        )
+
+    def _file_shape(self) -> tuple[tuple[int, ...], str]:
+        from bauv_sim.bathymetry import grid_shape
+
+        assert self.file is not None
+        return grid_shape(self.file, self.variable)
 
 
 @dataclass(frozen=True)
@@ -327,16 +402,38 @@ class Seabed:
         return -self.height_world(x_m, y_m)
 
 
-def generate(config: SeabedConfig | None = None) -> Seabed:
-    """Generate a seabed from its parameters (deterministic for a given seed).
+def generate(config: SeabedConfig | None = None, frame: LocalFrame | None = None) -> Seabed:
+    """Generate a seabed from its parameters (deterministic for a given seed), or resample the
+    site's bathymetry file (``config.file``) around the scene's geographic origin.
 
     Args:
         config: parameters; the defaults when None.
+        frame: the scene's frame on the Earth (the scenario's ``geo``); needed with a file, not
+            used without.
 
     Returns:
-        The :class:`Seabed`.
+        The :class:`Seabed`. From a file it is read and resampled once per process, file
+        version, configuration and frame (:func:`_from_file`; its depths are read-only).
+
+    Raises:
+        ConfigError: with a file: no frame, or what :func:`bauv_sim.bathymetry.read_bathymetry`
+            and :func:`bauv_sim.bathymetry.resample` refuse (a missing file or variable, units
+            not metres, no-data cells under the scene, a scene beyond the file's extent, a grid
+            too large), in one line naming the file and the variable.
     """
     c = config or SeabedConfig()
+    if c.file is not None:
+        if frame is None:
+            raise ConfigError(
+                f"seabed.file = {c.file}: needs the scenario's geo origin (geo.latitude_deg, "
+                "geo.longitude_deg)"
+            )
+        path = Path(c.file).resolve()
+        try:
+            version = path.stat().st_mtime_ns
+        except OSError:
+            raise ConfigError(f"seabed.file = {c.file}: no such file") from None
+        return _from_file(c, frame, str(path), version)
     rng = generator(c.seed, 0, "seabed", "relief")
     ax = np.linspace(-c.half_extent_m, c.half_extent_m, c.n)
     X, Y = np.meshgrid(ax, ax)  # [i, j] = (y_i, x_j)
@@ -354,6 +451,25 @@ def generate(config: SeabedConfig | None = None) -> Seabed:
     depth = c.depth_at_origin_m + c.slope * np.hypot(X, Y) + scale * (relief - relief0)
     depth = np.maximum(depth, c.min_depth_m)
     return Seabed(c, depth)
+
+
+@functools.lru_cache(maxsize=2)
+def _from_file(c: SeabedConfig, frame: LocalFrame, path: str, version: int) -> Seabed:
+    """The seabed of ``c.file`` (cached on its resolved ``path`` and ``version``, its
+    modification time in ns: a rewritten file is read again; messages name it as given)."""
+    from bauv_sim.bathymetry import read_bathymetry, resample
+
+    assert c.file is not None
+    grid = read_bathymetry(c.file, c.variable, c.values)
+    depth = resample(grid, frame, c.half_extent_m, c.cell_m)
+    depth.setflags(write=False)
+    return Seabed(c, depth)
+
+
+def _file_kind(file: str) -> Literal["netcdf", "geotiff"] | None:
+    from bauv_sim.bathymetry import file_kind
+
+    return file_kind(file)
 
 
 def write(seabed: Seabed, path: str | Path = DEFAULT_SEABED_FILE) -> Path:

@@ -18,9 +18,10 @@ from tasks.closed_loop.world import WaypointMission, fly
 from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary
 
 MESH_BYTES_PER_CELL = 600.0
-"""Memory of the recording's seabed mesh per grid cell of the mission area, bytes (the report
-builds it from Python tuples, :func:`tasks.closed_loop.report.record_mission`: 512 B per cell
-measured with tracemalloc on 600 x 600 points, plus the arrays rerun is given)."""
+"""Memory of the recording's seabed mesh per grid cell of the mission area, bytes, an upper
+bound (:func:`tasks.closed_loop.recording.seabed_mesh`: its vertices, triangles, normals and
+colours and rerun's copies of them, 273 B per cell at the peak, tracemalloc on 600 x 600 cells;
+600 B is the bound of the mesh the report built from Python tuples before, 512 B per cell)."""
 
 MESH_MARGIN_M = 160.0
 """How far the recorded mission area reaches beyond the way-points, the start and the transceiver,
@@ -36,12 +37,15 @@ def check_in_water(scenario: MissionScenario) -> None:
     """Refuse a start or a way-point below the seabed of the scene (or within
     :data:`~bauv_sim.build.VEHICLE_CLEARANCE_M` of it): a depth the vehicle cannot reach, whose
     way-point would still count as reached since the acceptance radius is judged horizontally.
-    Points outside the seabed grid are not checked (as when the scene is built).
+    Points outside the seabed grid are not checked (as when the scene is built). A seabed from
+    a bathymetry file is read and resampled here, so that a file that cannot serve is refused
+    before anything is written.
 
     Raises:
-        ConfigError: naming the field, its value and the water depth there.
+        ConfigError: naming the field, its value and the water depth there; or the bathymetry
+            file, its variable and what is wrong with it (:func:`bauv_sim.seabed.generate`).
     """
-    bed = seabed.generate(scenario.seabed)
+    bed = seabed.generate(scenario.seabed, scenario.frame())
     points = [("start.depth_m", scenario.start)] + [
         (f"guidance.waypoints.{i}.depth_m", w) for i, w in enumerate(scenario.guidance.waypoints)
     ]

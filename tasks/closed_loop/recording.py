@@ -28,32 +28,23 @@ def record_mission(name: str, scn: MissionScenario, run: MissionRun, out) -> str
     rec = Recording(out / "recording.rrd", name, f"{name}/seed{run.seed}/run{run.run}")
     r = rec.rec
     # seabed mesh around the mission area
-    bed = generate(scn.seabed)
-    c = bed.config
+    bed = generate(scn.seabed, scn.frame())
     pts = np.array(
         [[w.east_m, w.north_m] for w in scn.guidance.waypoints]
         + [[scn.transceiver_east_m, scn.transceiver_north_m]]
     )
     lo = np.minimum(a["truth_pos"][:, :2].min(axis=0), pts.min(axis=0)) - 60.0
     hi = np.maximum(a["truth_pos"][:, :2].max(axis=0), pts.max(axis=0)) + 60.0
-    grid = np.arange(c.n) * c.cell_m - c.half_extent_m
-    ix = np.flatnonzero((grid >= lo[0]) & (grid <= hi[0]))
-    iy = np.flatnonzero((grid >= lo[1]) & (grid <= hi[1]))
-    if len(ix) >= 2 and len(iy) >= 2:
-        X, Y = np.meshgrid(grid[ix], grid[iy])
-        Z = -bed.depth_m[np.ix_(iy, ix)]
-        verts = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
-        nx = len(ix)
-        cells = [
-            (i * nx + j, i * nx + j + 1, (i + 1) * nx + j + 1, (i + 1) * nx + j)
-            for i in range(len(iy) - 1)
-            for j in range(nx - 1)
-        ]
-        tris = np.array([(q[0], q[1], q[2]) for q in cells] + [(q[0], q[2], q[3]) for q in cells])
+    mesh = seabed_mesh(bed, lo, hi)
+    if mesh is not None:
+        verts, tris, normals, colors = mesh
         r.log(
             "world/seabed",
             rr.Mesh3D(
-                vertex_positions=verts, triangle_indices=tris, albedo_factor=[0.76, 0.70, 0.50, 1.0]
+                vertex_positions=verts,
+                triangle_indices=tris,
+                vertex_normals=normals,
+                vertex_colors=colors,
             ),
             static=True,
         )
@@ -153,6 +144,51 @@ def record_mission(name: str, scn: MissionScenario, run: MissionRun, out) -> str
     )
     rec.close()
     return "recording.rrd"
+
+
+SEABED_SHALLOW_RGB = (0.86, 0.79, 0.56)
+"""The recording's seabed colour at the shallowest point of the mission area (sand)."""
+SEABED_DEEP_RGB = (0.18, 0.33, 0.45)
+"""Its colour at the deepest point (the colour ramps linearly with depth in between)."""
+
+
+def seabed_mesh(
+    bed, lo: NDArray[np.float64], hi: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float32], NDArray[np.uint8]] | None:
+    """The scene's seabed over a box as the recording's mesh: the heightfield's grid points and
+    the triangles MuJoCo collides with (each cell split from its lower-left to its upper-right
+    corner), shaded by the surface's normals and coloured by depth, so that the relief shows.
+
+    Args:
+        bed: the scene's :class:`~bauv_sim.seabed.Seabed`.
+        lo: the box's (east, north) lower corner, m.
+        hi: its upper corner, m.
+
+    Returns:
+        ``(vertices (k, 3) m world, triangles (t, 3), normals (k, 3), colours (k, 4) RGBA)``,
+        or None when the box holds fewer than 2 x 2 grid points.
+    """
+    c = bed.config
+    grid = np.arange(c.n) * c.cell_m - c.half_extent_m
+    ix = np.flatnonzero((grid >= lo[0]) & (grid <= hi[0]))
+    iy = np.flatnonzero((grid >= lo[1]) & (grid <= hi[1]))
+    if len(ix) < 2 or len(iy) < 2:
+        return None
+    X, Y = np.meshgrid(grid[ix], grid[iy])
+    Z = -bed.depth_m[np.ix_(iy, ix)]
+    verts = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+    idx = np.arange(Z.size).reshape(Z.shape)
+    q0, q1 = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
+    q2, q3 = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    tris = np.concatenate([np.column_stack([q0, q1, q2]), np.column_stack([q0, q2, q3])])
+    dz_dy, dz_dx = np.gradient(Z, c.cell_m)
+    normals = np.column_stack([-dz_dx.ravel(), -dz_dy.ravel(), np.ones(Z.size)])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    span = float(Z.max() - Z.min())
+    f = (Z.max() - Z.ravel())[:, None] / span if span > 0 else np.zeros((Z.size, 1))
+    rgb = (1 - f) * np.asarray(SEABED_SHALLOW_RGB) + f * np.asarray(SEABED_DEEP_RGB)
+    colors = np.column_stack([np.round(255 * rgb), np.full(Z.size, 255)]).astype(np.uint8)
+    return verts, tris, normals.astype(np.float32), colors
 
 
 VEHICLE_PARTS: tuple[tuple[str, str, str, tuple[float, float, float], tuple[float, ...]], ...] = (

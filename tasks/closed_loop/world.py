@@ -185,8 +185,8 @@ def single_vehicle_scene(
     scenario: MissionScenario, beacons: tuple[BeaconSpec, ...] | None = None
 ) -> SceneConfig:
     """The scene of a one-vehicle mission: the BAUV named ``bauv`` at the scenario's start, its
-    seabed and transceiver, and the given beacons (default: the scene's own,
-    :data:`bauv_sim.build.DEFAULT_BEACONS`)."""
+    seabed (from its bathymetry file around its ``geo`` origin, if it has one) and transceiver,
+    and the given beacons (default: the scene's own, :data:`bauv_sim.build.DEFAULT_BEACONS`)."""
     st = scenario.start
     extra = {} if beacons is None else {"beacons": tuple(beacons)}
     return SceneConfig(
@@ -200,6 +200,7 @@ def single_vehicle_scene(
             ),
         ),
         seabed=scenario.seabed,
+        geo=scenario.geo,
         transceiver_east_m=scenario.transceiver_east_m,
         transceiver_north_m=scenario.transceiver_north_m,
         **extra,

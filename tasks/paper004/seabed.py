@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bauv_sim import seabed as seabed_mod
+from bauv_sim.geo import GeoOriginConfig
 from bauv_sim.seabed import Seabed, SeabedConfig
 from bauv_sim.sensors.multibeam import (
     HarmonicSeabed,
@@ -126,14 +127,17 @@ class SeabedPrediction:
 
 
 @functools.lru_cache(maxsize=2)
-def _heightfield(cfg_json: str) -> Seabed:
-    return seabed_mod.generate(SeabedConfig.model_validate_json(cfg_json))
+def _heightfield(cfg_json: str, geo_json: str | None) -> Seabed:
+    geo = None if geo_json is None else GeoOriginConfig.model_validate_json(geo_json)
+    return seabed_mod.generate(
+        SeabedConfig.model_validate_json(cfg_json), None if geo is None else geo.frame()
+    )
 
 
-def heightfield(cfg: SeabedConfig) -> Seabed:
-    """The generated seabed of a configuration (cached per process: a 1001 x 1001 grid takes
-    about a second)."""
-    return _heightfield(cfg.model_dump_json())
+def heightfield(cfg: SeabedConfig, geo: GeoOriginConfig | None = None) -> Seabed:
+    """The seabed of a configuration (generated, or from its bathymetry file around ``geo``;
+    cached per process: a 1001 x 1001 grid takes about a second)."""
+    return _heightfield(cfg.model_dump_json(), None if geo is None else geo.model_dump_json())
 
 
 class HeightfieldPrediction:

@@ -33,6 +33,7 @@ from nav.bearings.local_control import ControlLimits, limited_control, optimal_c
 from nav.bearings.pcrb import bearing_information
 
 if TYPE_CHECKING:
+    from bauv_sim.geo import GeoOriginConfig
     from bauv_sim.seabed import SeabedConfig
     from bauv_sim.sensors.multibeam import MultibeamConfig
 
@@ -67,6 +68,8 @@ class LoopSetting:
             ``heightfield`` with the multibeam ``multibeam``:
             :class:`tasks.paper004.seabed.HeightfieldPrediction`).
         heightfield: the scene's seabed (for ``"heightfield"``).
+        heightfield_geo: the scene's origin on the Earth, for a seabed from a bathymetry file
+            (``heightfield.file``).
         multibeam: the multibeam of a seabed prediction (default: seed 004's).
         slope_basis: Appendix A's basis (for ``"heightfield"``).
     """
@@ -84,6 +87,7 @@ class LoopSetting:
     train_paths: int = 100_000
     prediction: str = "system"
     heightfield: SeabedConfig | None = None
+    heightfield_geo: GeoOriginConfig | None = None
     multibeam: MultibeamConfig | None = None
     slope_basis: str = "quadratic"
 
@@ -123,6 +127,8 @@ class LoopSetting:
         if self.prediction == "heightfield":
             d["heightfield"] = None if self.heightfield is None else self.heightfield.model_dump()
             d["slope_basis"] = self.slope_basis
+            if self.heightfield_geo is not None:
+                d["heightfield_geo"] = self.heightfield_geo.model_dump()
         if self.prediction != "system" and self.multibeam is not None:
             d["multibeam"] = self.multibeam.model_dump()
         return json.dumps(d, sort_keys=True)
@@ -180,7 +186,7 @@ def prediction_of(s: LoopSetting, seed: int, runs: tuple[int, ...], world, strea
         if s.heightfield is None or s.multibeam is None:
             raise ValueError("prediction 'heightfield' needs the heightfield and the multibeam")
         pred = HeightfieldPrediction(
-            heightfield(s.heightfield),
+            heightfield(s.heightfield, s.heightfield_geo),
             s.multibeam,
             s.slope_basis,
             seed,

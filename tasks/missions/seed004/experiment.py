@@ -168,7 +168,7 @@ class Seed004Experiment(MissionExperiment):
                 f"seed004.dt_s = {c.dt_s:g}: must be a multiple of timing.control_tick_s = "
                 f"{scenario.timing.control_tick_s:g}"
             )
-        bed = seabed.generate(scenario.seabed)
+        bed = seabed.generate(scenario.seabed, scenario.frame())
         for i, (e, n, z) in enumerate(path_config(scenario).path()):
             try:
                 floor = float(bed.height_world(e, n))

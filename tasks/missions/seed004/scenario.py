@@ -148,7 +148,7 @@ def beacon_specs(scn: Seed004Scenario) -> tuple[BeaconSpec, ...]:
     Raises:
         ConfigError: if the water is not deep enough at a beacon.
     """
-    bed = seabed.generate(scn.seabed)
+    bed = seabed.generate(scn.seabed, scn.frame())
     out = []
     for i, (e, n, z) in enumerate(beacons_world(scn)):
         try:
@@ -204,6 +204,7 @@ def surrogate(scn: Seed004Scenario) -> LoopSetting:
             {
                 "prediction": "heightfield",
                 "heightfield": scn.seabed,
+                "heightfield_geo": scn.geo,
                 "multibeam": scn.multibeam,
                 "slope_basis": c.slope_basis,
             }

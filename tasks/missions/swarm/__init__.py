@@ -99,6 +99,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from bauv_sim import seabed
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import MissionExperiment, check_gridded_current
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
@@ -204,13 +205,15 @@ class SwarmExperiment(MissionExperiment):
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
             )
+        if scenario.seabed.file is not None:  # read before anything is written
+            seabed.generate(scenario.seabed, scenario.frame())
         # issue 25: a gridded current covers the leader's start, way-points and transceiver (the
         # followers keep station within the check's margin); without geo it is refused
         ld = scenario.leader
         wps = ld.guidance.waypoints
         check_gridded_current(
             scenario.current,
-            scenario.frame() if hasattr(scenario, "frame") else None,
+            scenario.frame(),
             scenario.timing.max_duration_s,
             [(ld.start.east_m, ld.start.north_m)]
             + [(w.east_m, w.north_m) for w in wps]

@@ -75,6 +75,7 @@ class SwarmMission:
         return SceneConfig(
             vehicles=vehicles,
             seabed=scn.seabed,
+            geo=scn.geo,
             transceiver_east_m=scn.transceiver_east_m,
             transceiver_north_m=scn.transceiver_north_m,
         )

@@ -15,6 +15,7 @@ from bauv_sim.autopilot import AutopilotConfig
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
 from bauv_sim.errors import ConfigError
+from bauv_sim.geo import GeoOriginConfig, LocalFrame
 from bauv_sim.seabed import SeabedConfig
 from bauv_sim.sensors import (
     AngleErrorConfig,
@@ -272,6 +273,11 @@ class StationGuidanceConfig(Config):
 class SwarmScenario(Config):
     """Scenario of ``mission/swarm``."""
 
+    geo: GeoOriginConfig | None = Field(
+        None,
+        description="the scene's origin on the Earth (WGS 84); needed by a bathymetry file "
+        "(seabed.file); default: none, a local frame only",
+    )
     seabed: SeabedConfig = Field(default_factory=SeabedConfig)
     transceiver_east_m: float = Field(50.0, description="the leader's USBL transceiver, m")
     transceiver_north_m: float = 120.0
@@ -297,6 +303,10 @@ class SwarmScenario(Config):
     )
     faults: FaultConfig = Field(default_factory=FaultConfig)
     report: MissionReportConfig = Field(default_factory=MissionReportConfig)
+
+    def frame(self) -> LocalFrame | None:
+        """The scene's east/north frame on the Earth, or None without a ``geo`` origin."""
+        return None if self.geo is None else self.geo.frame()
 
     @model_validator(mode="after")
     def _check(self) -> SwarmScenario:

@@ -9,7 +9,7 @@ import numpy as np
 
 from tasks.missions.trn.metrics import stack_runs
 from tasks.missions.trn.run import TrnRunResult
-from tasks.missions.trn.scenario import LABELS, METHODS, TrnScenario
+from tasks.missions.trn.scenario import LABELS, METHODS, TrnScenario, seabed_text
 from tasks.missions.trn.terrain import navigator_map
 
 
@@ -32,7 +32,7 @@ def error_figure(name: str, scn: TrnScenario, results: list[TrnRunResult], out: 
         ax.set_xlabel("time since the dive (s)")
         ax.set_ylabel("horizontal error, RMS over runs (m)")
         ax.legend(fontsize="small", ncol=2)
-        fig.suptitle(f"{name}: {len(results)} runs, relief {scn.seabed.relief_std_m:g} m")
+        fig.suptitle(f"{name}: {len(results)} runs, {seabed_text(scn)}")
         return style.save(fig, out / "errors.png")
 
 

@@ -19,7 +19,7 @@ from tasks.missions.trn.metrics import (
     trn_verdict,
 )
 from tasks.missions.trn.run import TrnRunResult, summary_of
-from tasks.missions.trn.scenario import LABELS, METHODS, TRN_METHODS, TrnScenario
+from tasks.missions.trn.scenario import LABELS, METHODS, TRN_METHODS, TrnScenario, seabed_text
 from tasks.missions.trn.terrain import map_nan_fraction
 
 __all__ = ["TrnMetrics", "report_trn"]
@@ -111,7 +111,7 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
     dur = results[0].t_s[-1] if results and len(results[0].t_s) else 0.0
     t1 = Table(
         f"Horizontal error after the dive per method ({ctx.n_runs} runs, {dur:.0f} s without "
-        f"USBL, relief {scn.seabed.relief_std_m:g} m, current {cur if cur is not None else '-'} "
+        f"USBL, {seabed_text(scn)}, current {cur if cur is not None else '-'} "
         f"m/s; steering on {LABELS[scn.navigation.steer]})",
         [
             "Method",

@@ -90,7 +90,7 @@ def reduce_flight(
             start, len(t), max(1, round(scn.sensors.dvl.period_s / scn.timing.control_tick_s))
         )
         pts, _ = true_footprints(scn, truth[pings], rph[pings], dirs, lever)
-        bed = true_map(scn.seabed)
+        bed = true_map(scn.seabed, frame=scn.frame())
         floor, ok = bed.depth(pts[..., 0], pts[..., 1])
         alt = floor + truth[pings, 2][:, None]  # seabed depth less the vehicle's
         stats["altitude_mean_m"] = float(alt[ok].mean()) if ok.any() else 0.0

@@ -202,3 +202,11 @@ PRESET = {
     "report": {"recording": False},
 }
 """``mission/trn``'s preset (package docstring)."""
+
+
+def seabed_text(scn: TrnScenario) -> str:
+    """The seabed in a title: its bathymetry file, or the generated relief's standard
+    deviation."""
+    if scn.seabed.file is not None:
+        return f"seabed from {scn.seabed.file}"
+    return f"relief {scn.seabed.relief_std_m:g} m"

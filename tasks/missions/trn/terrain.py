@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 from bauv_sim import rng as rng_mod
 from bauv_sim import seabed
 from bauv_sim.frames import R_from_roll_pitch_heading
+from bauv_sim.geo import LocalFrame
 from nav.trn import TerrainMap, degraded, trn_pcrb
 from tasks.missions.trn.scenario import TrnScenario
 
@@ -20,15 +21,20 @@ Array = NDArray[np.float64]
 
 
 @functools.lru_cache(maxsize=2)
-def true_seabed(cfg: seabed.SeabedConfig) -> seabed.Seabed:
-    """The scene's seabed (generated once per process and configuration)."""
-    return seabed.generate(cfg)
+def true_seabed(cfg: seabed.SeabedConfig, frame: LocalFrame | None = None) -> seabed.Seabed:
+    """The scene's seabed (generated, or resampled from its bathymetry file around the
+    scenario's geographic origin ``frame``, once per process, configuration and frame)."""
+    return seabed.generate(cfg, frame)
 
 
-def true_map(cfg: seabed.SeabedConfig, half_extent_m: float | None = None) -> TerrainMap:
-    """The true seabed as a :class:`nav.trn.TerrainMap` (its grid points; ``sigma_m`` 0),
-    cropped to ``+-half_extent_m`` about the origin when given."""
-    bed = true_seabed(cfg)
+def true_map(
+    cfg: seabed.SeabedConfig,
+    half_extent_m: float | None = None,
+    frame: LocalFrame | None = None,
+) -> TerrainMap:
+    """The true seabed (:func:`true_seabed`) as a :class:`nav.trn.TerrainMap` (its grid points;
+    ``sigma_m`` 0), cropped to ``+-half_extent_m`` about the origin when given."""
+    bed = true_seabed(cfg, frame)
     n = cfg.n
     x = -cfg.half_extent_m + cfg.cell_m * np.arange(n)
     keep = np.ones(n, bool) if half_extent_m is None else np.abs(x) <= half_extent_m + 1e-9
@@ -46,7 +52,7 @@ def survey_box(scn: TrnScenario) -> tuple[float, float, float, float]:
 @functools.lru_cache(maxsize=4)
 def _navigator_map(key: str, scn: TrnScenario, seed: int) -> TerrainMap:
     c = scn.map
-    truth = true_map(scn.seabed, c.half_extent_m)
+    truth = true_map(scn.seabed, c.half_extent_m, scn.frame())
     m = degraded(
         truth, c.cell_m, c.vertical_sigma_m, c.offset_m, rng_mod.generator(seed, 0, "trn", "map")
     )
@@ -63,7 +69,8 @@ def _navigator_map(key: str, scn: TrnScenario, seed: int) -> TerrainMap:
 
 
 def navigator_map(scn: TrnScenario, seed: int) -> TerrainMap:
-    """The navigator's map of a batch: the true seabed (cropped to ``map.half_extent_m``)
+    """The navigator's map of a batch: the true seabed (:func:`true_map`: the scene's, from
+    its bathymetry file when it has one; cropped to ``map.half_extent_m``)
     degraded by :func:`nav.trn.degraded` with ``map.cell_m``, ``map.vertical_sigma_m`` and
     ``map.offset_m``, then ``map.nan_holes`` discs of ``map.nan_hole_radius_m`` without data
     centred uniformly in the survey's box; one map per batch (streams of run 0: the survey map
@@ -97,7 +104,7 @@ def true_footprints(
         returns within the DVL's lock (a hit, the ping's altitude between ``sensors.dvl.
         min_altitude_m`` and ``max_altitude_m``, at least ``min_beams`` beams), shape (k, m).
     """
-    bed = true_seabed(scn.seabed)
+    bed = true_seabed(scn.seabed, scn.frame())
     R = np.array([R_from_roll_pitch_heading(*a) for a in rph_rad])
     origin = position_m + R @ lever_arm_body_m
     dirs = np.einsum("kij,mj->kmi", R, directions_body)
@@ -149,7 +156,7 @@ def pcrb_track(
     pts, lock = true_footprints(scn, position_m, rph_rad, directions_body, lever_arm_body_m)
     nav_map = navigator_map(scn, seed)
     _, on_map = nav_map.depth(pts[..., 0], pts[..., 1])
-    g, g_ok = true_map(scn.seabed).gradient(pts[..., 0], pts[..., 1])
+    g, g_ok = true_map(scn.seabed, frame=scn.frame()).gradient(pts[..., 0], pts[..., 1])
     active = lock & on_map & g_ok
     g = np.where(active[..., None], g, 0.0)
     sigma = np.full(active.shape, math.hypot(scn.trn.sounding_sigma_m, nav_map.sigma_m))
