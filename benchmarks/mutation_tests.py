@@ -136,6 +136,17 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "bauv_sim/sensors/multibeam.py": ("tests/bauv_sim/test_multibeam.py",),
     "bauv_sim/sensors/dvl.py": ("tests/sensors/test_dvl.py", "tests/sensors/test_dvl_device.py"),
     "nav/dvl.py": ("tests/nav/test_dvl.py", "tests/nav/test_dvl_ekf.py"),
+    "bauv_sim/ocean.py": (
+        "tests/bauv_sim/test_ocean.py",
+        "tests/bauv_sim/test_gridded_current.py",
+        "tests/tasks/test_site_current.py",
+    ),
+    "bauv_sim/bathymetry.py": (
+        "tests/bauv_sim/test_bathymetry.py",
+        "tests/bauv_sim/test_seabed_file.py",
+    ),
+    "tasks/core/geojson.py": ("tests/tasks/test_geojson.py",),
+    "tasks/closed_loop/geo.py": ("tests/tasks/test_geo_io.py",),
     "nav/acoustics/rays.py": (
         "tests/nav/test_acoustic_rays.py",
         "tests/sensors/test_usbl_sound.py",
@@ -1223,6 +1234,54 @@ ISSUE24_COOP = [
 """Issue 24: the cooperative filters (part C): the OWTT clock term, the clock prediction, the CI
 bound; the kinematic team (part D): its truth's geometry and current, the adapter's ticks."""
 
+ISSUE25: list[Mutation] = [
+    Mutation(
+        "gridded-current-depth-sign",
+        "own",
+        "sign",
+        "bauv_sim/ocean.py",
+        "depth = np.maximum(-flat[:, 2], self.grid.depth_m[0])",
+        "depth = np.maximum(flat[:, 2], self.grid.depth_m[0])",
+        "the gridded current looked up at the height above the surface instead of the depth",
+    ),
+    Mutation(
+        "gridded-current-units-ignored",
+        "own",
+        "unit",
+        "bauv_sim/ocean.py",
+        "values = var.transpose(*order).values.astype(float) * SPEED_UNITS[units]",
+        "values = var.transpose(*order).values.astype(float)",
+        "an ocean model's velocities in cm/s read as m/s",
+    ),
+    Mutation(
+        "bathymetry-elevation-sign",
+        "own",
+        "sign",
+        "bauv_sim/bathymetry.py",
+        'depth = -values if positive == "up" else values',
+        'depth = values if positive == "up" else values',
+        "a netCDF elevation (positive up) taken as a depth",
+    ),
+    Mutation(
+        "geojson-lat-lon-order",
+        "own",
+        "columns",
+        "tasks/core/geojson.py",
+        "return [round(float(lon), DECIMALS), round(float(lat), DECIMALS)]",
+        "return [round(float(lat), DECIMALS), round(float(lon), DECIMALS)]",
+        "GeoJSON positions written latitude first (RFC 7946 wants longitude, latitude)",
+    ),
+    Mutation(
+        "waypoint-lat-lon-east-north-swapped",
+        "own",
+        "columns",
+        "tasks/closed_loop/geo.py",
+        'return {"east_m": float(east), "north_m": float(north), **out}',
+        'return {"east_m": float(north), "north_m": float(east), **out}',
+        "a position given in latitude/longitude lands with east and north swapped",
+    ),
+]
+
 MUTATIONS: list[Mutation] = [
     *ISSUE21,
     *OWN,
@@ -1235,6 +1294,7 @@ MUTATIONS: list[Mutation] = [
     *ISSUE24_SWARM,
     *ISSUE24,
     *ISSUE24_COOP,
+    *ISSUE25,
 ]
 
 _IGNORE = shutil.ignore_patterns(
