@@ -58,6 +58,16 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__, __getattr__, __dir__ = lazy_exports(
+__all__, _export, __dir__ = lazy_exports(
     globals(), _EXPORTS, eager=("BauvSimError", "ConfigError", "PROJECT_ROOT")
 )
+
+
+def __getattr__(name: str) -> object:
+    """A public name on first use; ``__version__`` is the installed distribution's version
+    (:func:`bauv_sim.provenance.package_version`), read only when asked for."""
+    if name == "__version__":
+        from bauv_sim.provenance import package_version
+
+        return package_version()
+    return _export(name)

@@ -1,7 +1,9 @@
 """The run folder on disk: its files, how each is written, and how a saved block is read back.
 
 The folder holds ``run.json`` (:data:`RUN_FILE`: ``state`` is ``incomplete`` until the report is
-written, then ``complete``; ``record_sha256`` is the sha256 of its other fields),
+written, then ``complete``; ``provenance`` is :func:`bauv_sim.provenance.collect` of the process
+that wrote it, also in ``provenance.json`` (:data:`PROVENANCE_FILE`), never in ``metrics.json``;
+``record_sha256`` is the sha256 of its other fields),
 ``scenario.toml`` (:data:`SCENARIO_FILE`: the resolved scenario; ``bauv run NAME --scenario FILE``
 repeats it), ``blocks/`` and the report's files. A block's result, encoded as plain data
 (:mod:`tasks.core.store`, a format that cannot execute code when read), is written to
@@ -23,12 +25,14 @@ import re
 from pathlib import Path
 from typing import Any
 
+from bauv_sim import provenance
 from bauv_sim.errors import ConfigError
 from tasks.core import files, store
 from tasks.core.files import atomic_write_bytes, os_error_text
 from tasks.core.plan import BatchPlan, scenario_text, sha256
 
 RUN_FILE = "run.json"
+PROVENANCE_FILE = "provenance.json"
 SCENARIO_FILE = "scenario.toml"
 BLOCK_DIR = "blocks"
 BLOCK_SUFFIX = ".zip"
@@ -201,6 +205,7 @@ def run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
         "scenario_sha256": plan.scenario_sha256,
         "store_version": store.VERSION,
         "state": state,
+        "provenance": provenance.collect(),
     }
 
 
@@ -218,9 +223,12 @@ def record_digest(record: dict[str, Any]) -> str:
 
 
 def write_run_record(out_dir: Path, plan: BatchPlan, state: str) -> None:
-    """Write ``run.json`` with ``state`` and its :data:`RECORD_DIGEST`."""
+    """Write ``provenance.json``, then ``run.json`` with ``state``, the same provenance and its
+    :data:`RECORD_DIGEST`. A batch completed by ``--resume`` records the provenance of the
+    process that completed it in both."""
     record = run_record(plan, state)
     record[RECORD_DIGEST] = record_digest(record)
+    atomic_write_text(out_dir / PROVENANCE_FILE, json.dumps(record["provenance"], indent=2) + "\n")
     atomic_write_text(out_dir / RUN_FILE, json.dumps(record, indent=2) + "\n")
 
 
@@ -253,7 +261,7 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
             write_run_record(out_dir, plan, "incomplete")
     except OSError as exc:
         with files.confined(out_dir):
-            for path in (out_dir / SCENARIO_FILE, out_dir / RUN_FILE):
+            for path in (out_dir / SCENARIO_FILE, out_dir / PROVENANCE_FILE, out_dir / RUN_FILE):
                 with contextlib.suppress(OSError):
                     files.remove(path)
         for folder in created:  # deepest first
