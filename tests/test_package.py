@@ -171,3 +171,22 @@ def test_every_run_folder_records_its_provenance(tmp_path):
     metrics = (out / "metrics.json").read_text()
     for word in ("provenance", "mujoco", "numpy", "commit", "platform", "python"):
         assert word not in metrics.lower()
+
+
+def test_a_batch_completed_elsewhere_keeps_the_provenance_it_started_with(tmp_path):
+    from tasks.core import run_folder
+    from tasks.core.resume import plan_resume
+
+    out = tmp_path / "run"
+    overrides = ["passage.duration_s=100", "passage.closest_approach_time_s=50"]
+    run("paper-000/test-1", 2, 7, out, [*overrides, "report.figures=false"], progress=False)
+    # as if another version had started it: its provenance.json, then --resume completes it here
+    started = {**provenance.collect(), "version": "0.0.9", "commit": "0" * 40}
+    (out / "provenance.json").write_text(json.dumps(started))
+    plan = plan_resume(out, "paper-000/test-1", None, None, (), ())
+    run_folder.write_run_record(out, plan, "complete")
+    record = json.loads((out / "run.json").read_text())
+    assert record["provenance"] == started
+    assert record["provenance_completed"] == provenance.collect()
+    assert json.loads((out / "provenance.json").read_text()) == started
+    plan_resume(out, "paper-000/test-1", None, None, (), ())  # its record_sha256 still holds

@@ -2,7 +2,8 @@
 
 The folder holds ``run.json`` (:data:`RUN_FILE`: ``state`` is ``incomplete`` until the report is
 written, then ``complete``; ``provenance`` is :func:`bauv_sim.provenance.collect` of the process
-that wrote it, also in ``provenance.json`` (:data:`PROVENANCE_FILE`), never in ``metrics.json``;
+that started the batch, also in ``provenance.json`` (:data:`PROVENANCE_FILE`), never in
+``metrics.json``; ``provenance_completed`` that of a ``--resume`` that completed it elsewhere;
 ``record_sha256`` is the sha256 of its other fields),
 ``scenario.toml`` (:data:`SCENARIO_FILE`: the resolved scenario; ``bauv run NAME --scenario FILE``
 repeats it), ``blocks/`` and the report's files. A block's result, encoded as plain data
@@ -193,8 +194,19 @@ def load_block(plan: BatchPlan, out_dir: Path, index: int) -> Any:
     return stored.value
 
 
-def run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
-    """The fields of ``run.json`` (without :data:`RECORD_DIGEST`)."""
+def run_record(
+    plan: BatchPlan, state: str, started: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The fields of ``run.json`` (without :data:`RECORD_DIGEST`).
+
+    Args:
+        plan: the batch.
+        state: ``"incomplete"`` or ``"complete"``.
+        started: the provenance of the process that started the batch (default: this one's);
+            when it is not this process's, this one's is added as ``provenance_completed``.
+    """
+    current = provenance.collect()
+    started = current if started is None else started
     return {
         "format_version": FORMAT_VERSION,
         "experiment": plan.experiment.name,
@@ -205,8 +217,8 @@ def run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
         "scenario_sha256": plan.scenario_sha256,
         "store_version": store.VERSION,
         "state": state,
-        "provenance": provenance.collect(),
-    }
+        "provenance": started,
+    } | ({} if started == current else {"provenance_completed": current})
 
 
 RECORD_DIGEST = "record_sha256"
@@ -222,13 +234,33 @@ def record_digest(record: dict[str, Any]) -> str:
     return sha256(text.encode("ascii"))
 
 
+def _started_provenance(out_dir: Path) -> dict[str, Any] | None:
+    """``provenance.json`` of a started batch, or ``None`` (none yet, or not a JSON object)."""
+    try:
+        value = json.loads(read_small(out_dir / PROVENANCE_FILE, MAX_PROVENANCE_BYTES))
+    except (OSError, ValueError, ConfigError, RecursionError):
+        return None
+    return value if type(value) is dict else None
+
+
+MAX_PROVENANCE_BYTES = 2**14
+"""The largest ``provenance.json`` read back (it is about 300 bytes)."""
+
+
 def write_run_record(out_dir: Path, plan: BatchPlan, state: str) -> None:
-    """Write ``provenance.json``, then ``run.json`` with ``state``, the same provenance and its
-    :data:`RECORD_DIGEST`. A batch completed by ``--resume`` records the provenance of the
-    process that completed it in both."""
-    record = run_record(plan, state)
+    """Write ``run.json`` with ``state``, the batch's provenance and its :data:`RECORD_DIGEST`.
+
+    The provenance is that of the process that started the batch: this one's, written to
+    ``provenance.json`` when the folder has none yet (a folder started before provenance was
+    recorded gets the completing process's); a ``--resume`` from another environment keeps it
+    and adds its own as ``provenance_completed``.
+    """
+    started = _started_provenance(out_dir)
+    if started is None:
+        started = provenance.collect()
+        atomic_write_text(out_dir / PROVENANCE_FILE, json.dumps(started, indent=2) + "\n")
+    record = run_record(plan, state, started)
     record[RECORD_DIGEST] = record_digest(record)
-    atomic_write_text(out_dir / PROVENANCE_FILE, json.dumps(record["provenance"], indent=2) + "\n")
     atomic_write_text(out_dir / RUN_FILE, json.dumps(record, indent=2) + "\n")
 
 
