@@ -10,8 +10,19 @@ from bauv_sim.errors import BauvSimError as BauvSimError
 from bauv_sim.errors import ConfigError as ConfigError
 from nav._exports import lazy_exports
 
-PROJECT_ROOT = Path(__file__).resolve().parents[1]
-"""Root of the source tree (holds ``models/`` and ``assets/``)."""
+
+def _data_root() -> Path:
+    """Where ``models/`` and ``assets/`` are: ``bauv_sim/_data`` of an installed wheel (``setup.py``
+    copies them there), else the source tree above this package (a checkout, an editable
+    install)."""
+    here = Path(__file__).resolve().parent
+    wheel = here / "_data"
+    return wheel if (wheel / "models").is_dir() else here.parent
+
+
+PROJECT_ROOT = _data_root()
+"""Folder holding ``models/`` and ``assets/``: the source tree of a checkout or editable install,
+``bauv_sim/_data`` of an installed wheel (which has no ``docs/`` or ``tests/``)."""
 
 _EXPORTS: dict[str, tuple[str, str]] = {
     "ActuatorCommand": ("bauv_sim.autopilot", "ActuatorCommand"),
@@ -47,6 +58,16 @@ _EXPORTS: dict[str, tuple[str, str]] = {
 }
 """Public name -> (module, attribute), imported on first use."""
 
-__all__, __getattr__, __dir__ = lazy_exports(
+__all__, _export, __dir__ = lazy_exports(
     globals(), _EXPORTS, eager=("BauvSimError", "ConfigError", "PROJECT_ROOT")
 )
+
+
+def __getattr__(name: str) -> object:
+    """A public name on first use; ``__version__`` is the installed distribution's version
+    (:func:`bauv_sim.provenance.package_version`), read only when asked for."""
+    if name == "__version__":
+        from bauv_sim.provenance import package_version
+
+        return package_version()
+    return _export(name)

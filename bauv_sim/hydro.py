@@ -33,6 +33,7 @@ the world frame (ENU, m, m/s, N) unless the name says otherwise.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -83,8 +84,13 @@ PLUGIN_NAME = "bauv.hydro"
 """Name of the engine plugin (``bauv_sim/plugin/hydro.c``) that applies the run-time
 hydrodynamics; one instance per vehicle, named ``<prefix>hydro``."""
 
-PLUGIN_BUILT_FOR = "3.17.0"
-"""The MuJoCo release the plugin is compiled against (``pyproject.toml`` pins it)."""
+PLUGIN_RECORD = "_bauv_hydro.build.json"
+"""File beside the plugin library, written by ``setup.py`` when it compiles it: the MuJoCo release
+whose headers it was compiled against (``{"mujoco": "3.17.0", "mjVERSION_HEADER": 3017000}``)."""
+
+PLUGIN_BUILT_FOR_UNRECORDED = "3.17.0"
+"""The release a library without :data:`PLUGIN_RECORD` was compiled against: ``setup.py`` wrote no
+record while the build pinned ``mujoco==3.17.0`` exactly."""
 
 WATER_STATE_SIZE = 7
 """Numbers of the plugin's state per instance: water velocity ``w0`` (3, m/s, world), its rate
@@ -108,8 +114,77 @@ def plugin_path() -> Path:
     return found[-1]
 
 
+def _version_number(version: str) -> int:
+    """``mjVERSION_HEADER`` form of a release string: ``"3.17.0"`` -> 3017000."""
+    parts = [int(p) for p in version.split(".")[:3]]
+    parts += [0] * (3 - len(parts))
+    return parts[0] * 1_000_000 + parts[1] * 1_000 + parts[2]
+
+
+def _version_text(number: int) -> str:
+    """Release string of an ``mjVERSION_HEADER`` number: 3017000 -> ``"3.17.0"``."""
+    return f"{number // 1_000_000}.{number // 1_000 % 1_000}.{number % 1_000}"
+
+
+def plugin_built_for(library: Path | None = None) -> int:
+    """The MuJoCo release the plugin library was compiled against, as ``mjVERSION_HEADER``
+    (3017000 for 3.17.0), from :data:`PLUGIN_RECORD` beside it.
+
+    Args:
+        library: the plugin library (default :func:`plugin_path`).
+
+    Raises:
+        ConfigError: if the record cannot be read or holds no version number.
+    """
+    path = (plugin_path() if library is None else library).parent / PLUGIN_RECORD
+    if not path.exists():
+        return _version_number(PLUGIN_BUILT_FOR_UNRECORDED)
+    try:
+        number = json.loads(path.read_text(encoding="utf-8"))["mjVERSION_HEADER"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ConfigError(
+            f"{str(path)!r}: unreadable build record of the hydrodynamics plugin ({exc!r}); "
+            "reinstall the package"
+        ) from None
+    if type(number) is not int or number <= 0:
+        raise ConfigError(
+            f"{str(path)!r}: mjVERSION_HEADER = {number!r}: must be a positive integer; "
+            "reinstall the package"
+        )
+    return number
+
+
+def check_plugin_abi(runtime: int, built_for: int) -> None:
+    """Refuse a MuJoCo other than the release the plugin was compiled against.
+
+    The rule is equality of the whole release number (major, minor and patch): the plugin reads
+    ``mjModel``/``mjData`` fields at the offsets of its build's headers, MuJoCo promises no stable
+    layout between releases, and a changed one is not detected at load (3.17.0 inserted
+    ``mjModel.tex_contenttypeadr``, moving ``text_adr``, ``numeric_*`` and ``plugin_stateadr``,
+    all of which the plugin reads): the forces would be computed from the wrong arrays. MuJoCo's
+    own Python bindings refuse a library whose ``mj_version()`` is not their
+    ``mjVERSION_HEADER`` for the same reason.
+
+    Args:
+        runtime: ``mujoco.mj_version()`` of the library loaded (3017000 for 3.17.0).
+        built_for: ``mjVERSION_HEADER`` the plugin was compiled against (:func:`plugin_built_for`).
+
+    Raises:
+        ConfigError: if they differ.
+    """
+    if runtime != built_for:
+        have, want = _version_text(runtime), _version_text(built_for)
+        raise ConfigError(
+            f"mujoco {have} is installed, but the hydrodynamics plugin was compiled against "
+            f"mujoco {want} (its mjModel/mjData layout); install mujoco=={want}, or rebuild "
+            f"bauv-sim against {have} (pip install --no-build-isolation --force-reinstall "
+            "--no-deps bauv-sim, or pip install -e . in a checkout)"
+        )
+
+
 def load_plugin() -> None:
-    """Register the plugin ``bauv.hydro`` with MuJoCo (once per process).
+    """Register the plugin ``bauv.hydro`` with MuJoCo (once per process), after checking that
+    the MuJoCo loaded is the release it was compiled against (:func:`check_plugin_abi`).
 
     Raises:
         ConfigError: if the installed MuJoCo is not the release the plugin was built for, or the
@@ -118,12 +193,9 @@ def load_plugin() -> None:
     global _PLUGIN_LOADED
     if _PLUGIN_LOADED:
         return
-    if mujoco.__version__ != PLUGIN_BUILT_FOR:
-        raise ConfigError(
-            f"mujoco {mujoco.__version__} is installed, but the hydrodynamics plugin is built "
-            f"for {PLUGIN_BUILT_FOR}: install mujoco=={PLUGIN_BUILT_FOR}"
-        )
-    mujoco.mj_loadPluginLibrary(str(plugin_path()))
+    library = plugin_path()
+    check_plugin_abi(int(mujoco.mj_version()), plugin_built_for(library))
+    mujoco.mj_loadPluginLibrary(str(library))
     _PLUGIN_LOADED = True
 
 

@@ -1,5 +1,7 @@
 """The ``bauv`` command line.
 
+    bauv --version                          the package version (and git commit), Python,
+                                            MuJoCo, numpy, platform
     bauv list
     bauv show NAME [--set k=v ...] [--doc]  print the resolved scenario as TOML (--doc: every
                                             field with its description, unit, allowed range)
@@ -38,7 +40,24 @@ EXIT_FAILED = 1
 EXIT_INTERRUPTED = 130
 
 
+def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    if not value or ctx.resilient_parsing:
+        return
+    from bauv_sim.provenance import version_text
+
+    click.echo(version_text())
+    ctx.exit()
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.option(
+    "--version",
+    is_flag=True,
+    expose_value=False,
+    is_eager=True,
+    callback=_print_version,
+    help="Print the version (with the git commit in a checkout) and exit.",
+)
 def cli() -> None:
     """bauv-sim: a biomimetic AUV and its navigation, simulated."""
 

@@ -1,7 +1,10 @@
 """The run folder on disk: its files, how each is written, and how a saved block is read back.
 
 The folder holds ``run.json`` (:data:`RUN_FILE`: ``state`` is ``incomplete`` until the report is
-written, then ``complete``; ``record_sha256`` is the sha256 of its other fields),
+written, then ``complete``; ``provenance`` is :func:`bauv_sim.provenance.collect` of the process
+that started the batch, also in ``provenance.json`` (:data:`PROVENANCE_FILE`), never in
+``metrics.json``; ``provenance_completed`` that of a ``--resume`` that completed it elsewhere;
+``record_sha256`` is the sha256 of its other fields),
 ``scenario.toml`` (:data:`SCENARIO_FILE`: the resolved scenario; ``bauv run NAME --scenario FILE``
 repeats it), ``blocks/`` and the report's files. A block's result, encoded as plain data
 (:mod:`tasks.core.store`, a format that cannot execute code when read), is written to
@@ -23,12 +26,14 @@ import re
 from pathlib import Path
 from typing import Any
 
+from bauv_sim import provenance
 from bauv_sim.errors import ConfigError
 from tasks.core import files, store
 from tasks.core.files import atomic_write_bytes, os_error_text
 from tasks.core.plan import BatchPlan, scenario_text, sha256
 
 RUN_FILE = "run.json"
+PROVENANCE_FILE = "provenance.json"
 SCENARIO_FILE = "scenario.toml"
 BLOCK_DIR = "blocks"
 BLOCK_SUFFIX = ".zip"
@@ -189,8 +194,19 @@ def load_block(plan: BatchPlan, out_dir: Path, index: int) -> Any:
     return stored.value
 
 
-def run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
-    """The fields of ``run.json`` (without :data:`RECORD_DIGEST`)."""
+def run_record(
+    plan: BatchPlan, state: str, started: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The fields of ``run.json`` (without :data:`RECORD_DIGEST`).
+
+    Args:
+        plan: the batch.
+        state: ``"incomplete"`` or ``"complete"``.
+        started: the provenance of the process that started the batch (default: this one's);
+            when it is not this process's, this one's is added as ``provenance_completed``.
+    """
+    current = provenance.collect()
+    started = current if started is None else started
     return {
         "format_version": FORMAT_VERSION,
         "experiment": plan.experiment.name,
@@ -201,7 +217,8 @@ def run_record(plan: BatchPlan, state: str) -> dict[str, Any]:
         "scenario_sha256": plan.scenario_sha256,
         "store_version": store.VERSION,
         "state": state,
-    }
+        "provenance": started,
+    } | ({} if started == current else {"provenance_completed": current})
 
 
 RECORD_DIGEST = "record_sha256"
@@ -217,9 +234,32 @@ def record_digest(record: dict[str, Any]) -> str:
     return sha256(text.encode("ascii"))
 
 
+def _started_provenance(out_dir: Path) -> dict[str, Any] | None:
+    """``provenance.json`` of a started batch, or ``None`` (none yet, or not a JSON object)."""
+    try:
+        value = json.loads(read_small(out_dir / PROVENANCE_FILE, MAX_PROVENANCE_BYTES))
+    except (OSError, ValueError, ConfigError, RecursionError):
+        return None
+    return value if type(value) is dict else None
+
+
+MAX_PROVENANCE_BYTES = 2**14
+"""The largest ``provenance.json`` read back (it is about 300 bytes)."""
+
+
 def write_run_record(out_dir: Path, plan: BatchPlan, state: str) -> None:
-    """Write ``run.json`` with ``state`` and its :data:`RECORD_DIGEST`."""
-    record = run_record(plan, state)
+    """Write ``run.json`` with ``state``, the batch's provenance and its :data:`RECORD_DIGEST`.
+
+    The provenance is that of the process that started the batch: this one's, written to
+    ``provenance.json`` when the folder has none yet (a folder started before provenance was
+    recorded gets the completing process's); a ``--resume`` from another environment keeps it
+    and adds its own as ``provenance_completed``.
+    """
+    started = _started_provenance(out_dir)
+    if started is None:
+        started = provenance.collect()
+        atomic_write_text(out_dir / PROVENANCE_FILE, json.dumps(started, indent=2) + "\n")
+    record = run_record(plan, state, started)
     record[RECORD_DIGEST] = record_digest(record)
     atomic_write_text(out_dir / RUN_FILE, json.dumps(record, indent=2) + "\n")
 
@@ -253,7 +293,7 @@ def prepare_out_dir(plan: BatchPlan, out_dir: Path) -> None:
             write_run_record(out_dir, plan, "incomplete")
     except OSError as exc:
         with files.confined(out_dir):
-            for path in (out_dir / SCENARIO_FILE, out_dir / RUN_FILE):
+            for path in (out_dir / SCENARIO_FILE, out_dir / PROVENANCE_FILE, out_dir / RUN_FILE):
                 with contextlib.suppress(OSError):
                     files.remove(path)
         for folder in created:  # deepest first
