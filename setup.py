@@ -138,5 +138,5 @@ setup(
             extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
             libraries=["m"],
         ),
-    ]
+    ],
 )
