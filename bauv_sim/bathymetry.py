@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from bauv_sim.errors import ConfigError
 from bauv_sim.geo import LocalFrame
-from bauv_sim.ocean import cf_variable
+from bauv_sim.ocean import cf_variable, open_netcdf
 
 Array = NDArray[np.float64]
 
@@ -105,14 +105,8 @@ def read_netcdf(path: str | Path, variable: str | None = None) -> BathymetryGrid
         ConfigError: one line naming the file and the variable: missing, units not metres,
             unknown sign convention, dimensions not (latitude, longitude), too large.
     """
-    import xarray as xr
-
     where = str(path)
-    try:
-        ds = xr.open_dataset(path, engine="netcdf4")
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
-    with ds:
+    with open_netcdf(path) as ds:
         lat = cf_variable(ds, "latitude", "Y", where, ("latitude", "lat"))
         lon = cf_variable(ds, "longitude", "X", where, ("longitude", "lon"))
         var = _variable(ds, variable, where)
@@ -219,13 +213,7 @@ def grid_shape(path: str | Path, variable: str | None = None) -> tuple[tuple[int
                 return (src.height, src.width), "band 1"
         except (OSError, rasterio.errors.RasterioIOError) as exc:
             raise ConfigError(f"{where}: not a readable GeoTIFF ({exc})") from None
-    import xarray as xr
-
-    try:
-        ds = xr.open_dataset(p, engine="netcdf4")
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
-    with ds:
+    with open_netcdf(p) as ds:
         var = _variable(ds, variable, where)
         return tuple(int(k) for k in var.shape), str(var.name)
 

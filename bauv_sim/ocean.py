@@ -173,6 +173,23 @@ def write_current_grid(grid: CurrentGrid, path: str | Path, start: dt.datetime) 
     ds.to_netcdf(path, engine="netcdf4", encoding={"time": {"units": units, "dtype": "float64"}})
 
 
+def open_netcdf(path: str | Path, decode_times: bool = True):
+    """Open a netCDF file with xarray's netCDF4 engine (lazily: nothing read but the header).
+
+    Raises:
+        ConfigError: the file is missing or not a readable netCDF file (one line naming it).
+    """
+    import xarray as xr
+
+    where = str(path)
+    if not Path(path).is_file():
+        raise ConfigError(f"{where}: no such file")
+    try:
+        return xr.open_dataset(path, engine="netcdf4", decode_times=decode_times)
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
+
+
 def cf_variable(ds, standard_name: str, axis: str | None, where: str, names: tuple[str, ...] = ()):
     """The variable of an xarray dataset with a CF ``standard_name`` (or ``axis`` attribute),
     else the first of ``names`` the dataset has.
@@ -210,16 +227,8 @@ def read_current_grid(path: str | Path, start: dt.datetime | None = None) -> Cur
             velocity has NaN or missing cells, or the grid is larger than
             :data:`MAX_GRID_BYTES`.
     """
-    import xarray as xr
-
     where = str(path)
-    if not Path(path).is_file():
-        raise ConfigError(f"{where}: no such file")
-    try:
-        ds = xr.open_dataset(path, engine="netcdf4", decode_times=True)
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
-    with ds:
+    with open_netcdf(path) as ds:
         time = cf_variable(ds, "time", "T", where)
         depth = cf_variable(ds, "depth", "Z", where)
         lat = cf_variable(ds, "latitude", "Y", where)
@@ -450,14 +459,6 @@ def current_grid_cells(path: str | Path) -> int:
         ConfigError: the file is missing or unreadable, or has no eastward velocity (one line
             naming the file).
     """
-    import xarray as xr
-
     where = str(path)
-    if not Path(path).is_file():
-        raise ConfigError(f"{where}: no such file")
-    try:
-        ds = xr.open_dataset(path, engine="netcdf4", decode_times=False)
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{where}: not a readable netCDF file ({exc})") from None
-    with ds:
+    with open_netcdf(path, decode_times=False) as ds:
         return math.prod(cf_variable(ds, STANDARD_NAMES["u"], None, where).shape)

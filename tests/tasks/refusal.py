@@ -21,3 +21,16 @@ def assert_refused(tmp_path: Path, name: str, *args: str, pattern: str) -> None:
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and pattern in lines[0] and "Traceback" not in res.stderr, lines
     assert not out.exists()
+
+
+def run_in_process(capsys, *args: str) -> tuple[int, str]:
+    """``bauv ARGS`` in this process (pytest's ``capsys`` captures it): (exit status, stderr)."""
+    from tasks.core import cli
+
+    capsys.readouterr()
+    try:
+        cli.main(list(args))
+        code = 0
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err

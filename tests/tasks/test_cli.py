@@ -7,6 +7,7 @@ import sys
 import pytest
 
 from tasks.core import cli
+from tests.tasks.refusal import run_in_process
 
 
 def bauv(*args, cwd=None):
@@ -88,17 +89,6 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     assert not _servers(v.web_port)
 
 
-def _main(capsys, *args):
-    """``bauv ARGS`` in this process: (exit status, stderr)."""
-    capsys.readouterr()
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code
-    return code, capsys.readouterr().err
-
-
 @pytest.mark.parametrize(
     ("args", "pattern"),
     [
@@ -119,11 +109,13 @@ def test_executor_options_are_checked_before_the_folder_is_written(
         pytest.importorskip("distributed")
     monkeypatch.setattr(executors, "DASK_CONNECT_TIMEOUT_S", 1.0)
     out = tmp_path / "out"
-    code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out), *args)
+    code, err = run_in_process(
+        capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out), *args
+    )
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and pattern in lines[0], err
     assert not out.exists()
-    code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out))
+    code, err = run_in_process(capsys, "run", "paper-000/accuracy", "--quiet", "--out", str(out))
     assert code == 0, err
 
 
@@ -170,7 +162,7 @@ def test_an_out_folder_that_cannot_be_written_is_one_line(
         monkeypatch.setattr(run_folder, "atomic_write_bytes", write)
     monkeypatch.chdir(tmp_path)
     before = sorted(p.name for p in tmp_path.iterdir())
-    code, err = _main(capsys, "run", "paper-000/accuracy", "--quiet", "--out", where)
+    code, err = run_in_process(capsys, "run", "paper-000/accuracy", "--quiet", "--out", where)
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and pattern in lines[0], err
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing left behind
@@ -185,16 +177,18 @@ def test_a_disk_full_during_the_batch_keeps_the_saved_blocks(tmp_path, capsys, m
     args += [f"--set={s}" for s in ["runner.block_size=5", "passage.duration_s=100"]]
     args += ["--set=passage.closest_approach_time_s=50", "--set=report.figures=false"]
     args += ["--set=report.recording=false"]
-    code, err = _main(capsys, "run", *args, "--out", str(tmp_path / "straight"))
+    code, err = run_in_process(capsys, "run", *args, "--out", str(tmp_path / "straight"))
     assert code == 0, err
     monkeypatch.setattr(run_folder, "atomic_write_bytes", _no_space(("block-000001",)))
     out = tmp_path / "full"
-    code, err = _main(capsys, "run", *args, "--out", str(out))
+    code, err = run_in_process(capsys, "run", *args, "--out", str(out))
     lines = err.strip().splitlines()
     assert code == 1 and len(lines) == 1, err
     assert "cannot write block 1 (No space left on device); 1 of 2 blocks are saved" in lines[0]
     monkeypatch.undo()
-    code, err = _main(capsys, "run", "paper-000/test-1", "--quiet", "--resume", "--out", str(out))
+    code, err = run_in_process(
+        capsys, "run", "paper-000/test-1", "--quiet", "--resume", "--out", str(out)
+    )
     assert code == 0, err
     metrics = (out / "metrics.json").read_bytes()
     assert metrics == (tmp_path / "straight" / "metrics.json").read_bytes()
@@ -204,7 +198,9 @@ def test_a_scenario_file_that_is_not_utf8_is_one_line(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_bytes(b'[passage]\nname = "\xff\xfe"\n')
     out = tmp_path / "out"
-    code, err = _main(capsys, "run", "paper-000/test-1", "--out", str(out), "--scenario", str(bad))
+    code, err = run_in_process(
+        capsys, "run", "paper-000/test-1", "--out", str(out), "--scenario", str(bad)
+    )
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1, err
     assert "bad.toml': not UTF-8 text (byte 0xff at offset 18)" in lines[0]
@@ -252,7 +248,7 @@ def test_a_batch_too_big_for_memory_is_refused_before_work_starts(
     for exp in registry.all_experiments():
         monkeypatch.setattr(type(exp), "run_block", never)
     out = tmp_path / "out"
-    code, err = _main(capsys, "run", name, "--quiet", "--out", str(out), *args)
+    code, err = run_in_process(capsys, "run", name, "--quiet", "--out", str(out), *args)
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and pattern in lines[0], err
     memory = any(f in pattern for f in ("duration_s = 1e+12", "tick_s", "histogram"))
@@ -316,7 +312,7 @@ def test_the_memory_estimate_follows_the_measured_peak():
 )
 def test_accepted_but_absurd_input_is_refused(name, override, pattern, tmp_path, capsys):
     out = tmp_path / "out"
-    code, err = _main(capsys, "run", name, "--quiet", "--out", str(out), "--set", override)
+    code, err = run_in_process(capsys, "run", name, "--quiet", "--out", str(out), "--set", override)
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and pattern in lines[0], err
     assert not out.exists()

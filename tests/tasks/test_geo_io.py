@@ -12,8 +12,9 @@ from pyproj import Geod
 
 from bauv_sim.config import load_config, to_plain
 from bauv_sim.errors import ConfigError
-from tasks.core import cli, registry
+from tasks.core import registry
 from tests.bauv_sim.test_geo import vincenty_inverse
+from tests.tasks.refusal import run_in_process
 
 LAT0, LON0 = 43.05, 5.95
 GEO = {"geo": {"latitude_deg": LAT0, "longitude_deg": LON0}}
@@ -236,26 +237,15 @@ def test_bad_waypoint_files_name_the_file_row_and_column(tmp_path, name, text, m
     assert message in str(exc.value) and "\n" not in str(exc.value)
 
 
-def _main(capsys, *args):
-    """``bauv ARGS`` in this process: (exit status, stderr)."""
-    capsys.readouterr()
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code
-    return code, capsys.readouterr().err
-
-
 def test_cli_refuses_with_exit_2_one_line_and_nothing_written(tmp_path, capsys):
     out = tmp_path / "out"
     missing = tmp_path / "none.csv"
     wp = f"guidance.waypoints_file={json.dumps(str(missing))}"
-    code, err = _main(capsys, "run", "mission/survey", "--out", str(out), "--set", wp)
+    code, err = run_in_process(capsys, "run", "mission/survey", "--out", str(out), "--set", wp)
     assert code == 2, err
     assert f"guidance.waypoints_file = {str(missing)!r}: not found" in err
     assert len(err.strip().splitlines()) == 1 and not out.exists()
-    code, err = _main(
+    code, err = run_in_process(
         capsys, "run", "mission/short", "--out", str(out), "--set", "start.latitude_deg=43.0"
     )
     assert code == 2 and "start.latitude_deg = 43.0: needs start.longitude_deg" in err
@@ -294,7 +284,7 @@ def test_a_mission_given_in_latitude_longitude_flies_as_the_same_one_in_east_nor
     tx = lat_lon(3.0, -4.0)
     common = ["--runs", "1", "--quiet", "--set", "report.recording=false"]
     common += ["--set", "report.figures=false"]
-    code, err = _main(
+    code, err = run_in_process(
         capsys,
         "run",
         "mission/short",
@@ -320,7 +310,7 @@ def test_a_mission_given_in_latitude_longitude_flies_as_the_same_one_in_east_nor
             }
         )
     )
-    code, err = _main(
+    code, err = run_in_process(
         capsys,
         "run",
         "mission/short",

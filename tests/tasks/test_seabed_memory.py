@@ -10,17 +10,8 @@ import pytest
 from bauv_sim import seabed
 from bauv_sim.config import load_config
 from bauv_sim.errors import ConfigError
-from tasks.core import cli, registry
-
-
-def _main(capsys, *args):
-    capsys.readouterr()
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code
-    return code, capsys.readouterr().err
+from tasks.core import registry
+from tests.tasks.refusal import run_in_process
 
 
 def _no_grid(*_a, **_k):
@@ -94,7 +85,7 @@ def test_a_seabed_too_big_is_one_line_before_anything_is_allocated(
         monkeypatch.setattr(type(exp), "run_block", _no_grid)
     out = tmp_path / "out"
     sets = [a for o in overrides for a in ("--set", o)]
-    code, err = _main(capsys, "run", name, "--quiet", "--out", str(out), *sets)
+    code, err = run_in_process(capsys, "run", name, "--quiet", "--out", str(out), *sets)
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and pattern in lines[0], err
     assert not out.exists()
