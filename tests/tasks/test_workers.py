@@ -78,8 +78,12 @@ def test_local_workers_keep_freed_memory(tmp_path):
         for fut in calls:  # in submission order, which is each process's order too
             pid, counts = fut.result(timeout=120)
             per_process.setdefault(pid, []).extend(counts)
+    # the workers may back the arrays with transparent huge pages (numpy's madvise, decided when
+    # the pool's process imported numpy): the first round then faults at least once per 2 MiB
+    # page of the arrays (about 25), not once per 4 KiB page (about 12,700)
+    first_min = sum(SIZES) * 8 // (2 * 1024**2)
     for counts in per_process.values():
-        assert counts[0] > 2000 and max(counts[1:]) < 0.01 * counts[0], per_process
+        assert counts[0] >= first_min and max(counts[1:]) < 0.01 * counts[0], per_process
 
 
 def pid_and_faults() -> tuple[int, list[int]]:
