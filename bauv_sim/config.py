@@ -431,27 +431,56 @@ def read_toml(path: str | Path) -> dict[str, Any]:
             than :data:`MAX_TOML_BYTES`, or too deep, long or large to be a scenario
             (:func:`check_structure`).
     """
-    p = Path(path)
-    source = f"scenario file {str(p)!r}"
+    source = f"scenario file {str(Path(path))!r}"
+    text = read_text_file(
+        path,
+        MAX_TOML_BYTES,
+        source,
+        too_large=", the most a scenario file may hold",
+        not_utf8="; TOML files are UTF-8",
+    )
+    return loads_toml(text, source)
+
+
+def read_text_file(
+    path: str | Path,
+    max_bytes: int,
+    source: str,
+    *,
+    encoding: str = "utf-8",
+    too_large: str = "",
+    not_utf8: str = "",
+) -> str:
+    """A user's text file, read whole but never beyond ``max_bytes`` (a hostile file is refused
+    before it is held).
+
+    Args:
+        path: the file.
+        max_bytes: the most it may hold, bytes.
+        source: how messages name it (e.g. ``"scenario file 'x.toml'"``).
+        encoding: ``"utf-8"``, or ``"utf-8-sig"`` to drop a byte-order mark.
+        too_large, not_utf8: what the messages add after their own words.
+
+    Raises:
+        ConfigError: one line naming ``source``: not found, unreadable, larger than
+            ``max_bytes``, or not UTF-8 (the byte and its offset).
+    """
     try:
-        with p.open("rb") as fh:
-            raw = fh.read(MAX_TOML_BYTES + 1)
+        with Path(path).open("rb") as fh:
+            raw = fh.read(max_bytes + 1)
     except FileNotFoundError:
         raise ConfigError(f"{source}: not found") from None
     except OSError as exc:
         raise ConfigError(f"{source}: cannot read it ({exc.strerror})") from None
-    if len(raw) > MAX_TOML_BYTES:
-        raise ConfigError(
-            f"{source}: larger than {MAX_TOML_BYTES} bytes, the most a scenario file may hold"
-        )
+    if len(raw) > max_bytes:
+        raise ConfigError(f"{source}: larger than {max_bytes} bytes{too_large}")
     try:
-        text = raw.decode("utf-8")
+        return raw.decode(encoding)
     except UnicodeDecodeError as exc:
         raise ConfigError(
             f"{source}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
-            f"{exc.start}); TOML files are UTF-8"
+            f"{exc.start}){not_utf8}"
         ) from None
-    return loads_toml(text, source)
 
 
 def validate(model: type[C], data: Mapping[str, Any], what: str = "scenario") -> C:

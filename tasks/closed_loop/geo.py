@@ -52,7 +52,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from bauv_sim.config import MAX_ARRAY_ITEMS, MAX_TOML_BYTES
+from bauv_sim.config import MAX_ARRAY_ITEMS, MAX_TOML_BYTES, read_text_file
 from bauv_sim.geo import GeoOriginConfig, LocalFrame
 
 GEO = ("latitude_deg", "longitude_deg")
@@ -245,19 +245,7 @@ def read_waypoints_file(path: Any) -> list[dict[str, Any]]:
     suffix = p.suffix.lower()
     if suffix not in (".csv", ".geojson", ".json"):
         raise ValueError(f"{field}: the file's extension must be .csv, .geojson or .json")
-    try:
-        with p.open("rb") as fh:
-            raw = fh.read(MAX_WAYPOINTS_FILE_BYTES + 1)
-    except FileNotFoundError:
-        raise ValueError(f"{field}: not found") from None
-    except OSError as exc:
-        raise ValueError(f"{field}: cannot read it ({exc.strerror})") from None
-    if len(raw) > MAX_WAYPOINTS_FILE_BYTES:
-        raise ValueError(f"{field}: larger than {MAX_WAYPOINTS_FILE_BYTES} bytes")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{field}: not UTF-8 text (byte offset {exc.start})") from None
+    text = read_text_file(p, MAX_WAYPOINTS_FILE_BYTES, field, encoding="utf-8-sig")
     rows = _read_csv(text, field) if suffix == ".csv" else _read_geojson(text, field)
     if not rows:
         raise ValueError(f"{field}: holds no way-point (at least 1 needed)")
