@@ -25,7 +25,7 @@ from nav.metrics import nees_band
 from tasks.coop.run import LOSS_CAUSES, curve_ticks
 from tasks.coop.scenario import CLOCKED, LABELS, LEADER_ONLY, CoopScenario
 from tasks.core.registry import ReportContext, ReportSummary
-from tasks.core.report import Table, write_metrics, write_tables
+from tasks.core.report import Table, pool_blocks, write_metrics, write_tables
 
 Array = NDArray[np.float64]
 
@@ -111,14 +111,7 @@ class Pooled:
     @classmethod
     def of(cls, blocks: Iterator[dict[str, Array]]) -> Pooled:
         """Sum the pooled arrays and stack the per-run ones, one block at a time."""
-        sums: dict[str, Array] = {}
-        cat: dict[str, list[Array]] = {k: [] for k in PER_RUN}
-        for block in blocks:
-            for key in SUMMED:
-                sums[key] = block[key].copy() if key not in sums else sums[key] + block[key]
-            for key in PER_RUN:
-                cat[key].append(block[key])
-        return cls(**sums, **{key: np.concatenate(v) for key, v in cat.items()})
+        return cls(**pool_blocks(blocks, SUMMED, PER_RUN))
 
 
 def _se(a: Array) -> float:

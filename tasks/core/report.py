@@ -12,15 +12,44 @@ import io
 import json
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from pydantic import BaseModel
 
 from tasks.core.run_folder import atomic_write_text
 
 Cell = str | float | int | None
+
+
+def pool_blocks(
+    blocks: Iterable[Mapping[str, Any]], summed: Sequence[str], per_run: Sequence[str]
+) -> dict[str, Any]:
+    """Reduce a batch's blocks one at a time: the ``summed`` arrays added up (a block's own
+    arrays are not kept, so memory grows with the runs' per-run arrays only), the ``per_run``
+    arrays concatenated along their first (run) axis.
+
+    Args:
+        blocks: each block's arrays by name (numpy arrays; a summed one of the same shape in every
+            block).
+        summed: names of the arrays to add up.
+        per_run: names of the arrays to stack.
+
+    Returns:
+        Every name of ``summed`` and ``per_run`` with its pooled array.
+    """
+    import numpy as np
+
+    sums: dict[str, Any] = {}
+    cat: dict[str, list[Any]] = {k: [] for k in per_run}
+    for block in blocks:
+        for k in summed:
+            sums[k] = block[k].copy() if k not in sums else sums[k] + block[k]
+        for k in per_run:
+            cat[k].append(block[k])
+    return {**sums, **{k: np.concatenate(v) for k, v in cat.items()}}
 
 
 @dataclass(frozen=True)

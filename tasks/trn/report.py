@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, Field
 
 from tasks.core.registry import ReportContext, ReportSummary
-from tasks.core.report import Table, write_metrics, write_tables
+from tasks.core.report import Table, pool_blocks, write_metrics, write_tables
 from tasks.trn.run import METHODS, runs, update_times
 from tasks.trn.scenario import TrnReliefScenario
 
@@ -104,14 +104,7 @@ class Pooled:
     def of(cls, blocks: Iterator[dict[str, Array]]) -> Pooled:
         """Sum the per-update arrays and stack the per-run ones, one block at a time (the
         per-update arrays of a block are not kept: memory grows with the runs' scalars only)."""
-        sums: dict[str, Array] = {}
-        cat: dict[str, list[Array]] = {k: [] for k in PER_RUN}
-        for block in blocks:
-            for k in SUMMED:
-                sums[k] = block[k].copy() if k not in sums else sums[k] + block[k]
-            for k in PER_RUN:
-                cat[k].append(block[k])
-        return cls(**sums, **{k: np.concatenate(v) for k, v in cat.items()})
+        return cls(**pool_blocks(blocks, SUMMED, PER_RUN))
 
 
 SUMMED = ("sq_err_sum", "count", "pcrb_sum")
