@@ -231,24 +231,34 @@ def export_runs(
     out_dir: Path,
     name: str,
     runs: list[MissionRun],
-    suffix: str = "",
+    variant: str | None = None,
     frame: LocalFrame | None = None,
     points: Sequence[tuple[str, float, float]] = (),
 ) -> list[str]:
-    """Write every run's data as Parquet: ``data/run-NNNNNN<suffix>/<vehicle>.ticks.parquet``
-    (the per-tick columns) and ``<vehicle>.<device>.parquet`` (the fixes of each device).
+    """Write every run's data as Parquet, one folder per table:
+    ``data/ticks/run-NNNNNN[-<variant>]-<vehicle>.parquet`` (the per-tick columns) and
+    ``data/<device>/run-...-<vehicle>.parquet`` (the fixes of each device: ``usbl``, ``gps``,
+    ``modem``, ``network``), so that each folder reads as one dataset
+    (:func:`tasks.core.export.open_dataset`, ``pyarrow.dataset.dataset``).
+
+    Each table starts with the key columns ``run`` (int32), ``vehicle`` and, with a variant,
+    ``variant`` (labelled) (:func:`tasks.core.export.key_columns`); angles are written in degrees
+    with ``_deg`` in their names (:func:`tasks.core.export.data_columns`); enum columns as their
+    labels.
 
     With the scene's geographic frame, every position column of those tables gets its WGS 84
-    latitude/longitude companion (``<name>_geo``, deg; the GPS fixes ``latitude``/``longitude``:
-    :func:`tasks.core.geojson.with_geographic`), and each vehicle's tracks (the truth and every
-    estimate), way-points and ``points`` are written as GeoJSON, ``<vehicle>.tracks.geojson``
-    (:func:`tasks.core.geojson.write_tracks_geojson`). Without one the files are as before.
+    latitude/longitude companion (``<name>_geo_deg``; the GPS fixes ``latitude_deg``/
+    ``longitude_deg``: :func:`tasks.core.geojson.with_geographic`), and each vehicle's tracks
+    (the truth and every estimate), way-points and ``points`` are written as GeoJSON,
+    ``data/tracks/run-NNNNNN[-<variant>]-<vehicle>.geojson``
+    (:func:`tasks.core.geojson.write_tracks_geojson`). Without one there are no GeoJSON files.
 
     Args:
         out_dir: the report's folder.
         name: the experiment's name (in the files' metadata).
         runs: the runs.
-        suffix: added to each run's folder name (a mission flying several variants per run).
+        variant: the variant flown (a mission flying several per run: ``compensated``,
+            ``ga1``, ...), in the files' names and the ``variant`` column; ``None`` for none.
         frame: the scene's frame on the Earth (``scenario.frame()``), or ``None``.
         points: named positions of the scene for the GeoJSON, ``(name, east m, north m)`` (the
             USBL transceiver).
@@ -256,8 +266,14 @@ def export_runs(
     Returns:
         The files written, relative to ``out_dir``.
     """
-    from tasks.core.export import write_parquet
+    from tasks.core.export import data_columns, data_file, key_columns, write_parquet
     from tasks.core.geojson import with_geographic, write_tracks_geojson
+
+    def table(cols: dict, run: int, vehicle: str) -> dict:
+        n = len(next(iter(cols.values())).values) if cols else 0
+        if frame is not None:
+            cols = with_geographic(cols, frame)
+        return {**key_columns(n, run, vehicle, variant), **data_columns(cols)}
 
     files = []
     for r in runs:
@@ -266,31 +282,27 @@ def export_runs(
                 "experiment": name,
                 "seed": str(r.seed),
                 "run": str(r.run),
+                "variant": variant or "",
                 "vehicle": v.name,
                 "failed": r.failed or "",
             }
-            folder = Path("data") / f"run-{r.run:06d}{suffix}"
-            rel = folder / f"{v.name}.ticks.parquet"
-            ticks = v.ticks if frame is None else with_geographic(v.ticks, frame)
-            write_parquet(out_dir / rel, ticks, {**meta, "table": "ticks"})
-            files.append(str(rel))
-            for device, cols in v.fixes.items():
-                rel = folder / f"{v.name}.{device}.parquet"
-                if frame is not None:
-                    cols = with_geographic(cols, frame)
-                write_parquet(out_dir / rel, cols, {**meta, "table": device})
-                files.append(str(rel))
+            for kind, cols in {"ticks": v.ticks, **v.fixes}.items():
+                if not cols:
+                    continue
+                rel = data_file(kind, r.run, v.name, variant)
+                write_parquet(out_dir / rel, table(cols, r.run, v.name), {**meta, "table": kind})
+                files.append(rel.as_posix())
             if frame is not None and v.ticks:
-                rel = folder / f"{v.name}.tracks.geojson"
+                rel = data_file("tracks", r.run, v.name, variant)
                 props = {
                     "experiment": name,
                     "seed": r.seed,
                     "run": r.run,
-                    "variant": suffix.lstrip("-"),
+                    "variant": variant or "",
                     "vehicle": v.name,
                     "failed": r.failed or "",
                 }
                 wps = [(f"waypoint {w['index']}", w["east_m"], w["north_m"]) for w in v.waypoints]
                 write_tracks_geojson(out_dir / rel, v.ticks, frame, props, [*wps, *points])
-                files.append(str(rel))
+                files.append(rel.as_posix())
     return files

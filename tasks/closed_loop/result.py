@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tasks.closed_loop.scenario import MODES
 from tasks.core import store
 from tasks.core.export import Column
 
@@ -61,7 +62,7 @@ TICK_COLUMNS: Mapping[str, tuple[str, str, tuple[str, ...]]] = {
     "guidance_course": ("rad", "commanded course, clockwise from north", ()),
     "guidance_depth": ("m", "commanded depth", ()),
     "guidance_speed": ("m/s", "commanded speed through water", ()),
-    "guidance_mode": ("enum", "guidance mode: 0 transit, 1 ascend, 2 surface, 3 dive, 4 done", ()),
+    "guidance_mode": ("enum", "guidance mode (labelled: transit, ascend, surface, dive, done)", ()),
     "guidance_waypoint": ("index", "way-point being approached", ()),
     "usbl_event": ("bool", "a USBL fix reached the navigator at this tick", ()),
     "gps_event": ("bool", "a GPS fix reached the navigator at this tick", ()),
@@ -109,12 +110,28 @@ FIX_COLUMNS: Mapping[str, Mapping[str, tuple]] = {
         "centre_north": ("m", "north of the range circle's centre used", ()),
         "hdop": ("1", "HDOP of the fix (seed 003 eq. 7-8; 0 if not computed, capped at 100)", ()),
         "criterion": ("1", "V^T P V of the adjustment (GA) or the NIS (EKF); 0 otherwise", ()),
-        "refusal": ("enum", "0 accepted; why not (tasks.missions.swarm.REFUSAL_CODES)", ()),
+        "refusal": ("enum", "ok (accepted), else why not (labelled: REFUSAL_LABELS)", ()),
         "accepted": ("bool", "the range corrected the estimate", ()),
         "position": ("m", "the estimate after the range, world ENU (up = -depth)", ENU),
     },
 }
 """Columns of the fix tables, by device."""
+
+REFUSAL_LABELS = (
+    "ok",
+    "dr",
+    "no range",
+    "range below minimum",
+    "gate",
+    "no fix",
+    "no direction",
+    "degenerate",
+)
+"""Labels of the modem table's ``refusal`` codes (``tasks.missions.swarm.REFUSAL_CODES``)."""
+
+ENUM_LABELS: Mapping[str, tuple[str, ...]] = {"guidance_mode": MODES, "refusal": REFUSAL_LABELS}
+"""The labels of the integer enum columns (code ``i`` is ``labels[i]``), by column name: the
+files hold them as labelled (dictionary-encoded) columns."""
 
 
 @store.plain_data("closed_loop.VehicleRun")
@@ -203,7 +220,7 @@ class TickLog:
             v = np.asarray(self.rows[k][:n])
             if v.ndim == 3:
                 v = 0.5 * (v + np.swapaxes(v, 1, 2))
-            out[k] = Column(v, unit, desc, comps)
+            out[k] = Column(v, unit, desc, comps, labels=ENUM_LABELS.get(k, ()))
         if self.current:
             unit, desc, comps = CURRENT_COLUMN
             out["ekf_current"] = Column(np.asarray(self.current[:n]), unit, desc, comps)
@@ -229,7 +246,10 @@ def fix_columns(fixes) -> dict[str, dict[str, Column]]:
         }
         for j, name in enumerate(k for k in spec if k not in values):
             values[name] = z[:, j]
-        out[device] = {k: Column(values[k], *spec[k]) for k in spec}
+        for k in spec:
+            if k in ENUM_LABELS:  # codes carried as floats in the fix's measurement vector
+                values[k] = values[k].astype(np.int64)
+        out[device] = {k: Column(values[k], *spec[k], labels=ENUM_LABELS.get(k, ())) for k in spec}
     return out
 
 

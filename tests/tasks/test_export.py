@@ -13,6 +13,7 @@ from tasks.core.export import Column, ExportError, read_parquet, write_parquet
 
 T = 5
 XYZ = ("x", "y", "z")
+LABELS = ("transit", "ascend", "surface", "dive", "done")
 
 
 def _covariances():
@@ -43,6 +44,7 @@ def _columns():
         "fix_range": Column(
             np.array([np.nan, 10.5, np.nan, 12.25, 13.0]), "m", "USBL range", nullable=True
         ),
+        "phase": Column(np.array([3, 0, 0, 4, 3], dtype=np.int16), "enum", "mode", labels=LABELS),
     }
 
 
@@ -59,11 +61,12 @@ def test_round_trip_is_bit_exact_with_units(tmp_path):
     assert list(got) == list(cols)
     for name, col in cols.items():
         g = got[name]
-        assert (g.unit, g.description, g.components, g.nullable) == (
+        assert (g.unit, g.description, g.components, g.nullable, g.labels) == (
             col.unit,
             col.description,
             col.components,
             col.nullable,
+            col.labels,
         ), name
         assert g.values.dtype.str == col.values.dtype.str and g.values.shape == col.values.shape
         if col.nullable:
@@ -80,38 +83,42 @@ def test_any_parquet_reader_sees_the_fields_and_their_units(tmp_path):
     path = tmp_path / "ticks.parquet"
     write_parquet(path, cols, {"experiment": "x"})
     table = pq.read_table(path)
-    tri = ["P.x.x", "P.x.y", "P.x.z", "P.y.y", "P.y.z", "P.z.z"]
+    tri = ["P_x_x", "P_x_y", "P_x_z", "P_y_y", "P_y_z", "P_z_z"]
     assert table.schema.names == [
         "t",
-        "position.x",
-        "position.y",
-        "position.z",
+        "position_x",
+        "position_y",
+        "position_z",
         *tri,
-        "quat.w",
-        "quat.x",
-        "quat.y",
-        "quat.z",
+        "quat_w",
+        "quat_x",
+        "quat_y",
+        "quat_z",
         "usbl_event",
         "mode",
         "count",
         "label",
         "fix_range",
+        "phase",
     ]
     for f in table.schema:
         assert f.metadata[b"unit"] and b"description" in f.metadata, f.name
         assert f.nullable == (f.name == "fix_range"), f.name
-    assert table.schema.field("P.x.y").metadata[b"unit"] == b"m2"
-    assert table.schema.field("position.z").metadata[b"unit"] == b"m"
-    assert table.schema.field("quat.w").type == pa.float32()
+    assert table.schema.field("P_x_y").metadata[b"unit"] == b"m2"
+    assert table.schema.field("position_z").metadata[b"unit"] == b"m"
+    assert table.schema.field("quat_w").type == pa.float32()
     assert table.schema.field("usbl_event").type == pa.bool_()
     assert table.schema.field("count").type == pa.uint64()
     assert table.schema.metadata[b"experiment"] == b"x"
     p = cols["P"].values
     for name in tri:
-        i, j = (XYZ.index(c) for c in name.split(".")[1:])
+        i, j = (XYZ.index(c) for c in name.split("_")[1:])
         assert np.array_equal(table.column(name).to_numpy(), p[:, i, j])
     assert table.column("fix_range").null_count == 2
     assert table.column("label").to_pylist() == ["transit", "dive", "", "ü✓", "done"]
+    # a labelled column: its labels, dictionary-encoded (a pandas category)
+    assert table.schema.field("phase").type == pa.dictionary(pa.int32(), pa.string())
+    assert table.column("phase").to_pylist() == ["dive", "transit", "transit", "done", "dive"]
 
 
 def _refused(tmp_path, columns, fragment, metadata=None):
@@ -158,9 +165,15 @@ def test_nan_is_refused_unless_the_column_is_nullable(tmp_path):
         ({"": Column(np.zeros(3), "m", "")}, "column name ''"),
         ({"a": np.zeros(3)}, "not a Column"),
         (
-            {"a.b": Column(np.zeros(3), "m", ""), "a": Column(np.zeros((3, 1)), "m", "", ("b",))},
+            {"a_b": Column(np.zeros(3), "m", ""), "a": Column(np.zeros((3, 1)), "m", "", ("b",))},
             "occur twice",
         ),
+        ({"truth_pos.east": Column(np.zeros(3), "m", "")}, "holds a dot"),
+        ({"a": Column(np.zeros((3, 2)), "m", "", ("x.y", "z"))}, "component name holds a dot"),
+        ({"a": Column(np.zeros(3), "1", "", labels=("x", "x"))}, "repeat a name"),
+        ({"a": Column(np.zeros(3), "1", "", labels=("x",))}, "labels need integer codes"),
+        ({"a": Column(np.array([0, 2]), "1", "", labels=("x", "y"))}, "code 2 at row 1 has no"),
+        ({"a": Column(np.array([0, -1]), "1", "", labels=("x", "y"))}, "code -1 at row 1"),
     ],
 )
 def test_bad_columns_are_refused_before_anything_is_written(tmp_path, columns, fragment):

@@ -54,7 +54,7 @@ def folder(tmp_path_factory):
         cli.main(args + [a for s in sets for a in ("--set", s)])
     except SystemExit as exc:
         assert exc.code == 0
-    return out / "data" / "run-000000"
+    return out / "data"
 
 
 def read_features(path):
@@ -70,13 +70,13 @@ def read_features(path):
 
 
 def test_geojson_tracks_read_by_ogr_equal_the_parquet_latitude_longitude(folder):
-    ticks, _ = read_parquet(folder / "bauv.ticks.parquet")
-    feats = read_features(folder / "bauv.tracks.geojson")
+    ticks, _ = read_parquet(folder / "ticks" / "run-000000-bauv.parquet")
+    feats = read_features(folder / "tracks" / "run-000000-bauv.geojson")
     lines = {p["track"]: g for p, g in feats if g.geom_type == "LineString"}
     assert set(lines) == set(TRACKS)
     for name in TRACKS:
         xy = shapely.get_coordinates(lines[name])  # (lon, lat)
-        geo = ticks[f"{name}_geo"]
+        geo = ticks[f"{name}_geo_deg"]
         assert geo.unit == "deg" and geo.components == ("latitude", "longitude")
         assert "WGS 84" in geo.description
         assert xy.shape == (len(ticks["t"].values), 2)
@@ -103,27 +103,28 @@ def test_geojson_tracks_read_by_ogr_equal_the_parquet_latitude_longitude(folder)
 
 
 def test_gps_fixes_and_fix_positions_carry_latitude_longitude(folder):
-    gps, _ = read_parquet(folder / "bauv.gps.parquet")
+    gps, _ = read_parquet(folder / "gps" / "run-000000-bauv.parquet")
     assert len(gps["east"].values) >= 3
     lat, lon = geodesic_lat_lon(gps["east"].values, gps["north"].values)
-    assert gps["latitude"].unit == gps["longitude"].unit == "deg"
-    assert np.abs(gps["latitude"].values - lat).max() < 1e-10
-    assert np.abs(gps["longitude"].values - lon).max() < 1e-10
-    usbl, _ = read_parquet(folder / "bauv.usbl.parquet")
+    assert gps["latitude_deg"].unit == gps["longitude_deg"].unit == "deg"
+    assert np.abs(gps["latitude_deg"].values - lat).max() < 1e-10
+    assert np.abs(gps["longitude_deg"].values - lon).max() < 1e-10
+    usbl, _ = read_parquet(folder / "usbl" / "run-000000-bauv.parquet")
     lat, lon = geodesic_lat_lon(usbl["position"].values[:, 0], usbl["position"].values[:, 1])
-    assert np.abs(usbl["position_geo"].values - np.c_[lat, lon]).max() < 1e-10
+    assert np.abs(usbl["position_geo_deg"].values - np.c_[lat, lon]).max() < 1e-10
 
 
 def test_without_a_geo_origin_the_run_data_are_as_before(folder, tmp_path):
-    ticks, _ = read_parquet(folder / "bauv.ticks.parquet")
-    plain = {k: c for k, c in ticks.items() if not k.endswith("_geo")}
+    ticks, _ = read_parquet(folder / "ticks" / "run-000000-bauv.parquet")
+    keys = ("run", "vehicle")
+    plain = {k: c for k, c in ticks.items() if not k.endswith("_geo_deg") and k not in keys}
     run = MissionRun(0, 0, None, {"bauv": VehicleRun("bauv", plain)})
     files = export_runs(tmp_path, "x", [run])
-    assert files == ["data/run-000000/bauv.ticks.parquet"]
+    assert files == ["data/ticks/run-000000-bauv.parquet"]
     back, _ = read_parquet(tmp_path / files[0])
-    assert list(back) == list(plain)
+    assert list(back) == [*keys, *plain]
     files = export_runs(tmp_path / "geo", "x", [run], frame=LocalFrame(LAT0, LON0))
-    assert files[-1] == "data/run-000000/bauv.tracks.geojson"
+    assert files[-1] == "data/tracks/run-000000-bauv.geojson"
 
 
 def test_missing_positions_are_null_and_left_out_of_the_track(tmp_path):
@@ -138,11 +139,11 @@ def test_missing_positions_are_null_and_left_out_of_the_track(tmp_path):
     frame = LocalFrame(LAT0, LON0)
     run = MissionRun(0, 0, None, {"v": VehicleRun("v", ticks)})
     export_runs(tmp_path, "x", [run], frame=frame)
-    back, _ = read_parquet(tmp_path / "data/run-000000/v.ticks.parquet")
-    geo = back["track_geo"].values
+    back, _ = read_parquet(tmp_path / "data/ticks/run-000000-v.parquet")
+    geo = back["track_geo_deg"].values
     assert np.isnan(geo[2]).all() and np.isfinite(np.delete(geo, 2, axis=0)).all()
-    assert "shift_geo" not in back  # a displacement is no position
-    feats = read_features(tmp_path / "data/run-000000/v.tracks.geojson")
+    assert "shift_geo_deg" not in back  # a displacement is no position
+    feats = read_features(tmp_path / "data/tracks/run-000000-v.geojson")
     (props, line) = feats[0]
     assert props["n_points"] == 4 and len(feats) == 1
     lat, lon = geodesic_lat_lon(pos[[0, 1, 3, 4], 0], pos[[0, 1, 3, 4], 1])

@@ -295,18 +295,19 @@ def test_run_folder_is_complete(tmp_path):
         "paths-all.png",
         "distance-single.png",
         "recording.rrd",
-        "data/runs.parquet",
-        "data/run-000000.parquet",
+        "data/runs/runs.parquet",
+        "data/sample/run-000000.parquet",
     ]:
         assert (out / name).is_file(), name
     md = (out / "tables.md").read_text()
     assert "Table 2" in md and "23.71" in md  # the paper's values beside ours
     from tasks.core.export import read_parquet
 
-    cols, meta = read_parquet(out / "data" / "runs.parquet")
+    cols, meta = read_parquet(out / "data" / "runs" / "runs.parquet")
     assert meta["experiment"] == "paper-003/test-2" and len(cols["run"].values) == 5
-    cols, _ = read_parquet(out / "data" / "run-000000.parquet")
+    cols, _ = read_parquet(out / "data" / "sample" / "run-000000.parquet")
     assert cols["GA1"].values.shape == (4801, 2) and cols["t"].unit == "s"
+    assert set(cols["run"].values) == {0} and "GA1_distance" in cols
 
 
 def test_cli_runs_and_refuses_bad_input(tmp_path):

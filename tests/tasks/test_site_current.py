@@ -71,17 +71,17 @@ def test_correction_runs_under_a_time_varying_current_from_a_file(tmp_path):
     res = _bauv(tmp_path, "mission/correction", "--runs", "1", "--out", "out", *cur, *GEO)
     assert res.returncode == 0, res.stderr[-3000:]
     out = tmp_path / "out"
-    ticks = pq.read_table(out / "data/run-000000-compensated/bauv.ticks.parquet").to_pandas()
+    ticks = pq.read_table(out / "data/ticks/run-000000-compensated-bauv.parquet").to_pandas()
     t = ticks["t"].to_numpy()
-    pos = ticks[[f"truth_pos.{c}" for c in ("east", "north", "up")]].to_numpy()
-    true = ticks[[f"truth_current.{c}" for c in ("east", "north", "up")]].to_numpy()
+    pos = ticks[[f"truth_pos_{c}" for c in ("east", "north", "up")]].to_numpy()
+    true = ticks[[f"truth_current_{c}" for c in ("east", "north", "up")]].to_numpy()
     w = (t / RAMP_S)[:, None]
     want = (1.0 - w) * FIRST.velocity_world(0.0, pos) + w * LAST.velocity_world(0.0, pos)
     assert np.abs(true - want).max() < 1e-5  # measured 2.4e-6 m/s
     assert np.ptp(true[:, 0]) > 0.05  # the current changed along the track
     # the along-track table: legs 1-3, every tick; the estimate is CP2's (uniform response: the
     # same for every course, so leg 3's estimate is the one made when leg 2 closed)
-    est = ticks[["cp_current.east", "cp_current.north"]].to_numpy()
+    est = ticks[["cp_current_east", "cp_current_north"]].to_numpy()
     est = est[np.isfinite(est).all(axis=1)][0]
     err = np.linalg.norm(est - true[:, :2], axis=1)
     dev = np.linalg.norm(true[:, :2] - true[:, :2].mean(axis=0), axis=1)

@@ -231,7 +231,7 @@ def test_report_recording_and_warning_of_a_batch(tmp_path):
         assert np.allclose(r, r[0], atol=1e-3) and 7.0 < r[0] < 14.0  # about 10 m abeam
     th, hdop = read_time_series(rec, "hdop/f1", "Scalars:scalars")
     assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
-    assert (out / "data" / "run-000000-ga2" / "f1.modem.parquet").is_file()
+    assert (out / "data" / "modem" / "run-000000-ga2-f1.parquet").is_file()
 
 
 def _bauv_run(*args):
@@ -320,17 +320,21 @@ def test_a_diverged_estimate_is_named_and_fails_the_batch(tmp_path):
 
 
 def test_follower_columns_have_the_units_docs_run_data_states(compared):
-    """The columns a follower adds carry the units ``docs/run-data.md`` states for them, and the
-    leader's stated course labelled rad is a course in radians: in [0, 2 pi), and after the first
+    """The columns a follower adds carry, as written to the files (angles in degrees,
+    ``_deg`` names), the units ``docs/run-data.md`` states for them, and the leader's stated
+    course labelled rad inside is a course in radians: in [0, 2 pi), and after the first
     messages within 20 deg on average of the leader's true course over ground."""
+    from tasks.core.export import data_columns
     from tasks.missions.swarm import FOLLOWER_COLUMNS
 
     doc = prose_units("`mission/swarm`'s followers")
-    assert doc["leader_course"] == "rad" and doc["hdop"] == "1"  # the parse found them
+    assert doc["leader_course_deg"] == "deg" and doc["hdop"] == "1"  # the parse found them
     _, res = compared
     f, lead = res.flights["ga1"].vehicles["f1"], res.flights["ga1"].vehicles[LEADER]
-    for name in FOLLOWER_COLUMNS:
-        assert f.ticks[name].unit == doc[name], (name, f.ticks[name].unit, doc[name])
+    written = data_columns({name: f.ticks[name] for name in FOLLOWER_COLUMNS})
+    assert len(written) == len(FOLLOWER_COLUMNS)
+    for name, col in written.items():
+        assert col.unit == doc[name], (name, col.unit, doc[name])
     course = f["leader_course"]
     assert np.all((course >= 0) & (course < 2 * np.pi))
     v = lead["truth_vel"][:, :2]

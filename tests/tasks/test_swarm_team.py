@@ -277,7 +277,7 @@ def test_decentralised_flies_on_the_network_and_the_batch_reports_the_team(tmp_p
         m["runs"][0]["team"]["decentralised"]["central"]["f1"]
         == rows[("decentralised", "central", "f1")]
     )
-    assert (out / "data" / "run-000000-decentralised" / "f2.network.parquet").is_file()
+    assert (out / "data" / "network" / "run-000000-decentralised-f2.parquet").is_file()
     for f in ("f1", "f2"):
         got = m["runs"][0]["metrics"]["decentralised"][f]
         assert got["fixes_accepted"] >= 8  # 2 senders x 5 cycles, the last may be cut

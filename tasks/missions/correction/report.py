@@ -86,7 +86,7 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
     files = [write_metrics(ctx.out_dir, metrics)]
     for law in ("compensated", "direct"):
         files += export_runs(
-            ctx.out_dir, exp.name, [r.flights[law] for r in runs], f"-{law}", frame=scn.frame()
+            ctx.out_dir, exp.name, [r.flights[law] for r in runs], law, frame=scn.frame()
         )
     p = scn.correction.procedure.upper()
     t1 = Table(

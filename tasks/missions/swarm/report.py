@@ -234,7 +234,7 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
     files = [write_metrics(ctx.out_dir, metrics)]
     for m in methods:
         files += export_runs(
-            ctx.out_dir, exp.name, [r.flights[m] for r in runs], f"-{m}", frame=scn.frame()
+            ctx.out_dir, exp.name, [r.flights[m] for r in runs], m, frame=scn.frame()
         )
     cur = scn.current
     cur_text = (
