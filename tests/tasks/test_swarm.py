@@ -13,7 +13,7 @@ import pytest
 from tasks.closed_loop.world import build_environment, fly
 from tasks.core.recording import read_time_series
 from tasks.core.runner import plan_batch, run
-from tasks.missions.swarm import LEADER, SwarmMission, fly_run
+from tasks.missions.swarm import LEADER, REFUSAL_CODES, SwarmMission, fly_run
 
 from .run_data_doc import prose_units
 
@@ -232,6 +232,17 @@ def test_report_recording_and_warning_of_a_batch(tmp_path):
     th, hdop = read_time_series(rec, "hdop/f1", "Scalars:scalars")
     assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
     assert (out / "data" / "modem" / "run-000000-ga2-f1.parquet").is_file()
+    # the batch's ticks as one table: every method and vehicle, the followers' own columns
+    # null in the leader's rows, the leader's EKF current null in the followers'
+    from tasks.core.export import open_dataset
+
+    t = open_dataset(out, "ticks").to_pandas()
+    assert set(t["variant"]) == {"ga2", "dr"} and set(t["vehicle"]) == {LEADER, "f1", "f2"}
+    lead = t["vehicle"] == LEADER
+    assert t.loc[lead, "hdop"].isna().all() and t.loc[~lead, "hdop"].notna().all()
+    if "ekf_current_east" in t:
+        assert t.loc[~lead, "ekf_current_east"].isna().all()
+    assert set(open_dataset(out, "modem")["refusal"].to_pylist()) <= set(REFUSAL_CODES)
 
 
 def _bauv_run(*args):
@@ -367,3 +378,11 @@ def test_modem_table_centre_is_the_leaders_position(compared):
     centre = np.column_stack([fx["centre_east"].values, fx["centre_north"].values])
     assert len(centre) >= 10 and np.abs(truth[:, 1] - truth[:, 0]).mean() > 10.0
     assert np.abs(centre - truth).max() < 1.0
+
+
+def test_the_modem_tables_refusal_labels_are_the_codes_names():
+    """The labels the modem table's ``refusal`` is written with name the codes the followers
+    record (``REFUSAL_CODES``: name -> code), in code order."""
+    from tasks.closed_loop.result import ENUM_LABELS
+
+    assert {name: i for i, name in enumerate(ENUM_LABELS["refusal"])} == REFUSAL_CODES
