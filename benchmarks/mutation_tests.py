@@ -187,7 +187,11 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_paper000.py",
     ),
     # tasks: the run data (Parquet) and the reports
-    "tasks/core/export.py": ("tests/tasks/test_export.py", "tests/tasks/test_run_data.py"),
+    "tasks/core/export.py": (
+        "tests/tasks/test_export.py",
+        "tests/tasks/test_run_data.py",
+        "tests/tasks/test_run_dataset.py",
+    ),
     "tasks/closed_loop/result.py": (
         "tests/tasks/test_run_data.py",
         "tests/tasks/test_export.py",
@@ -501,9 +505,27 @@ OWN: list[Mutation] = [
         "own",
         "transpose",
         "tasks/core/export.py",
-        '(f"{name}.{comps[i]}.{comps[j]}", (i, j), v[:, i, j])',
-        '(f"{name}.{comps[j]}.{comps[i]}", (i, j), v[:, i, j])',
-        "a covariance's upper-triangle fields named <col>.<row>",
+        '(f"{name}_{comps[i]}_{comps[j]}", (i, j), v[:, i, j])',
+        '(f"{name}_{comps[j]}_{comps[i]}", (i, j), v[:, i, j])',
+        "a covariance's upper-triangle fields named <col>_<row>",
+    ),
+    Mutation(
+        "export-angles-not-converted-to-degrees",
+        "own",
+        "unit",
+        "tasks/core/export.py",
+        'deg = np.degrees(col.values) if col.values.dtype.kind == "f" else col.values',
+        "deg = col.values",
+        "run data's angle columns named and labelled deg but holding radians",
+    ),
+    Mutation(
+        "export-run-key-off-by-one",
+        "own",
+        "index",
+        "tasks/core/export.py",
+        '"run": Column(np.full(n, run, dtype=np.int32), "index", "run index of the batch"),',
+        '"run": Column(np.full(n, run + 1, dtype=np.int32), "index", "run index of the batch"),',
+        "the run key of a batch's rows shifted by one run",
     ),
     Mutation(
         "seed003-dr-covariance-sin-cos-swapped",
