@@ -459,6 +459,13 @@ def open_dataset(run_folder: str | Path, table: str) -> pa.Table:
     """
     import pyarrow.dataset as ds
 
+    if not isinstance(run_folder, str | os.PathLike):
+        raise ExportError(
+            f"run_folder = {run_folder!r} ({type(run_folder).__name__}): must be the path of a "
+            "run folder (str or Path)"
+        )
+    if type(table) is not str or not table.isidentifier():
+        raise ExportError(f"table = {table!r}: must be a table's name (ticks, usbl, gps, ...)")
     root = Path(run_folder)
     data = root if root.name == "data" and not (root / "data").is_dir() else root / "data"
     if not data.is_dir():

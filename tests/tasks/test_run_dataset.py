@@ -145,3 +145,18 @@ def test_the_old_layout_is_named_and_its_files_still_read(tmp_path):
     assert "read_parquet" in msg
     cols, meta = read_parquet(old)
     assert cols["pos"].values.tolist() == [[1.0, 2.0], [2.0, 3.0]] and meta == {"run": "0"}
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        ((None, "ticks"), "run_folder = None (NoneType): must be the path of a run folder"),
+        (("{tmp}", "../ticks"), "table = '../ticks': must be a table's name"),
+        (("{tmp}/nowhere", "ticks"), "no data folder"),
+    ],
+)
+def test_open_dataset_refuses_bad_arguments_in_one_line(tmp_path, args, fragment):
+    folder = args[0].format(tmp=tmp_path) if isinstance(args[0], str) else args[0]
+    with pytest.raises(ExportError) as exc:
+        open_dataset(folder, args[1])
+    assert fragment in str(exc.value) and "\n" not in str(exc.value)
