@@ -6,9 +6,10 @@ their east/north columns and gain, for each **position column** (unit ``m``, com
 ``east, north``, and not a displacement: its description does not say "displacement"), a column
 ``<name>_geo`` with components ``latitude, longitude`` (unit ``deg``, WGS 84), and a table with
 scalar ``east``/``north`` columns (the GPS fixes) gains ``latitude``/``longitude``
-(:func:`with_geographic`). The conversion is the frame's inverse azimuthal equidistant
-projection (PROJ, on the WGS 84 ellipsoid); a missing position (NaN in a nullable column) has a
-missing latitude and longitude.
+(:func:`with_geographic`); the files name them ``<name>_geo_deg``, ``latitude_deg``,
+``longitude_deg`` (:func:`tasks.core.export.data_columns`). The conversion is the frame's inverse
+azimuthal equidistant projection (PROJ, on the WGS 84 ellipsoid); a missing position (NaN in a
+nullable column) has a missing latitude and longitude.
 
 :func:`write_tracks_geojson` writes one FeatureCollection: a LineString per position column of
 a tick table (the truth and every estimate; one vertex per tick, ``[longitude, latitude]`` in
