@@ -18,14 +18,15 @@ __getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)
 
 # the looks of the methods its report draws (tasks.core.style), the same as the missions'
 from tasks.core.style import PALETTE as _P  # noqa: E402
-from tasks.core.style import MethodStyle, declare  # noqa: E402
+from tasks.core.style import MethodStyle as _Style  # noqa: E402
+from tasks.core.style import declare as _declare  # noqa: E402
 
-declare(
+_declare(
     __name__,
     {
-        "DR": MethodStyle(_P["vermillion"]),
-        "EKF": MethodStyle(_P["blue"]),
-        "USBL": MethodStyle(_P["bluish_green"], ls="none", marker="."),
-        "GPS": MethodStyle(_P["orange"], ls="none", marker="x"),
+        "DR": _Style(_P["vermillion"]),
+        "EKF": _Style(_P["blue"]),
+        "USBL": _Style(_P["bluish_green"], ls="none", marker="."),
+        "GPS": _Style(_P["orange"], ls="none", marker="x"),
     },
 )
