@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
-import tomllib
 
 from bauv_sim.bathymetry import write_netcdf
 from tests.bauv_sim.test_seabed_file import GEO, mujoco_seabed_z, site_grid
