@@ -43,6 +43,7 @@ def _one_line(exc: pytest.ExceptionInfo) -> str:
     return text
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("text", "pattern"),
     [

@@ -69,6 +69,7 @@ def read_features(path):
     return out
 
 
+@pytest.mark.slow
 def test_geojson_tracks_read_by_ogr_equal_the_parquet_latitude_longitude(folder):
     ticks, _ = read_parquet(folder / "bauv.ticks.parquet")
     feats = read_features(folder / "bauv.tracks.geojson")

@@ -29,6 +29,7 @@ def batch(tmp_path_factory):
     return out, flown
 
 
+@pytest.mark.slow
 def test_every_run_has_its_tables_and_every_field_a_unit(batch):
     out, _ = batch
     for r in range(2):
