@@ -109,3 +109,34 @@ def test_the_version_is_a_string():
 @pytest.mark.parametrize("package", ["bauv_sim", "nav", "tasks"])
 def test_each_top_level_package_is_marked_typed(package):
     assert (ROOT / package / "py.typed").is_file()
+
+
+def test_the_error_configs_declared_for_type_checkers_are_the_runtime_models():
+    """:mod:`bauv_sim.sensors.errors` builds its three error models with ``create_model`` and
+    spells them out for type checkers under ``TYPE_CHECKING``: the same fields, defaults and
+    types (``_Sector`` is the sector bias's four-tuple)."""
+    from bauv_sim.sensors import errors
+
+    tree = ast.parse((ROOT / "bauv_sim/sensors/errors.py").read_text())
+    block = next(
+        n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"
+    )
+    declared = {n.name: n for n in block.body if isinstance(n, ast.ClassDef)}
+    assert set(declared) == {"AngleErrorConfig", "LengthErrorConfig", "SpeedErrorConfig"}
+    base = set(errors._ErrorConfigBase.model_fields)
+    for name, cls in declared.items():
+        fields = {
+            n.target.id: (
+                ast.unparse(n.annotation).replace("_Sector", "tuple[float, float, float, float]"),
+                ast.literal_eval(n.value),
+            )
+            for n in cls.body
+            if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)
+        }
+        runtime = getattr(errors, name).model_fields
+        assert set(fields) == set(runtime) - base, name
+        for field, (annotation, default) in fields.items():
+            assert default == runtime[field].default, (name, field)
+            assert annotation == str(runtime[field].annotation).replace(
+                "<class 'float'>", "float"
+            ), (name, field)
