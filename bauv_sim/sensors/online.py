@@ -244,7 +244,8 @@ def lever_arm_from_site(
     """A site's position relative to the vehicle's reference point, body FLU, m."""
     R = physics.R_world_from_body(vehicle)
     rel = physics.site_position_world(site, vehicle) - physics.position_world(vehicle)
-    return tuple(float(c) for c in R.T @ rel)
+    x, y, z = (float(c) for c in R.T @ rel)
+    return x, y, z
 
 
 def truth_record(vt: VehicleTruth) -> Truth:
