@@ -225,7 +225,7 @@ class BeatAverage:
         nd = min(round(self.depth_rate_window_s / dt_s), len(self._depths) - 1)
         rate = (a[3] - self._depths[-1 - nd]) / (nd * dt_s) if nd >= 1 else 0.0
         heading = course_of_scalar(a[0], a[1])
-        return Measured(heading, *a[2:8], speed), rate
+        return Measured(heading, a[2], a[3], a[4], a[5], a[6], a[7], speed), rate
 
 
 class Autopilot:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import copy
 import os
 import re
+import tomllib
 import types
 import typing
 from collections.abc import Iterable, Mapping
@@ -20,7 +21,6 @@ from typing import Any, TypeVar
 
 import pydantic
 import pydantic_core
-import tomllib
 from pydantic import BaseModel, ConfigDict
 
 from bauv_sim.errors import ConfigError

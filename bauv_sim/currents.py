@@ -352,7 +352,7 @@ def parse_utc(text: str) -> dt.datetime:
             f"{text!r} is not an ISO 8601 date and time (e.g. 2026-06-01T06:00:00Z)"
         ) from None
     if t.tzinfo is not None:
-        t = t.astimezone(dt.timezone.utc).replace(tzinfo=None)
+        t = t.astimezone(dt.UTC).replace(tzinfo=None)
     return t
 
 

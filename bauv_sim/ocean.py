@@ -305,7 +305,7 @@ def read_current_grid(path: str | Path, start: dt.datetime | None = None) -> Cur
         for key in comps:
             comps[key] = np.take(comps[key], order_, axis=ax)
     w = comps.get("w", np.zeros_like(comps["u"]))
-    return CurrentGrid(*axes, comps["u"], comps["v"], w)
+    return CurrentGrid(axes[0], axes[1], axes[2], axes[3], comps["u"], comps["v"], w)
 
 
 class GriddedCurrent:

@@ -586,33 +586,6 @@ class CurrentAwareMotion:
         Q[..., 3, 3] = Q[..., 4, 4] = q
         return Q
 
-    def increment_and_packed_Q(self, u: Array, dt_s: float) -> tuple[Array, Array]:
-        """:meth:`increment_and_Q` of n runs' T steps laid out for
-        :func:`nav.usbl.tracks.ekf_tracks`.
-
-        Args:
-            u: ``(C, S, dz)`` of each step, shape (n, T, 3).
-            dt_s: step duration, s.
-
-        Returns:
-            ``(displacement (T, n, 3) m, Q packed (T, 6, n) m^2)``: time-major; Q's upper
-            triangle in the order of :data:`nav.ekf.SYM3`, the same numbers as
-            :meth:`increment_and_Q` (tested).
-        """
-        c, s, dz = (np.ascontiguousarray(u[..., i].T) for i in range(3))  # (T, n) each
-        ue, un = np.sin(c), np.cos(c)
-        ds = dt_s * s
-        inc = np.empty((*c.shape, 3))
-        inc[..., 0], inc[..., 1], inc[..., 2] = ds * ue, ds * un, -dz
-        g00, g01, g10, g11 = ds * un, dt_s * ue, -ds * ue, dt_s * un
-        sc2, ss2 = self.sigma_course_rad**2, self.sigma_speed_m_s**2
-        Q = np.zeros((c.shape[0], 6, c.shape[1]))
-        Q[:, 0] = g00 * g00 * sc2 + g01 * g01 * ss2
-        Q[:, 1] = g00 * g10 * sc2 + g01 * g11 * ss2
-        Q[:, 3] = g10 * g10 * sc2 + g11 * g11 * ss2
-        Q[:, 5] = self.sigma_depth_change_m**2
-        return inc, Q
-
     def predict_one(self, x: Array, P: Array, u: Array, dt_s: float) -> tuple[Array, Array]:
         """One prediction of one run in closed form (eq. 17-18): ``F`` is the identity plus
         ``dt`` on the position-current blocks, so ``F P F^T`` is two row and column updates; the

@@ -20,27 +20,7 @@ imports a family's package when a name of it is asked for (:mod:`tasks.core.fami
 :mod:`bauv_sim`; nothing depends on it.
 """
 
-from nav._exports import lazy_exports
+import lazy_loader
 
-_EXPORTS: dict[str, tuple[str, str]] = {
-    "BatchFailed": ("tasks.core.errors", "BatchFailed"),
-    "BatchInterrupted": ("tasks.core.errors", "BatchInterrupted"),
-    "BatchPlan": ("tasks.core.plan", "BatchPlan"),
-    "Column": ("tasks.core.export", "Column"),
-    "Experiment": ("tasks.core.registry", "Experiment"),
-    "MissionRun": ("tasks.closed_loop.result", "MissionRun"),
-    "MissionScenario": ("tasks.closed_loop.scenario", "MissionScenario"),
-    "VehicleRun": ("tasks.closed_loop.result", "VehicleRun"),
-    "WaypointMission": ("tasks.closed_loop.world", "WaypointMission"),
-    "experiment_names": ("tasks.core.registry", "names"),
-    "fly": ("tasks.closed_loop.world", "fly"),
-    "get_experiment": ("tasks.core.registry", "get"),
-    "plan_batch": ("tasks.core.plan", "plan_batch"),
-    "read_parquet": ("tasks.core.export", "read_parquet"),
-    "register": ("tasks.core.registry", "register"),
-    "run": ("tasks.core.runner", "run"),
-    "write_parquet": ("tasks.core.export", "write_parquet"),
-}
-"""Public name -> (module, attribute), imported on first use."""
-
-__all__, __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
+# the public names: those of __init__.pyi, each imported from its module on first use
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

@@ -117,6 +117,7 @@ def kalman_sites(path: Path) -> list[str]:
     return sites
 
 
+@pytest.mark.slow
 def test_no_kalman_gain_or_joseph_form_outside_the_one_update():
     found = []
     for path in _modules():
@@ -180,6 +181,7 @@ def dr_sites(path: Path) -> list[str]:
     return sites
 
 
+@pytest.mark.slow
 def test_no_dead_reckoning_outside_the_one():
     found = []
     for path in _modules():
@@ -321,6 +323,7 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
+@pytest.mark.slow
 def test_no_circle_of_imports():
     cycles = _cycles(_import_edges())
     assert not cycles, "circles of imports:\n" + "\n".join(" <-> ".join(c) for c in cycles)

@@ -17,6 +17,7 @@ def _python(code: str) -> str:
     return res.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("package", PACKAGES)
 def test_every_exported_name_exists(package):
     out = _python(
@@ -60,6 +61,7 @@ print(sorted(k for k in ("mujoco", "matplotlib", "rerun", "dm_control") if k in 
     assert out.strip() == "[]"
 
 
+@pytest.mark.slow
 def test_the_readme_library_example_runs(tmp_path):
     """The README's "Use it as a library" code blocks run as written (with small batches)."""
     import re

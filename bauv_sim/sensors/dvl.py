@@ -116,7 +116,9 @@ class DvlConfig(Config):
 
     @field_validator("beam", "range")
     @classmethod
-    def _no_sector_bias(cls, v: Config) -> Config:
+    def _no_sector_bias(
+        cls, v: SpeedErrorConfig | LengthErrorConfig
+    ) -> SpeedErrorConfig | LengthErrorConfig:
         name = f"sector_bias_{type(v).unit_name}"
         if getattr(v, name) is not None:
             raise ValueError(f"{name} needs a reference course; a DVL beam has none")

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -246,9 +246,37 @@ def _error_config(name: str, unit: str, to_si: float, angle: bool) -> type[_Erro
     return cls
 
 
-AngleErrorConfig = _error_config("AngleErrorConfig", "deg", math.pi / 180.0, angle=True)
-"""Error of an angle (course, heading, azimuth, elevation, bearing); fields in degrees."""
-LengthErrorConfig = _error_config("LengthErrorConfig", "m", 1.0, angle=False)
-"""Error of a length (range, depth, position); fields in metres."""
-SpeedErrorConfig = _error_config("SpeedErrorConfig", "m_s", 1.0, angle=False)
-"""Error of a speed; fields in metres per second."""
+if TYPE_CHECKING:
+    # What _error_config builds, spelt out for type checkers, which cannot see the fields of a
+    # model made by create_model (tests/test_typing.py checks these match the runtime models).
+    _Sector = tuple[float, float, float, float]
+
+    class AngleErrorConfig(_ErrorConfigBase):
+        sigma_deg: float = 0.0
+        bias_deg: float = 0.0
+        sector_bias_deg: _Sector | None = None
+        random_walk_deg_per_sqrt_s: float = 0.0
+        outlier_sigma_deg: float = 0.0
+        deviation_deg: tuple[float, float, float, float, float] | None = None
+
+    class LengthErrorConfig(_ErrorConfigBase):
+        sigma_m: float = 0.0
+        bias_m: float = 0.0
+        sector_bias_m: _Sector | None = None
+        random_walk_m_per_sqrt_s: float = 0.0
+        outlier_sigma_m: float = 0.0
+
+    class SpeedErrorConfig(_ErrorConfigBase):
+        sigma_m_s: float = 0.0
+        bias_m_s: float = 0.0
+        sector_bias_m_s: _Sector | None = None
+        random_walk_m_s_per_sqrt_s: float = 0.0
+        outlier_sigma_m_s: float = 0.0
+
+else:
+    AngleErrorConfig = _error_config("AngleErrorConfig", "deg", math.pi / 180.0, angle=True)
+    """Error of an angle (course, heading, azimuth, elevation, bearing); fields in degrees."""
+    LengthErrorConfig = _error_config("LengthErrorConfig", "m", 1.0, angle=False)
+    """Error of a length (range, depth, position); fields in metres."""
+    SpeedErrorConfig = _error_config("SpeedErrorConfig", "m_s", 1.0, angle=False)
+    """Error of a speed; fields in metres per second."""

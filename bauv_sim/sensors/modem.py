@@ -408,9 +408,10 @@ class ModemDevice:
                 other.current_world_m_s[:2].copy(),
             )
         else:
-            payload = peer.broadcast
-            if payload is None:
+            sent = peer.broadcast
+            if sent is None:
                 return None
+            payload = sent
             if not self.cfg.send_covariance and payload.covariance_m2 is not None:
                 payload = dataclasses.replace(payload, covariance_m2=None)
         return Measurement(

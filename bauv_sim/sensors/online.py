@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Any, Literal, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -172,6 +172,10 @@ class Device(Protocol):
         ...
 
 
+C = TypeVar("C", bound=Config)
+"""A configuration type: a device's, returned as given or updated."""
+
+
 @dataclass(frozen=True)
 class DeviceBuild:
     """What a device class receives to build itself.
@@ -203,14 +207,14 @@ class DeviceBuild:
     extra: Mapping[str, Any] = field(default_factory=dict)
     propagation: Propagation | None = None
 
-    def with_lever_arm(self, cfg: Config, field_name: str) -> Config:
+    def with_lever_arm(self, cfg: C, field_name: str) -> C:
         """The configuration with its lever-arm field (body FLU, m) set to the model's site
         when the configuration leaves it at zero."""
         if getattr(cfg, field_name) == (0.0, 0.0, 0.0) and self.lever_arm_body_m is not None:
             return cfg.model_copy(update={field_name: self.lever_arm_body_m})
         return cfg
 
-    def with_site(self, cfg: Config, field_name: str, site: str) -> Config:
+    def with_site(self, cfg: C, field_name: str, site: str) -> C:
         """The configuration with its lever-arm field (body FLU, m) set to the model's ``site``
         when the configuration leaves it at zero (a device whose site does not depend on its
         name in the rig: the multibeam's ``sonar``, the DVL's ``dvl``)."""
@@ -244,7 +248,8 @@ def lever_arm_from_site(
     """A site's position relative to the vehicle's reference point, body FLU, m."""
     R = physics.R_world_from_body(vehicle)
     rel = physics.site_position_world(site, vehicle) - physics.position_world(vehicle)
-    return tuple(float(c) for c in R.T @ rel)
+    x, y, z = (float(c) for c in R.T @ rel)
+    return x, y, z
 
 
 def truth_record(vt: VehicleTruth) -> Truth:

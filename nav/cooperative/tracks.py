@@ -414,8 +414,8 @@ def _cov_since_fixes(
     (n, k, 2, 2)."""
     n, k = dr_cov.shape[:2]
     last = np.full((n, k), -1, dtype=np.intp)
-    for j, tick in enumerate(fix_tick):
-        last[used[:, j], tick] = j
+    for fix, tick in enumerate(fix_tick):
+        last[used[:, fix], tick] = fix
     last = np.maximum.accumulate(last, axis=1)
     rows = np.arange(n)[:, None]
     j = np.maximum(last, 0)

@@ -59,7 +59,7 @@ def dr_increment_covariance(
     speed_m_s: ArrayLike,
     dt_s: float,
     sigma_course_rad: float,
-    sigma_speed_m_s: float,
+    sigma_speed_m_s: ArrayLike,
 ) -> Array:
     """Covariance of one DR step's displacement (seed 003, eq. 5).
 
@@ -73,14 +73,14 @@ def dr_increment_covariance(
         speed_m_s: speed S(k+i-1), shape (n,), m/s.
         dt_s: step, s.
         sigma_course_rad: the course's mean error sigma_C, rad.
-        sigma_speed_m_s: the speed's mean error sigma_S, m/s.
+        sigma_speed_m_s: the speed's mean error sigma_S, m/s: one for every step, or shape (n,).
 
     Returns:
         Shape (n, 2, 2), m^2.
     """
     c = np.asarray(course_rad, dtype=float)
     a = np.asarray(speed_m_s, dtype=float) * sigma_course_rad
-    b = sigma_speed_m_s
+    b = np.asarray(sigma_speed_m_s, dtype=float)
     sin, cos = np.sin(c), np.cos(c)
     out = np.empty((*c.shape, 2, 2))
     dt2 = dt_s * dt_s

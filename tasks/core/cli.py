@@ -275,7 +275,11 @@ def run_viewer(cmd: list[str]) -> int:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGTERM)
 
-    previous = {s: signal.signal(s, lambda *_: (stop(), sys.exit(0))) for s in _stop_signals()}
+    def stop_and_exit(*_: object) -> None:
+        stop()
+        sys.exit(0)
+
+    previous = {s: signal.signal(s, stop_and_exit) for s in _stop_signals()}
     try:
         return proc.wait()
     except KeyboardInterrupt:

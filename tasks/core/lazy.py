@@ -2,9 +2,10 @@
 
 Plotting (matplotlib), recording (rerun) and Parquet (pyarrow) cost a large part of a short run's
 start-up and are used only in the report; a module that needs them holds a :class:`LazyModule`
-instead of importing them at its top. Unlike :class:`importlib.util.LazyLoader`, nothing is put in
-``sys.modules`` before the first attribute is read, so ``sys.modules`` tells what was really
-imported (tests/tasks/test_imports.py checks a kinematic run).
+instead of importing them at its top. Unlike :class:`importlib.util.LazyLoader` (which
+``lazy_loader.load`` uses), nothing is put in ``sys.modules`` before the first attribute is read,
+so ``sys.modules`` tells what was really imported (tests/tasks/test_imports.py checks a kinematic
+run), and a module can be set up on its import (matplotlib's backend before ``pyplot``).
 """
 
 from __future__ import annotations

@@ -43,6 +43,7 @@ def _one_line(exc: pytest.ExceptionInfo) -> str:
     return text
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("text", "pattern"),
     [
@@ -139,7 +140,6 @@ def test_the_scanner_agrees_with_what_tomli_w_writes():
     comment signs in strings) with arrays nested 1..MAX_NESTING deep parse with tomllib and pass
     the scanner; the same with one level more is refused."""
     import random
-
     import tomllib
 
     rnd = random.Random(21)

@@ -92,6 +92,7 @@ def test_randomised_current_sets_towards_alpha_c_clockwise_from_north():
     np.testing.assert_allclose(drift, want, rtol=0.02)
 
 
+@pytest.mark.slow
 def test_randomised_current_defaults_are_seed_001s_and_scatter_as_stated():
     """Seed 001, "Conditions of experiments": alpha_c = 20 deg, sigma_V^2 = 0.02, sigma_alpha^2 =
     10 (deg^2), N_d,max = 10000 steps of 0.001 s. The default configuration says so, and the

@@ -138,6 +138,7 @@ def _water_gyre(t, en, centre=(-20.0, 15.0)):
     return OMEGA_RAD_S * np.array([-(en[1] - centre[1]), en[0] - centre[0]])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["uniform", "gyre"])
 def test_an_idle_vehicle_moves_with_the_gridded_water(tmp_path, kind):
     """The vehicle (motor off, the model's neutral trim) is put in the water at rest relative to

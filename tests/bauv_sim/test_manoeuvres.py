@@ -39,6 +39,7 @@ def test_cruise_strouhal_is_that_of_cruising_fish(cruise):
     assert 0.2 <= cruise[2].strouhal <= 0.4
 
 
+@pytest.mark.slow
 def test_tail_bias_turns_the_way_it_says():
     for bias, sign in [(math.radians(15.0), 1.0), (math.radians(-15.0), -1.0)]:
         phys = manoeuvres.open_water_scene(speed_m_s=1.0)
@@ -52,6 +53,7 @@ def test_tail_bias_turns_the_way_it_says():
         )
 
 
+@pytest.mark.slow
 def test_fins_change_depth_the_way_they_say():
     f = load_speed_table().frequency_for(1.0)  # at cruise (above 1.4 m/s the vehicle pitches up)
     up = manoeuvres.depth_change(
@@ -63,6 +65,7 @@ def test_fins_change_depth_the_way_they_say():
     assert up.depth_rate_m_s < -0.03 and down.depth_rate_m_s > 0.03
 
 
+@pytest.mark.slow
 def test_idle_vehicle_hovers_and_rights_itself():
     phys = manoeuvres.open_water_scene()
     z0 = phys.depth_m()
@@ -83,6 +86,7 @@ def test_idle_vehicle_hovers_and_rights_itself():
     assert r.settle_time_s < 15.0  # about 12.7 s: twice the inertia, the same damping
 
 
+@pytest.mark.slow
 def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
     """Galilean invariance: the idle vehicle released at rest in a current c moves, relative to the
     water, exactly as the same vehicle coasting in still water from velocity -c."""
@@ -99,6 +103,7 @@ def test_drift_in_a_uniform_current_is_coasting_seen_from_the_water():
     assert np.allclose(drift.position_world() - 5.0 * cw, coast.position_world(), atol=1e-9)
 
 
+@pytest.mark.slow
 def test_coasting_along_the_axis_decays_as_quadratic_drag():
     """dv = dv0 / (1 + k dv0 t) with k = drag(1 m/s) / (m + surge added mass)."""
     coast = manoeuvres.open_water_scene()
@@ -111,6 +116,7 @@ def test_coasting_along_the_axis_decays_as_quadratic_drag():
     assert np.linalg.norm(coast.velocity_world()) == pytest.approx(expected, rel=0.05)
 
 
+@pytest.mark.slow
 def test_swimming_in_a_current_adds_the_current():
     field = currents.UniformCurrent(0.4, math.radians(200.0))
     r = manoeuvres.swim_in_current(

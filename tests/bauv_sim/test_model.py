@@ -115,6 +115,7 @@ def test_hull_meshes_on_disk_match_the_profile():
     assert disk.volume == pytest.approx(fresh.volume, rel=1e-4)
 
 
+@pytest.mark.slow
 def test_mesh_volume_converges_to_the_profile_quadrature():
     coarse = hull.hull_mesh(hull.HULL, 56, 36).volume
     fine = hull.hull_mesh(hull.HULL, 400, 360).volume

@@ -48,6 +48,7 @@ def _dense_first_root(f, lmax, step):
     return 0.5 * (a + b), v[:i]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("steps", [60, 3, 0], ids=["curvature", "mixed", "first-order"])
 def test_harmonic_ranges_are_the_first_crossing_found_by_dense_sampling(steps, monkeypatch):
     # the curvature-bounded march alone, handing rays over after 3 steps, and the first-order
@@ -172,6 +173,7 @@ def _triangulated_range(bed, origin, e, lmax):
     return None if r is None else r[0]
 
 
+@pytest.mark.slow
 def test_mujoco_ray_ranges_equal_the_triangulated_heightfield_intersection():
     phys = build_physics(
         SceneConfig(seabed=SMALL, beacons=(), vehicles=(VehicleSpec(depth_m=5.0),))

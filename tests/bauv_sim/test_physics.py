@@ -162,6 +162,7 @@ def _linkage_mean_angle_rad(phys: BauvPhysics) -> tuple[float, float]:
     return float(np.mean([phi(t) for t in thetas])), phi(0.0)
 
 
+@pytest.mark.slow
 def test_crank_rocker_is_symmetric_so_zero_bias_swims_straight(phys):
     """Issue 21: turns at -10 and +10 deg of bias differed by 6 % because the rod was 0.26 mm longer
     than a symmetric stroke needs (the linkage closed with the rod inclined at the crank's home
@@ -481,6 +482,7 @@ def test_the_timestep_is_kept_when_the_model_is_reloaded():
     assert phys.timestep() == pytest.approx(0.004) and phys.steps_per_tick == 50
 
 
+@pytest.mark.slow
 def test_the_4ms_preset_swims_at_the_1ms_cruise_speed():
     """The missions' 4 ms step against 1 ms over a short swim from the same start at the cruise
     frequency (models/bauv/README.md, Timestep presets)."""

@@ -189,6 +189,7 @@ def _swim(sea_at: dict[float, Sea], seconds: float, heading_deg: float = 0.0, f:
     return np.array(pos), np.array(through), p
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("direction_deg", [0.0, 90.0])
 def test_an_idle_vehicle_follows_a_step_of_a_steady_uniform_current(direction_deg):
     """Galilean invariance: a neutrally buoyant vehicle at rest in water whose velocity changes as
@@ -213,6 +214,7 @@ def test_an_idle_vehicle_follows_a_step_of_a_steady_uniform_current(direction_de
     assert np.allclose(idle.position_world() - w * 1.0, still.position_world(), atol=1e-9)
 
 
+@pytest.mark.slow
 def test_a_vehicle_put_in_a_current_starts_moving_with_the_water():
     """A vehicle placed at 1 m/s along its heading and put in a 0.3 m/s cross current swims, over
     ground, the still-water track plus the drift (issue 21: it lagged 2.66 m behind the drifted
@@ -225,6 +227,7 @@ def test_a_vehicle_put_in_a_current_starts_moving_with_the_water():
     assert np.allclose(cur, still + t[:, None] * w, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_the_log_keeps_reading_speed_through_water_after_an_along_track_switch():
     """A steady uniform current injected along the track during a swim changes nothing relative
     to the water (the log read 0.72 m/s at 1 m/s before issue 21, recovering over 5 s)."""

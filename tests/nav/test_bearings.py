@@ -199,6 +199,7 @@ def _closed_loop(path, noise, n, seed, update):
     return np.array(errs), P
 
 
+@pytest.mark.slow
 def test_upmf_is_unbiased_on_1e4_paths():
     path = NominalPathConfig(duration_s=30.0)
     e, _ = _closed_loop(path, Seed004Noise(), 10_000, 4, upmf_update)
@@ -221,6 +222,7 @@ def test_upmf_with_the_printed_true_state_in_the_innovation_would_not_be_a_filte
     assert np.abs(a - x_t).max() > 0.1  # the measurement moved it
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("correction", ["residual", "pseudo"])
 def test_cmnf_stated_covariance_is_within_10_percent_of_the_empirical_one_on_fresh_paths(
     correction,
@@ -365,6 +367,7 @@ def test_pseudo_noise_mean_is_the_monte_carlo_mean_of_eq20s_noise():
     assert np.all(np.abs(mean - want) < 0.01 * np.abs(want) + 4 * se), (mean, want, se)
 
 
+@pytest.mark.slow
 def test_upmf_update_is_unbiased_given_a_prediction_at_the_truth():
     """Eq. 20's pseudo-measurement noise ``Psi2 E`` has a mean that is not zero (the measured cos
     phi, cos lambda depend on E); the unbiased UPMF takes it off, so with the prediction at the

@@ -60,6 +60,7 @@ def _fresh_errors(gains, path, noise, control, pred, beacons, n, seed):
     return np.array(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 2])
 def test_near_beacon_gains_from_few_paths_never_make_the_estimate_worse_than_the_prediction(seed):
     """Eq. 22's H_k minimises E||X - X~ - H beta - h||^2 over all linear corrections, H = 0

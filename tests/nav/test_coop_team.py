@@ -33,6 +33,7 @@ def metrics(team):
     return out
 
 
+@pytest.mark.slow
 def test_check4_central_beats_decentralised_beats_leader_only(metrics):
     for i in (1, 2, 3):  # the followers
         central = metrics["central"][i].mean_error_m
@@ -65,6 +66,7 @@ def test_naive_fusion_is_over_confident(metrics):
         assert naive.nees > 5 * naive.nees_band[1]
 
 
+@pytest.mark.slow
 def test_ci_covers_the_error_when_the_peers_estimates_are_correlated():
     # three vehicles launched from one ship: their starts share one error (the ship's GPS, 2 m
     # per axis) and each states only its own marginal covariance; no fixes, so ranges observe

@@ -33,6 +33,7 @@ def lossy():
     return team, rec
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_lost_ranges_leave_no_nan_and_are_not_used(lossy, method):
     team, rec = lossy
@@ -51,6 +52,7 @@ def test_lost_ranges_leave_no_nan_and_are_not_used(lossy, method):
             assert m.consistent, (m.vehicle, m.nees, m.nees_band)
 
 
+@pytest.mark.slow
 def test_two_way_ranges_need_no_clock_and_keep_the_filters_consistent():
     team = make_team(n=40, v=3, duration_s=240.0, seed=31, kind="twtt")
     rec = team.record
@@ -110,6 +112,7 @@ _PER_RUN = (
 )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_a_run_has_the_same_numbers_whatever_its_batch(lossy, method):
     # fixes lost at random too, so that the runs' stated covariances differ

@@ -98,6 +98,7 @@ def test_cp2_closed_form_recovers_truth_on_a_grid():
     assert np.allclose(est.reference_course_rad, courses[:, 0])
 
 
+@pytest.mark.slow
 def test_cp1_descent_recovers_truth_on_a_grid():
     pairs = [(0, 90), (30, 120), (45, 100), (10, 350), (200, 45), (270, 0), (90, 300), (180, 170)]
     courses, vs, beta, cur, T = grid_truth(pairs)

@@ -22,6 +22,7 @@ def u(deg):
     return np.array([math.sin(math.radians(deg)), math.cos(math.radians(deg))])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("bias_deg", [0.0, 5.0, -12.0])
 def test_cp2_from_two_surfacings_recovers_the_errors_and_corrects_dr(bias_deg):
     # the vehicle holds compass course C but really swims C - bias at 0.9 of its odometry speed,

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from bauv_sim.frames import R_from_roll_pitch_heading as R_frames
 from nav.dead_reckoning import dead_reckon
@@ -136,6 +137,7 @@ def test_dvl_updates_batched_and_online_give_the_same_numbers():
         assert np.linalg.norm(c - truth["current"][run]) < 0.01  # near the true 0.3 m/s
 
 
+@pytest.mark.slow
 def test_dvl_updates_estimate_the_current_consistently():
     """200 runs of 90 s, DVL pings at 5 Hz and no position fix: the current converges to the
     true 0.3 m/s within its stated covariance (NEES of the current and of the whole state in

@@ -238,6 +238,7 @@ def _band(dim, n, p=0.99):
     return chi2.ppf((1 - p) / 2, dim * n) / n, chi2.ppf((1 + p) / 2, dim * n) / n
 
 
+@pytest.mark.slow
 def test_navigator_is_consistent_on_a_matched_world():
     """Innovations of a consistent filter are white: the NIS of all fixes of all runs is one
     sample of size N_RUNS * fixes, and its mean must lie in the 99% chi-square band of that size;

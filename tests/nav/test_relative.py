@@ -135,6 +135,7 @@ def _cases(n=20, seed=3):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["ga1", "ga2"])
 @pytest.mark.parametrize("jacobian", ["printed", "true"])
 def test_ga_equals_a_brute_force_minimisation_of_its_criterion_over_the_circle(method, jacobian):
@@ -398,6 +399,7 @@ def test_dr_track_is_eq_1_summed_with_eq_5_summed():
             np.testing.assert_allclose(tr.cov_m2[i, k + 1], P, atol=1e-15)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("restart", [True, False])
 @pytest.mark.parametrize("method", ["ga1", "ga2"])
 def test_ga_track_equals_the_online_follower_stepped_tick_by_tick(method, restart):

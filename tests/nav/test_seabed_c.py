@@ -87,6 +87,7 @@ def _assert_close(got, want, rtol):
     assert np.all(err <= rtol * scale), f"paths {np.flatnonzero(err > rtol * scale)}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("covariance", ["residual", "range_noise"])
 @pytest.mark.parametrize(
     ("reading", "delta_e"),

@@ -347,6 +347,7 @@ def _fly_devices(cfg, tick=0.1, t_end=T_GRID[-1], seed=9, run=2, propagation=Non
     return got
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("propagation", [None, Isovelocity(1490.0)])
 def test_online_device_gives_the_batched_numbers_on_the_same_truth(propagation):
     clocks = {
@@ -394,6 +395,7 @@ def test_online_device_gives_the_batched_numbers_on_the_same_truth(propagation):
 CROWDED = {"period_s": 3.0, "slot_s": 0.25, "turnaround_s": 0.1, "packet_s": 0.1}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("schedule", [{"reply_stagger_s": 0.0}, {"reply_stagger_s": 0.3}, CROWDED])
 def test_online_twtt_gives_the_batched_numbers_on_the_same_truth(schedule):
     clocks = {

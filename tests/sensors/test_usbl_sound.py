@@ -205,6 +205,7 @@ def test_sound_config_default_is_no_medium_and_bad_input_names_the_field() -> No
             validate(SoundSpeedConfig, data)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sound", [None, {"speed_m_s": 1510.0}, {"kind": "munk"}])
 def test_mission_scenario_sound_reaches_the_rig(sound) -> None:
     from tasks.closed_loop.scenario import MissionScenario
@@ -224,6 +225,7 @@ def test_mission_scenario_sound_reaches_the_rig(sound) -> None:
         assert medium.profile.speed(0.0) == pytest.approx(1548.52, abs=0.01)
 
 
+@pytest.mark.slow
 def test_online_modem_takes_the_rigs_medium() -> None:
     """The follower's modem (seed 003's instant ranges) in a sound-speed gradient: the range is
     the nominal speed times the circular ray's travel time, worked out in the test, and the

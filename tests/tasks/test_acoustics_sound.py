@@ -46,6 +46,7 @@ def test_one_speed_sea_scales_every_range_by_the_speed_ratio():
     assert got["usbl_present"].all() and got["modem_present"].all()
 
 
+@pytest.mark.slow
 def test_profile_known_is_exact_and_nominal_pays_the_profile():
     scn = load_config(SoundSpeedScenario)
     got = exact(scn)
@@ -64,6 +65,7 @@ def test_profile_known_is_exact_and_nominal_pays_the_profile():
     assert np.all((ratio > 1 - 1500 / 1540) & (ratio < 1 - 1500 / 1549))
 
 
+@pytest.mark.slow
 def test_profile_known_modem_error_is_the_devices_own():
     """With the profile known, the range error is seed 003's (uniform +-0.1 m plus a 0.025 m
     bias: mean 0.025 m, standard deviation 0.1 / sqrt 3), made in nominal metres: the navigator
@@ -84,6 +86,7 @@ def test_profile_known_modem_error_is_the_devices_own():
     assert np.abs(e - 0.025).max() <= 0.1 + 1e-4 and np.abs(e - 0.025).max() > 0.099
 
 
+@pytest.mark.slow
 def test_a_small_batch_writes_metrics_and_tables_without_nan(tmp_path):
     out, summary = run(
         "acoustics/sound-speed", n_runs=4, seed=1, out_dir=tmp_path / "run", progress=False
@@ -101,6 +104,7 @@ def test_a_small_batch_writes_metrics_and_tables_without_nan(tmp_path):
     assert "Modem range error" in summary.text and "USBL position error" in summary.text
 
 
+@pytest.mark.slow
 def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     overrides = ["runner.block_size=1", "usbl.fixes=11", "report.figures=false"]
     args = dict(n_runs=4, seed=9, overrides=overrides)
@@ -111,6 +115,7 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     assert (one / "metrics.json").read_bytes() == (two / "metrics.json").read_bytes()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("setting", "pattern"),
     [

@@ -16,6 +16,7 @@ def bauv(*args, cwd=None):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "pattern"),
     [
@@ -37,12 +38,14 @@ def test_bad_input_is_one_line_and_exit_2(args, pattern, tmp_path):
     assert not out.exists() and not (tmp_path / "runs").exists()
 
 
+@pytest.mark.slow
 def test_unknown_experiment(tmp_path):
     res = bauv("run", "paper-000/test-7", cwd=tmp_path)
     assert res.returncode == 2 and "unknown experiment 'paper-000/test-7'" in res.stderr
     assert "paper-000/test-1" in res.stderr and "Traceback" not in res.stderr
 
 
+@pytest.mark.slow
 def test_existing_folder_is_not_overwritten(tmp_path):
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "keep.txt").write_text("x")
@@ -51,6 +54,7 @@ def test_existing_folder_is_not_overwritten(tmp_path):
     assert (tmp_path / "out" / "keep.txt").read_text() == "x"
 
 
+@pytest.mark.slow
 def test_list_and_show():
     res = bauv("list")
     assert res.returncode == 0
@@ -66,6 +70,7 @@ def test_web_viewer_binds_loopback_only(tmp_path):
     assert "--serve-web" in cmd and cmd[cmd.index("--web-viewer-port") + 1] == "9191"
 
 
+@pytest.mark.slow
 def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     """Start `bauv view --web` on a recording and fetch the page over HTTP."""
     import socket
@@ -89,6 +94,7 @@ def test_view_web_serves_the_viewer_on_loopback_only(tmp_path):
     assert not _servers(v.web_port)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "pattern"),
     [
@@ -256,6 +262,7 @@ def test_a_batch_too_big_for_memory_is_refused_before_work_starts(
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_the_memory_estimate_follows_the_measured_peak():
     """The estimate of a seed 000 block is the measured peak of computing it, within 30%."""
     import tracemalloc
@@ -331,6 +338,7 @@ def test_a_waypoint_within_the_water_is_accepted():
     assert water - VEHICLE_CLEARANCE_M > 4.5 and water == pytest.approx(5.13, abs=0.005)
 
 
+@pytest.mark.slow
 def test_view_web_stops_its_server_on_sighup(tmp_path):
     """The terminal that ran `bauv view --web` closes (SIGHUP): the rerun server stops too."""
     import signal
@@ -378,6 +386,7 @@ def test_native_viewer_binds_loopback_only(tmp_path):
     assert res.returncode == 0 and "--bind" in res.stdout, res.stderr
 
 
+@pytest.mark.slow
 def test_nohup_keeps_a_batch_running_when_the_terminal_closes(tmp_path):
     """A SIGHUP ignored at start (``nohup bauv run``) stays ignored: the batch completes."""
     import signal

@@ -14,6 +14,7 @@ def bauv(*args, cwd=None):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("text", "pattern"),
     [
@@ -43,6 +44,7 @@ def test_a_hostile_or_bad_scenario_file_is_one_line_and_exit_2(tmp_path, text, p
     assert not out.exists() and not (tmp_path / "runs").exists()
 
 
+@pytest.mark.slow
 def test_a_bad_waypoint_override_is_one_line(tmp_path):
     res = bauv("show", "mission/short", "--set", 'guidance.waypoints=[{east_m="x", north_m=1}]')
     lines = res.stderr.strip().splitlines()

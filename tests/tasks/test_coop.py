@@ -150,6 +150,7 @@ def small():
     return scn, run_block(scn, 11, tuple(range(N_CHECK)))
 
 
+@pytest.mark.slow
 def test_acceptance_4_central_decentralised_leader_only(small):
     """Acceptance check 4 on every follower, paired over the runs: the central filter's mean
     error at most the decentralised one's, which is at most the better leader-only method's
@@ -186,6 +187,7 @@ def test_clock_offsets_are_recovered(small):
     assert (b["clock_rms_s"][:, 0, meth["ga2"]] == 0).all()
 
 
+@pytest.mark.slow
 def test_a_small_batch_writes_metrics_tables_and_figures_without_nan(tmp_path):
     out, summary = run(
         "coop/sensitivity",
@@ -228,6 +230,7 @@ def test_a_small_batch_writes_metrics_tables_and_figures_without_nan(tmp_path):
     assert "decentralised" in summary.text
 
 
+@pytest.mark.slow
 def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     args = dict(n_runs=3, seed=9, overrides=[*FAST, "report.figures=false", "runner.block_size=1"])
     one, _ = run("coop/team", out_dir=tmp_path / "one", progress=False, **args)
@@ -235,6 +238,7 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     assert (one / "metrics.json").read_bytes() == (two / "metrics.json").read_bytes()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("setting", "pattern"),
     [
@@ -273,6 +277,7 @@ def test_a_non_finite_estimate_fails_the_block(monkeypatch):
         run_block(scn, 1, (4, 5))
 
 
+@pytest.mark.slow
 def test_clock_drift_costs_the_leader_only_methods_not_the_clocked_filters():
     """Followers' clocks drifting by 100 ppm (sigma, per run) bias a range by c d t, 15 m after
     100 s: seed 003's range EKF, which has no clock, loses its accuracy; the central filter, with
@@ -289,6 +294,7 @@ def test_clock_drift_costs_the_leader_only_methods_not_the_clocked_filters():
     assert err[1, 1] < 1.25 * err[0, 1], err
 
 
+@pytest.mark.slow
 def test_a_runs_numbers_do_not_depend_on_its_block():
     """Run 7 alone and beside run 6 (a setting with packets lost): every per-run number the
     same bit for bit, every method."""

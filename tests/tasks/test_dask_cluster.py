@@ -131,6 +131,7 @@ def _run(out: Path, *extra: str) -> bytes:
     return (out / "metrics.json").read_bytes()
 
 
+@pytest.mark.slow
 def test_a_batch_on_a_real_cluster_equals_the_local_run_byte_for_byte(cluster, tmp_path):
     assert cluster.startswith("tcp://127.0.0.1:")
     local = _run(tmp_path / "local")

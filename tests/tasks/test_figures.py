@@ -10,6 +10,7 @@ from tasks.core.runner import run
 NO_RECORDING = ["report.recording=false"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("n_runs", "overrides"),
     [
@@ -103,6 +104,7 @@ except OSError as exc:
 """
 
 
+@pytest.mark.slow
 def test_a_figure_whose_write_fails_part_way_leaves_no_partial_file(tmp_path):
     """The PDF cannot be written whole (a file-size limit stands in for a full disk): a plain
     OSError, the PNG written whole, no PDF and no temporary file. Before the fix matplotlib wrote

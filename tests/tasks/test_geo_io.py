@@ -264,6 +264,7 @@ def test_a_scenario_without_the_mission_validator_refuses_a_waypoints_file(tmp_p
         )
 
 
+@pytest.mark.slow
 def test_a_mission_given_in_latitude_longitude_flies_as_the_same_one_in_east_north(
     tmp_path, capsys
 ):

@@ -69,6 +69,7 @@ def read_features(path):
     return out
 
 
+@pytest.mark.slow
 def test_geojson_tracks_read_by_ogr_equal_the_parquet_latitude_longitude(folder):
     ticks, _ = read_parquet(folder / "ticks" / "run-000000-bauv.parquet")
     feats = read_features(folder / "tracks" / "run-000000-bauv.geojson")

@@ -96,6 +96,7 @@ def test_every_mission_is_registered_with_gymnasium():
     assert "bauv/mission-survey-v0" in gymnasium.registry
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mission", MISSIONS)
 def test_gymnasium_env_checker_passes(mission):
     env = make(mission, 10.0, SMALL.get(mission, ()))
@@ -123,6 +124,7 @@ def test_a_random_rollout_runs_to_its_time_limit():
         env.step(actions[0])
 
 
+@pytest.mark.slow
 def test_seeded_resets_repeat_bit_for_bit():
     env = make("mission/short", 3.0)
     env.action_space.seed(0)
@@ -143,6 +145,7 @@ def test_seeded_resets_repeat_bit_for_bit():
     assert not np.array_equal(nxt["obs"][0], first["obs"][0])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("mission", "seconds", "controlled"),
     [
@@ -163,6 +166,7 @@ def test_the_autopilot_through_the_env_flies_the_mission_run(mission, seconds, c
     assert_same_run(got, fly(*u.experiment.flight(u.scenario, 5, 2), 5, 2))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("mission", "seconds"), [("mission/short", 80.0), ("mission/swarm", 8.0)])
 def test_the_reward_is_the_way_point_progress_of_the_run(mission, seconds):
     """Each step's reward recomputed from the run's recorded truth and guidance columns: the
@@ -195,6 +199,7 @@ def test_the_reward_is_the_way_point_progress_of_the_run(mission, seconds):
         assert changes >= 1  # a way-point was reached during the episode
 
 
+@pytest.mark.slow
 def test_the_observation_layouts_are_the_run_columns():
     env = make("mission/short", 2.0, observation="both")
     u = env.unwrapped
@@ -241,6 +246,7 @@ def test_the_observation_layouts_are_the_run_columns():
     }
 
 
+@pytest.mark.slow
 def test_bad_input_is_refused_in_one_line():
     cases = [
         (lambda: MissionEnv("mission/nowhere"), "unknown experiment 'mission/nowhere'"),
@@ -279,6 +285,7 @@ def test_the_gym_package_names_its_extra_when_gymnasium_is_missing():
     assert "pip install 'bauv-sim[gym]'" in res.stderr
 
 
+@pytest.mark.slow
 def test_make_imports_the_package_from_the_id():
     code = (
         "import gymnasium\n"
@@ -316,6 +323,7 @@ def test_a_physics_failure_terminates_the_episode():
         env.step(u.autopilot_action())
 
 
+@pytest.mark.slow
 def test_an_action_beyond_the_limits_is_clipped_to_them():
     env = make("mission/short", 2.0)
     high = env.action_space.high
@@ -328,12 +336,14 @@ def test_an_action_beyond_the_limits_is_clipped_to_them():
     assert np.array_equal(beyond, clipped) and not np.array_equal(below, clipped)
 
 
+@pytest.mark.slow
 def test_an_unseeded_first_reset_draws_the_batch_seed():
     seeds = [make("mission/short", 1.0).reset()[1]["seed"] for _ in range(2)]
     assert seeds[0] != seeds[1]
     assert all(isinstance(s, int) and 0 <= s <= 2**63 - 1 for s in seeds)
 
 
+@pytest.mark.slow
 def test_a_vector_of_environments_flies_the_single_environments_runs():
     """Gymnasium's vector API seeds sub-environment i with seed + i: each flies the run 0 of its
     seed, as one environment does."""

@@ -9,6 +9,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 HEAVY = (
     "mujoco",
     "dm_control",
@@ -31,6 +33,7 @@ def _modules_after(code: str) -> dict[str, bool]:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_a_kinematic_run_without_figures_and_recording_imports_nothing_heavy(tmp_path):
     out = tmp_path / "run"
     code = (
@@ -49,6 +52,7 @@ def test_a_kinematic_run_without_figures_and_recording_imports_nothing_heavy(tmp
     assert not any(loaded[m] for m in heavy), loaded
 
 
+@pytest.mark.slow
 def test_figures_import_matplotlib_when_drawn(tmp_path):
     out = tmp_path / "run"
     code = (
@@ -89,6 +93,7 @@ def test_the_command_line_and_the_workers_module_import_nothing_heavy():
     assert not any(loaded.values()), loaded
 
 
+@pytest.mark.slow
 def test_bauv_run_forks_its_workers_after_its_imports_and_before_its_threads(tmp_path):
     """With ``--workers 2`` on Linux the workers are forked from ``bauv`` itself (issue 13: a
     fork server's own start and imports were on the critical path of a 2-worker batch): when it

@@ -62,6 +62,7 @@ def _check_observation(env, obs):
         assert np.all(np.isfinite(value)), (key, value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MISSIONS)
 def test_mission_specs_before_reset_and_observations_match_them(name):
     design, scn = flight(name, 0, 0, "timing.max_duration_s=20")
@@ -87,6 +88,7 @@ def test_mission_specs_before_reset_and_observations_match_them(name):
     _check_observation(env, ts.observation)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MISSIONS)
 def test_mission_physics_runs_at_the_scenario_timestep(name):
     # the preset, but the swarm's GA1 is not robust to it (tasks/missions/swarm.py)
@@ -108,6 +110,7 @@ def test_mission_physics_runs_at_the_scenario_timestep(name):
         scenario(name, "timing.physics_timestep_s=0.005")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MISSIONS)
 def test_mission_steps_with_actions_at_the_bounds_and_random_actions(name):
     design, scn = flight(name, 0, 0, "timing.max_duration_s=8")
@@ -123,6 +126,7 @@ def test_mission_steps_with_actions_at_the_bounds_and_random_actions(name):
             break
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MISSIONS)
 def test_mission_runs_are_deterministic_and_seeded(name):
     a = fly(*flight(name, 0, 0, "timing.max_duration_s=20"), 0, 0)
@@ -142,6 +146,7 @@ def test_mission_runs_are_deterministic_and_seeded(name):
 # sensors sampled from the physics
 
 
+@pytest.mark.slow
 def test_compass_and_pressure_errors_have_their_configured_statistics(short_run):
     a = short_run
     e = np.degrees(np.angle(np.exp(1j * (a["meas_heading"] - a["truth_rph"][:, 2]))))
@@ -154,6 +159,7 @@ def test_compass_and_pressure_errors_have_their_configured_statistics(short_run)
     assert d.std() == pytest.approx(0.05, rel=5 * math.sqrt(1 / (2 * d.size)))
 
 
+@pytest.mark.slow
 def test_log_reads_speed_through_water_not_over_ground():
     # current from astern on the first leg (course about north): over ground is faster
     scn = scenario(
@@ -172,6 +178,7 @@ def test_log_reads_speed_through_water_not_over_ground():
     assert err_sog.mean() == pytest.approx(-0.3, abs=0.05)  # the current the log cannot see
 
 
+@pytest.mark.slow
 def test_gps_only_with_the_antenna_out_of_the_water():
     scn = scenario(
         SHORT, "guidance.waypoints.0.surface=true", "guidance.hold_s=5", "guidance.fixes_needed=2"
@@ -196,6 +203,7 @@ def test_gps_only_with_the_antenna_out_of_the_water():
     assert a.waypoints[0]["reached_by_estimate"] and a.summary["completed"] == 1.0
 
 
+@pytest.mark.slow
 def test_usbl_stops_beyond_its_range():
     scn = scenario(
         SHORT,
@@ -222,6 +230,7 @@ def test_usbl_stops_beyond_its_range():
 # recording, robustness, failures
 
 
+@pytest.mark.slow
 def test_recording_holds_the_physics_trajectory_and_the_estimates(tmp_path):
     scn = scenario(SHORT)
     res = fly(WaypointMission(), scn, 0, 0)
@@ -241,6 +250,7 @@ def test_recording_holds_the_physics_trajectory_and_the_estimates(tmp_path):
     assert len(half) > 50 and np.all(half > 0)
 
 
+@pytest.mark.slow
 def test_gate_keeps_the_mission_on_track_with_usbl_outliers():
     bad = [
         "sensors.usbl.period_s=1.0",
@@ -277,6 +287,7 @@ def test_a_diverging_run_is_reported_and_the_batch_completes(tmp_path):
     assert "run 1 (seed 4)" in msg and "t = 5.2" in msg and "PhysicsError" in msg
 
 
+@pytest.mark.slow
 def test_mission_navigator_is_consistent():
     """The EKF's horizontal NEES (dimension 2) in the chi-square band of its sample size.
 
@@ -305,6 +316,7 @@ def test_mission_navigator_is_consistent():
     assert lo < np.mean(samples) < hi, (np.mean(samples), lo, hi, n)
 
 
+@pytest.mark.slow
 def test_correction_mission_corrects_dr_and_the_course(tmp_path):
     """Seed 001 on the physical vehicle, four runs (both flights each): CP2 from two surfacings
     makes leg 3's DR several times better and the compensated course stays on the desired course.
@@ -372,6 +384,7 @@ class Fleet:
         return MissionParts(vs, scenario_sea(scn, seed, run_index))
 
 
+@pytest.mark.slow
 def test_two_vehicles_in_one_sea_fly_as_they_fly_alone():
     """Two BAUVs 300 m apart, each with its own rig and navigator, in one scene: each vehicle's
     trajectory equals its lone run (the lone run ends when its mission is done)."""
@@ -433,6 +446,7 @@ class Loiter:
         return {"loiter_radius_m": self.radius_m}
 
 
+@pytest.mark.slow
 def test_a_mission_with_its_own_guidance_law_defined_in_the_test():
     scn = scenario(SHORT, "timing.max_duration_s=500", "start.heading_deg=90")
     design = WaypointMission(guidance=lambda s, rig: Loiter(0.0, 30.0, 25.0, until_s=360.0))
@@ -449,6 +463,7 @@ def test_a_mission_with_its_own_guidance_law_defined_in_the_test():
     assert "waypoints_reached_by_truth" not in v.summary  # no way-points to judge
 
 
+@pytest.mark.slow
 def test_a_batch_with_failed_runs_exits_1_and_says_how_many_completed(tmp_path):
     """``bauv run`` exits 1 when a run failed (the CLI's promise); the report still is written,
     and its message does not claim that others completed when none did."""
@@ -478,6 +493,7 @@ def test_a_batch_with_failed_runs_exits_1_and_says_how_many_completed(tmp_path):
     assert json.loads((out / "run.json").read_text())["state"] == "complete"
 
 
+@pytest.mark.slow
 def test_gps_table_holds_the_antennas_east_and_north():
     """The GPS table's ``east`` and ``north`` are the antenna's measured east and north: each fix
     lies within 5 sigma (the default 2.5 m per coordinate) plus the antenna's lever arm (< 1 m) of

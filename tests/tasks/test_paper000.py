@@ -48,6 +48,7 @@ def test_hundred_passages_within_25_percent_of_the_paper(test, tmp_path):
         assert mean == pytest.approx(paper[method][2], rel=0.25), (test, method, mean)
 
 
+@pytest.mark.slow
 def test_run_folder_is_complete(test1):
     for name in [
         "metrics.json",

@@ -46,6 +46,7 @@ def test_registered_with_the_papers_parameters():
     assert w.current_hold_max_steps == 10000 and w.vehicle_speed_m_s == 1.0
 
 
+@pytest.mark.slow
 def test_acceptance_2_ordering_and_improvement(replica):
     m = json.loads((replica / "metrics.json").read_text())
     p001_report.Paper001Metrics.model_validate(m)
@@ -110,6 +111,7 @@ def test_results_do_not_depend_on_block_grouping():
     assert not np.array_equal(other.data["courses_deg"][0], whole.data["courses_deg"][0])
 
 
+@pytest.mark.slow
 def test_coarse_step_keeps_the_statistics():
     """Paired missions at t = 0.001 s and 0.02 s: courses and current are identical, only Vr
     differs (0.04 vs 0.18 m per axis over a leg): cell means move by a fraction of a metre."""
@@ -132,6 +134,7 @@ def test_paper_values_lookup():
     assert p001_paper.paper_value("table1", "cp1", 5.0, 0.2, 0.5) is None
 
 
+@pytest.mark.slow
 def test_fit_objective_prefers_the_default_hull_response():
     """The default rho_s was fitted to the paper's Tables 1 and 3 (nav.surfacing.CurrentResponse);
     on a seed outside the fit it still beats a hull without angle dependence."""

@@ -31,6 +31,7 @@ def tests100(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("test", ["test-1", "test-2", "test-3"])
 def test_dr_rows_within_10_percent_of_the_paper_on_every_100_sample_cell(tests100, test):
     m = tests100[test]
@@ -74,6 +75,7 @@ def test_abeam_geometry_has_lower_hdop_than_astern(tests100):
     assert f1["GA2"]["median_hdop"] < 2.0
 
 
+@pytest.mark.slow
 def test_the_reading_notes_ga_observations_hold_on_the_printed_equations(tmp_path):
     """The notes: with the restart GA2 matches Test 1 and GA1 (true Jacobian) collapses onto GA2;
     without it GA1 (true Jacobian) is near Test 1's GA1 row. Asserted loosely (30 %): a check that
@@ -128,6 +130,7 @@ def _one_run_online(scn, s, method, restart, leader_cov=None):
     return np.array(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("restart", [True, False])
 def test_batched_navigation_equals_the_online_follower(restart):
     scn = scenario_of(
@@ -146,6 +149,7 @@ def test_batched_navigation_equals_the_online_follower(restart):
         np.testing.assert_allclose(one.tracks[k][0], online, rtol=0, atol=1e-6, err_msg=k)
 
 
+@pytest.mark.slow
 def test_noisy_broadcast_and_the_ekf_that_knows_it():
     over = {"sensors": {"modem": {"broadcast": {"sigma_m": 0.5}}}}
     scn = scenario_of("test-3", {**over, "navigation": {"leader_sigma_m": 0.5}})
@@ -160,6 +164,7 @@ def test_noisy_broadcast_and_the_ekf_that_knows_it():
     assert (tr > tr_blind).all()
 
 
+@pytest.mark.slow
 def test_same_seed_same_numbers_whatever_the_block_split(tmp_path):
     outs = []
     for block, workers in ((10, 1), (3, 1), (4, 2)):
@@ -221,6 +226,7 @@ def test_leader_out_of_modem_range_degrades_to_dr_with_a_warning(tmp_path):
         assert m["methods"][k]["all_runs"] == dr
 
 
+@pytest.mark.slow
 def test_ranges_missing_for_minutes_dead_reckon_through_the_gap(tmp_path):
     over = {"sensors": {"modem": {"dropout_windows_s": [[60.0, 240.0]]}}}
     _, s = _samples(over)
@@ -240,6 +246,7 @@ def test_ranges_missing_for_minutes_dead_reckon_through_the_gap(tmp_path):
     assert m["fixes"][0]["longest_gap_s"] == pytest.approx(190.0)
 
 
+@pytest.mark.slow
 def test_follower_on_the_leaders_course_line(tmp_path):
     """Ahead on the course line (relative bearing 0, offset kept per leg): the range and the DR
     segment cross at a small angle, HDOP ~ D_r (5 m in 5 s) instead of ~1.4 abeam; the report
@@ -281,6 +288,7 @@ def test_consistency_report_compares_stated_and_actual_accuracy(tests100):
         assert not x["consistent"] and x["mean_nees"] > hi and "over-confident" in x["note"]
 
 
+@pytest.mark.slow
 def test_run_folder_is_complete(tmp_path):
     out = tmp_path / "run"
     run("paper-003/test-2", n_runs=5, seed=0, out_dir=out, progress=False)
@@ -310,6 +318,7 @@ def test_run_folder_is_complete(tmp_path):
     assert set(cols["run"].values) == {0} and "GA1_distance" in cols
 
 
+@pytest.mark.slow
 def test_cli_runs_and_refuses_bad_input(tmp_path):
     import subprocess
     import sys

@@ -30,6 +30,7 @@ def table1(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_table1_row1_filters_are_equal_and_sit_on_the_pcrb_level(table1):
     m = _metrics(table1)
     for bearing, level in ((0.5, 8.28), (1.0, 14.73)):
@@ -62,6 +63,7 @@ def test_table1_row1_filters_are_equal_and_sit_on_the_pcrb_level(table1):
         assert (table1 / name).is_file(), name
 
 
+@pytest.mark.slow
 def test_cmnf_gains_are_saved_as_plain_data_and_reused(table1, tmp_path):
     gains = sorted((table1 / "gains").glob("*.npz"))
     assert len(gains) == 2
@@ -89,6 +91,7 @@ def test_cmnf_gains_are_saved_as_plain_data_and_reused(table1, tmp_path):
         )
 
 
+@pytest.mark.slow
 def test_same_seed_same_numbers_whatever_the_worker_count(tmp_path):
     outs = []
     for workers in (1, 2):
@@ -129,6 +132,7 @@ def test_near_beacon_ekf_breaks_down_at_the_documented_spread(tmp_path):
     assert m["ekf_starts_to_lose_m2"] == 10.0
 
 
+@pytest.mark.slow
 def test_near_beacon_cmnf_trained_on_few_paths_stays_on_the_bound_or_is_flagged(tmp_path):
     """2000 training paths, S_0 = 5 I, seed 2. Every filter that follows the path has J-bar at
     its PCRB level 3 + trace S_0 = 18 (pinned at k = 1). The paper's unclipped CMNF does not:
@@ -195,6 +199,7 @@ def _bauv(tmp_path, name, *args):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "name, args, pattern",
     [
@@ -295,6 +300,7 @@ def test_a_runs_draws_do_not_depend_on_its_block():
     np.testing.assert_array_equal(block.w[2], w)
 
 
+@pytest.mark.slow
 def test_row2_seabed_prediction_runs_for_both_readings_and_reports_the_shift_error(tmp_path):
     out = tmp_path / "row2"
     over = [
@@ -364,6 +370,7 @@ def test_row2_seabed_out_of_range_degrades_with_warnings_and_no_nan(tmp_path):
     assert 0 == beams[5.0] < beams[25.0] < 0.9 * 64
 
 
+@pytest.mark.slow
 def test_row2_same_numbers_whatever_the_worker_count(tmp_path):
     # row 2 (ray casting, seabed shifts, the CMNF trained with them): a block's numbers come
     # from its runs' streams alone, not from the worker that flies it

@@ -28,6 +28,7 @@ def survey(tmp_path_factory):
     return _record("mission/survey", tmp_path_factory.mktemp("survey"))
 
 
+@pytest.mark.slow
 def test_survey_recording_has_the_estimated_current_beside_the_true_one(survey):
     rec, a = survey
     every = max(1, round(1.0 / float(a["t"][1] - a["t"][0])))
@@ -89,6 +90,7 @@ def test_survey_recording_has_the_event_log(survey):
     assert [e[0] for e in events] == sorted(e[0] for e in events)
 
 
+@pytest.mark.slow
 def test_gate_rejections_are_events_and_rejected_fixes(tmp_path):
     bad = [
         "sensors.usbl.period_s=1.0",
@@ -105,6 +107,7 @@ def test_gate_rejections_are_events_and_rejected_fixes(tmp_path):
     assert len(pos) == (~ok).sum()
 
 
+@pytest.mark.slow
 def test_fins_and_tail_move_with_their_true_joint_angles(tmp_path):
     rec, a = _record("mission/short", tmp_path)
     for entity, col, j, axis in [
@@ -120,6 +123,7 @@ def test_fins_and_tail_move_with_their_true_joint_angles(tmp_path):
         assert np.allclose(q, exp, atol=1e-6), entity
 
 
+@pytest.mark.slow
 def test_heading_is_recorded_unwrapped(tmp_path):
     rec, a = _record("mission/short", tmp_path)
     _, h = read_time_series(rec, "heading/true", SCALARS)
@@ -168,6 +172,7 @@ def _static_colour(path, entity, component):
     raise KeyError(f"{entity}:{component} not in {path}")
 
 
+@pytest.mark.slow
 def test_paper003_recording_draws_each_method_in_its_figure_colour(tmp_path):
     # one style table (issue 22): the hex of the figures is the colour in rerun
     from tasks.core import style

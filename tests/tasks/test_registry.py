@@ -48,6 +48,7 @@ def test_the_catalog_of_bauv_list_is_the_registry():
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", sorted(families.families()))
 def test_each_family_is_registered_by_its_own_package_alone(family):
     """get() imports only the name's family package: that package alone must register every
@@ -74,9 +75,8 @@ def test_a_name_outside_the_families_is_refused():
 def test_the_families_are_the_entry_points_of_pyproject():
     """The installed metadata declares this project's families as its pyproject.toml does (a stale
     install, or an entry point lost from pyproject.toml, fails here), and every family has names."""
-    from pathlib import Path
-
     import tomllib
+    from pathlib import Path
 
     pyproject = Path(__file__).resolve().parents[2] / "pyproject.toml"
     declared = tomllib.loads(pyproject.read_text())["project"]["entry-points"][families.GROUP]

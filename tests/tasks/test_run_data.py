@@ -41,6 +41,7 @@ def as_written(name, unit):
     return name, unit
 
 
+@pytest.mark.slow
 def test_every_run_has_its_tables_and_every_field_a_unit(batch):
     out, _ = batch
     tables = {p.name for p in (out / "data").iterdir()}

@@ -43,6 +43,7 @@ def reference(tmp_path_factory):
     return _batch(tmp_path_factory.mktemp("ref") / "run")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "executor",
     [{}, {"workers": 2}, {"executor": "dask", "workers": 2}],
@@ -66,6 +67,7 @@ def _resume_in_a_process(out, *extra):
     )
 
 
+@pytest.mark.slow
 def test_interrupted_batch_resumes_to_the_same_result(tmp_path):
     args = [
         "paper-000/test-1",
@@ -283,6 +285,7 @@ class _Touch:
         return (pathlib.Path.touch, (self.path,))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("tamper", "fragment"),
     [
@@ -345,6 +348,7 @@ def test_untouched_folder_resumes_to_the_straight_result(batches, tmp_path, caps
     assert json.loads((out / "run.json").read_text())["state"] == "complete"
 
 
+@pytest.mark.slow
 def test_resume_refusal_from_the_command_line(batches, tmp_path):
     """The real CLI process: one line on stderr, exit status 2, no traceback."""
     out = tmp_path / "batch"
@@ -562,6 +566,7 @@ def _alive(procs):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
 def test_workers_die_with_bauv(tmp_path, sig):
     """``bauv run --workers 2`` stopped by SIGTERM (handled: blocks kept, exit 130) or SIGKILL
@@ -743,6 +748,7 @@ def _link_the_blocks(out, outside):
     (out / "blocks").symlink_to(outside / "blocks", target_is_directory=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("plant", [_link_a_figure, _link_the_tables, _link_the_blocks])
 def test_resume_refuses_a_run_folder_with_a_symbolic_link(figured, tmp_path, capsys, plant):
     """``--resume`` on a folder where a figure, ``tables/`` or ``blocks/`` links outside: one
@@ -762,6 +768,7 @@ def test_resume_refuses_a_run_folder_with_a_symbolic_link(figured, tmp_path, cap
     assert _tree(out) == before
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", ["file", "folder"])
 def test_a_link_planted_after_the_checks_is_not_written_through(figured, tmp_path, where):
     """A link that appears after ``--resume``'s checks (here: planted between the plan and the
@@ -806,6 +813,7 @@ def _limit_file_size():
     resource.setrlimit(resource.RLIMIT_FSIZE, (FILE_SIZE_LIMIT_B, FILE_SIZE_LIMIT_B))
 
 
+@pytest.mark.slow
 def test_a_write_failing_part_way_leaves_whole_figures_only(figured, tmp_path):
     """The report's first figure fails part-way: one line, exit status 1, the block computed
     before is kept, every figure there is whole (before the fix a truncated file was left) and
@@ -841,6 +849,7 @@ def test_a_write_failing_part_way_leaves_whole_figures_only(figured, tmp_path):
             assert (out / rel).read_bytes() == data, rel
 
 
+@pytest.mark.slow
 def test_a_recording_that_cannot_be_written_is_one_line_not_a_hang(tmp_path):
     """The recording fails part-way: one line, exit status 1, the blocks kept and no recording
     left; ``--resume`` then writes a whole one. Before the fix rerun wrote the file itself:

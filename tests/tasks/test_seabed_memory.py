@@ -116,6 +116,7 @@ def test_the_grid_estimate_is_the_measured_peak_of_generating_it():
     assert 0.9 * peak < c.grid_bytes < 1.1 * peak, (c.grid_bytes, peak)
 
 
+@pytest.mark.slow
 def test_a_mission_block_peaks_at_its_estimate():
     """A mission block on a 2001 x 2001 grid (the scene's seabed dominates a 2 s flight): the
     block's estimate (the per-block terms) is its measured peak within 30%."""
@@ -149,6 +150,7 @@ def _image_peak(make, n: int, beams: int) -> float:
     return (peak - base) / (n * beams)
 
 
+@pytest.mark.slow
 def test_the_surrogates_image_estimate_is_its_measured_peak():
     """mission/seed004's surrogate images (HeightfieldPrediction), 12 x 12 beams on 300 paths:
     IMAGE_BYTES_PER_PATH_BEAM within 30% of the measured peak per path and beam."""

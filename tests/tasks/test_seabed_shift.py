@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from tasks.core.runner import run
 from tasks.paper004 import seabed_shift as ss
@@ -45,6 +46,7 @@ def test_a_small_measurement_reports_both_readings():
     assert np.array_equal(again["turning"].error_m, res["turning"].error_m)
 
 
+@pytest.mark.slow
 def test_bad_arguments_exit_2_with_one_line(tmp_path):
     out = tmp_path / "out"
     for args, pattern in (

@@ -52,6 +52,7 @@ def short_runs(tmp_path_factory):
     return outs
 
 
+@pytest.mark.slow
 def test_short_run_completes_without_nan_and_stays_on_the_path(short_runs):
     m = _metrics(short_runs[0])
     assert m["failures"] == [] and m["warnings"] == []
@@ -78,6 +79,7 @@ def test_same_seed_same_numbers(short_runs):
     assert a == b
 
 
+@pytest.mark.slow
 def test_scene_beacons_are_the_seeds_scaled_about_the_start():
     scn = plan_batch(NAME, overrides=FAST).scenario
     st = scn.start
@@ -93,6 +95,7 @@ def test_scene_beacons_are_the_seeds_scaled_about_the_start():
     assert np.allclose(np.stack([got[f"beacon_{i}"] for i in range(4)]), want, atol=5e-3)
 
 
+@pytest.mark.slow
 def test_distance_to_polyline_matches_brute_force():
     rng = np.random.default_rng(0)
     line = np.cumsum(rng.normal(size=(6, 3)), axis=0)
@@ -105,12 +108,14 @@ def test_distance_to_polyline_matches_brute_force():
     assert np.allclose(got, brute, atol=1e-3)
 
 
+@pytest.mark.slow
 def test_the_registered_flight_is_the_seed004_design():
     scn = plan_batch(NAME, overrides=[*FAST, "navigation.filter=upmf"]).scenario
     design, _ = registry.get(NAME).flight(scn, 0, 0)
     assert isinstance(design, Seed004Mission) and design.filter == "upmf"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args, pattern",
     [
@@ -125,6 +130,7 @@ def test_bad_input_is_one_line_exit_2(tmp_path, args, pattern):
     assert_refused(tmp_path, NAME, "--runs", "1", *args, pattern=pattern)
 
 
+@pytest.mark.slow
 def test_lost_bearings_degrade_with_a_warning_and_no_nan(tmp_path):
     out = tmp_path / "drop"
     over = [*FAST, "doa.dropout_probability=0.5", "navigation.filter=upmf"]
@@ -211,6 +217,7 @@ def test_sonar_shift_on_a_flat_seabed_is_the_vertical_move_less_the_lever_arms_t
     assert np.all(np.diag(got.covariance_m2[0])[:2] >= 1e5) and got.covariance_m2[0, 2, 2] < 1e-6
 
 
+@pytest.mark.slow
 def test_surrogate_images_the_scene_heightfield_and_shifts_exactly_on_a_flat_one():
     """The kinematic surrogate's prediction images the scene's heightfield (here flat, 6 m deep,
     no range noise), image k+1 aimed from u_k: from the second step on, its shift's vertical
@@ -265,6 +272,7 @@ def test_surrogate_images_the_scene_heightfield_and_shifts_exactly_on_a_flat_one
         x, u_prev = x1, u
 
 
+@pytest.mark.slow
 def test_seabed_prediction_flies_every_filter_without_nan_and_reports_the_shift(tmp_path):
     """With the seabed-sensing prediction the CMNF follows the path and the EKF and UPMF may
     fail to (seed 004's dashes in Table 1's row 2; on the physics a few of 20 s flights of EKF or
@@ -303,6 +311,7 @@ def test_seabed_prediction_flies_every_filter_without_nan_and_reports_the_shift(
     assert "Seabed-sensing prediction" in text and "nan" not in text.lower()
 
 
+@pytest.mark.slow
 def test_a_filter_that_leaves_the_nominal_path_is_a_named_divergence_not_nan(tmp_path):
     out = tmp_path / "div"
     over = [*SEABED, "seed004.diverge_m=0.5", "navigation.filter=ekf"]
@@ -315,6 +324,7 @@ def test_a_filter_that_leaves_the_nominal_path_is_a_named_divergence_not_nan(tmp
     assert "nan" not in (out / "metrics.json").read_text().lower()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args, pattern",
     [
@@ -328,6 +338,7 @@ def test_bad_seabed_setting_is_one_line_exit_2(tmp_path, args, pattern):
     assert_refused(tmp_path, NAME, "--runs", "1", *pred, *args, pattern=pattern)
 
 
+@pytest.mark.slow
 def test_beams_without_echo_degrade_to_the_command_with_a_warning_and_no_nan(tmp_path):
     out = tmp_path / "noecho"
     over = [*SEABED, "multibeam.range.dropout_probability=0.9", "navigation.filter=cmnf"]

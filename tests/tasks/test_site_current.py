@@ -62,6 +62,7 @@ def _bauv(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
     )
 
 
+@pytest.mark.slow
 def test_correction_runs_under_a_time_varying_current_from_a_file(tmp_path):
     """Check 4: the run's true current at the vehicle is the file's field where the vehicle is,
     when it is there; the report compares the procedure's estimate with it along the track (the
@@ -146,6 +147,7 @@ def _write_bad(tmp_path: Path, what: str) -> Path:
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("what", "pattern"),
     [
@@ -174,6 +176,7 @@ def test_a_bad_current_file_is_refused_in_one_line(tmp_path, what, pattern):
     assert not (tmp_path / "refused").exists()
 
 
+@pytest.mark.slow
 def test_swarm_refuses_a_gridded_current_it_cannot_place(tmp_path):
     """mission/swarm builds its sea with the same scenario_sea: a gridded current is checked
     before anything is written (here: no geo origin to place the file's latitude/longitude)."""

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
-import tomllib
 
 from bauv_sim.bathymetry import write_netcdf
 from tests.bauv_sim.test_seabed_file import GEO, mujoco_seabed_z, site_grid
@@ -69,6 +69,7 @@ def survey(tmp_path_factory):
     return tmp, grid, out
 
 
+@pytest.mark.slow
 def test_survey_runs_on_the_file_and_its_scene_is_the_file(survey, monkeypatch):
     from tasks.closed_loop.world import single_vehicle_scene
     from tasks.core.registry import get
@@ -139,6 +140,7 @@ def _refused(tmp_path, file, pattern, *extra):
     )
 
 
+@pytest.mark.slow
 def test_missing_variable_is_refused(tmp_path):
     def unnamed(ds):
         ds["elevation"].attrs["standard_name"] = "sea_surface_height"
@@ -155,6 +157,7 @@ def test_missing_variable_is_refused(tmp_path):
     )
 
 
+@pytest.mark.slow
 def test_wrong_units_are_refused(tmp_path):
     def fathoms(ds):
         ds["elevation"].attrs["units"] = "fathoms"
@@ -164,6 +167,7 @@ def test_wrong_units_are_refused(tmp_path):
     _refused(tmp_path, name, "fathoms.nc: variable 'elevation' has units 'fathoms', expected m")
 
 
+@pytest.mark.slow
 def test_nan_cells_under_the_scene_are_refused(tmp_path):
     def hole(ds):
         ds["elevation"][10, 10] = np.nan  # the grid's centre, under the scene
@@ -173,6 +177,7 @@ def test_nan_cells_under_the_scene_are_refused(tmp_path):
     _refused(tmp_path, name, "hole.nc: variable 'elevation' has no data (NaN or no-data cells)")
 
 
+@pytest.mark.slow
 def test_scene_outside_the_files_extent_is_refused(tmp_path):
     write_netcdf(site_grid(), tmp_path / "small.nc")  # +-0.008 deg: about +-650 m east
     assert_refused(
@@ -185,6 +190,7 @@ def test_scene_outside_the_files_extent_is_refused(tmp_path):
     )  # the default seabed.half_extent_m = 1000 m
 
 
+@pytest.mark.slow
 def test_a_file_without_a_geo_origin_is_refused(tmp_path):
     write_netcdf(site_grid(), tmp_path / "site.nc")
     assert_refused(
@@ -199,6 +205,7 @@ def test_a_file_without_a_geo_origin_is_refused(tmp_path):
     )
 
 
+@pytest.mark.slow
 def test_a_grid_too_large_for_memory_is_refused(tmp_path):
     """A real netCDF declaring 100000 x 100000 nodes (never written: a few MB on disk)."""
     import netCDF4

@@ -549,6 +549,7 @@ def test_paper001_block():
     same(roundtrip(block).value, block)
 
 
+@pytest.mark.slow
 def test_paper003_block():
     block = _block("paper-003/test-1", (0, 1), "report.readings=all", "report.routes_max=1")
     assert block.routes and block.single and len(block.labels) == 16
@@ -611,6 +612,7 @@ def test_autopilot_block():
     same(roundtrip(block).value, block)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["mission/short", "mission/correction", "mission/swarm"])
 def test_mission_blocks(name):
     block = _block(name, (0,), "timing.max_duration_s=10")
@@ -620,6 +622,7 @@ def test_mission_blocks(name):
     same(got, block)
 
 
+@pytest.mark.slow
 def test_seed004_mission_block():
     block = _block(
         "mission/seed004",
@@ -633,6 +636,7 @@ def test_seed004_mission_block():
     same(roundtrip(block).value, block)
 
 
+@pytest.mark.slow
 def test_trn_mission_block():
     block = _block("mission/trn", (0,), "timing.max_duration_s=70", "report.figures=false")
     r = block[0]
@@ -661,6 +665,7 @@ def test_every_experiment_class_has_a_block_test_above():
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
 
+@pytest.mark.slow
 def test_the_largest_mission_block_grows_within_the_block_file_ceiling():
     """A block file is refused above ``runner.block_file_limit`` (issue 21), whose part that
     grows with a mission's length is BLOCK_FILE_MEMORY_FACTOR x the memory estimate per control

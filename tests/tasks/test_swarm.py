@@ -51,6 +51,7 @@ def _true_station_error(flight, distance_m=10.0, bearing_rad=math.pi / 2):
     return v["t"], np.hypot(*(v["truth_pos"][:, :2] - station).T)
 
 
+@pytest.mark.slow
 def test_station_keeping_holds_the_follower_near_its_station(compared):
     """Bound, after the first 30 s: the navigation error (GA2 here, at most ~1.5 m: between two
     ranges the DR error grows by the compass and log errors, +-2 deg x 5 m and +-0.3 m/s over 25
@@ -109,6 +110,7 @@ def test_ranges_beat_dead_reckoning_on_the_same_draws(compared):
     assert dr["fixes_accepted"] == 0
 
 
+@pytest.mark.slow
 def test_missing_ranges_degrade_to_dead_reckoning_with_a_warning():
     scn = scenario(
         "timing.max_duration_s=120",
@@ -137,6 +139,7 @@ def test_missing_ranges_degrade_to_dead_reckoning_with_a_warning():
     assert res.metrics["ga1"]["f1"]["longest_dr_gap_s"] >= 60.0
 
 
+@pytest.mark.slow
 def test_leader_out_of_modem_range_gives_no_range_and_a_warning():
     res = fly_run(
         scenario(
@@ -156,6 +159,7 @@ def test_leader_out_of_modem_range_gives_no_range_and_a_warning():
     assert any("no accepted range for 70 s" in w for w in res.warnings), res.warnings
 
 
+@pytest.mark.slow
 def test_flights_are_deterministic():
     scn = scenario("timing.max_duration_s=20", "followers.count=2")
     a = fly(SwarmMission("ekf"), scn, 3, 0)
@@ -168,6 +172,7 @@ def test_flights_are_deterministic():
     assert not np.array_equal(a.vehicles["f1"]["meas_heading"], c.vehicles["f1"]["meas_heading"])
 
 
+@pytest.mark.slow
 def test_four_followers_share_the_channel_in_slots():
     scn = scenario("timing.max_duration_s=15", "followers.count=4")
     env = build_environment(SwarmMission("ga2"), scn, 0, 0)
@@ -188,6 +193,7 @@ def test_four_followers_share_the_channel_in_slots():
     assert offsets == pytest.approx([0.0, 1.2, 2.4, 3.6])  # (slot * 25) // 4 ticks of 0.2 s
 
 
+@pytest.mark.slow
 def test_report_recording_and_warning_of_a_batch(tmp_path):
     """The batch report: every vehicle, its estimate, a range circle per fix and the HDOP in the
     recording (read back); the warning in the tables and metrics; no NaN in metrics.json."""
@@ -282,6 +288,7 @@ def test_the_shipped_mission_keeps_every_follower_better_than_its_dead_reckoning
         assert v["diverged_runs"] == 0
 
 
+@pytest.mark.slow
 def test_a_diverged_estimate_is_named_and_fails_the_batch(tmp_path):
     """An aided estimate farther from the truth than navigation.divergence_m is named in the
     report and metrics.json, counted in the table, and `bauv run` exits with status 1; dead

@@ -20,6 +20,7 @@ def scenario(*overrides):
     return plan_batch(NAME, overrides=list(overrides)).scenario
 
 
+@pytest.mark.slow
 def test_six_followers_fly_on_generated_stations_in_six_slots():
     """f5 and f6 get the stations after the four defaults (20 m abeam to port, 20 m astern): they
     start there (the leader heads north: port is west, astern is south), and the six followers
@@ -134,6 +135,7 @@ def _at(v, t_s):
     return p + R_from_quat_wxyz(v["truth_quat_wxyz"][q]) @ MODEM_SITE_M
 
 
+@pytest.mark.slow
 def test_every_vehicle_hears_every_other_with_its_clock_bias(networked):
     """Each vehicle receives every other vehicle's transmissions (the cycles from 5 s); a range
     is the true distance between the transmitter at its transmission and the receiver at the
@@ -221,6 +223,7 @@ def test_usbl_fix_covariance_is_the_noise_through_the_inverse_geometry():
         np.testing.assert_allclose(cov, J @ np.diag(np.square(sig)) @ J.T, rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_the_network_changes_nothing_when_off():
     """Off (the default), the followers keep the modem (no network device, no network table,
     no team comparison, no ``team`` key in metrics.json; the golden mission_swarm is the check
@@ -232,6 +235,7 @@ def test_the_network_changes_nothing_when_off():
         assert "network" not in v.fixes and "network" not in v.outcome
 
 
+@pytest.mark.slow
 def test_decentralised_flies_on_the_network_and_the_batch_reports_the_team(tmp_path):
     """A batch on the network with the decentralised method: every follower fuses the ranges
     from every other vehicle and, relayed back in the receivers' broadcasts, the ranges it sent

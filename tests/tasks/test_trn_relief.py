@@ -86,6 +86,7 @@ def test_noise_free_dvl_dead_reckoning_keeps_exactly_the_initial_error(tmp_path)
             assert dr[key] == pytest.approx(e0, abs=1e-6), (key, dr[key], e0)
 
 
+@pytest.mark.slow
 def test_a_small_batch_writes_metrics_tables_and_figures_without_nan(tmp_path):
     out, summary = run(
         "trn/relief", n_runs=2, seed=1, out_dir=tmp_path / "run", overrides=FAST, progress=False
@@ -133,6 +134,7 @@ def trend():
     return run_block(scn, 7, tuple(range(N_TREND)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["TRN-PF", "TRN-PMF"])
 def test_trn_error_falls_as_the_relief_grows(trend, method):
     """Each run's mean error over the updates, paired over the runs (same tracks, wave shapes
@@ -173,6 +175,7 @@ def test_filters_are_not_below_the_pcrb(trend, method):
 # The runner: same seed, same numbers whatever the worker count; bad input
 
 
+@pytest.mark.slow
 def test_one_and_two_workers_give_the_same_bytes(tmp_path):
     args = dict(n_runs=4, seed=9, overrides=[*FAST, "report.figures=false", "runner.block_size=1"])
     one, _ = run("trn/relief", out_dir=tmp_path / "one", progress=False, **args)
@@ -182,6 +185,7 @@ def test_one_and_two_workers_give_the_same_bytes(tmp_path):
         assert a.read_text() == (two / "blocks" / a.name).read_text()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("setting", "pattern"),
     [

@@ -58,6 +58,7 @@ def _fresh_process(keep: bool) -> list[int]:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 @glibc
 def test_freed_memory_is_kept_for_the_next_block():
     """After :func:`keep_freed_memory` only the first round faults its pages in; without it
@@ -122,6 +123,7 @@ print(json.dumps(got))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is used on Linux")
 @pytest.mark.parametrize("extra_thread", [False, True], ids=["one thread", "two threads"])
 def test_workers_are_forked_from_bauv_only_when_it_runs_one_thread(extra_thread):

@@ -46,6 +46,7 @@ def test_a_hypothesis_that_predicts_no_beam_gets_the_weighted_mean_likelihood():
     assert ll[3] == pytest.approx(np.log(w[:3] @ lik / w[:3].sum()), rel=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["particle", "point mass"])
 def test_prediction_propagates_a_gaussian(kind):
     # no measurement: after k steps the density is N(x0 + k d, P0 + k Q)

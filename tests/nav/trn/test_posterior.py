@@ -73,6 +73,7 @@ def toy_case():
     return tmap, x0, p0, steps, pings, mean, cov
 
 
+@pytest.mark.slow
 def test_particle_filter_matches_the_fine_grid_posterior(toy_case):
     tmap, x0, p0, steps, pings, mean, cov = toy_case
     f = ParticleTrn(TrnOptions(particles=20_000, sigma_bias_m=SIGMA_BIAS_M), x0, p0, 3)
@@ -150,6 +151,7 @@ def pmf_runs():
     return monte_carlo(lambda x0, r: PointMassTrn(opt, x0, P0_M2, r))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("runs", ["pf_runs", "pmf_runs"])
 def test_nees_over_100_runs_is_in_the_chi_square_band(runs, request):
     errs, covs, _ = request.getfixturevalue(runs)
@@ -179,6 +181,7 @@ def test_rmse_over_runs_is_at_least_the_pcrb(runs, request):
     assert np.trace(bound) < 0.2 * np.trace(P0_M2)
 
 
+@pytest.mark.slow
 def test_reinitialisation_recovers_from_a_50_m_initial_error():
     tmap = toy_map()
     rng = np.random.default_rng(5)
