@@ -158,8 +158,8 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
         slug="current",
         note=(
             f"{p}'s current estimate is {mean('compensated', 'current_error_m_s'):.3f} m/s off "
-            "the true current at the vehicle averaged over legs 1-2 (Error: the size of their "
-            "difference; here its mean over the runs)."
+            "the true current at the vehicle averaged over legs 1-2 (Error: the size of the "
+            "difference; its mean over the runs)."
         ),
     )
     ta = along_track_table(p, ok)
