@@ -221,3 +221,20 @@ def test_bauv_list_fits(capsys):
     cli.main(["list"])
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) >= len(registry.names()) and max(map(len, lines)) <= WIDTH
+
+
+def test_a_way_point_missed_by_truth_but_reached_by_the_estimate_is_explained():
+    from tasks.closed_loop.report import _missed_note
+
+    wp = dict(index=0, acceptance_radius_m=8.0, closest_true_distance_m=38.25)
+    hit = dict(wp, index=1, closest_true_distance_m=1.0, reached_by_truth=True)
+    note = _missed_note(
+        [
+            dict(wp, reached_by_truth=False, reached_by_estimate=True),
+            dict(hit, reached_by_estimate=True),
+        ]
+    )
+    # the estimate was within 8 m while the truth stayed 38.25 m away: an error of >= 30.25 m
+    assert note.startswith("Way-point 0: NO by truth") and "at least 30.2 m" in note
+    assert "Way-point 1" not in note
+    assert _missed_note([dict(hit, reached_by_estimate=True)]) == ""
