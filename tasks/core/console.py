@@ -60,7 +60,8 @@ def table(
 
     The first column is aligned left, the others right. A table that fits is one block with a
     one-line header; else its headers are wrapped onto two lines where that narrows a column;
-    else its columns are split into groups, each headed by the first ``key`` columns.
+    else its columns are split into groups, each headed by the first ``key`` columns. A row
+    still too wide (one cell wider than the screen) is wrapped like prose and its rule cut.
 
     Args:
         title: printed above (wrapped).
@@ -95,11 +96,12 @@ def table(
                 for i in cols
             ]
             out.append(_line(padded, [widths[i] for i in cols]))
-        out.append(GAP.join("-" * widths[i] for i in cols))
+        out.append(GAP.join("-" * widths[i] for i in cols)[:width])
         out += [_line([r[i] for i in cols], [widths[i] for i in cols]) for r in cells]
     if note:
         out.append(wrap(note, width))
-    return "\n".join(out) + "\n"
+    # a cell wider than the screen by itself (a failed run's reason): its row wrapped like prose
+    return wrap("\n".join(out), width) + "\n"
 
 
 def _span(widths: Sequence[int], cols: Sequence[int]) -> int:

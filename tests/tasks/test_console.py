@@ -238,3 +238,12 @@ def test_a_way_point_missed_by_truth_but_reached_by_the_estimate_is_explained():
     assert note.startswith("Way-point 0: NO by truth") and "at least 30.2 m" in note
     assert "Way-point 1" not in note
     assert _missed_note([dict(hit, reached_by_estimate=True)]) == ""
+
+
+def test_a_cell_wider_than_the_screen_is_wrapped_not_left_wide():
+    reason = "PhysicsError: " + "the simulation diverged at t = 12.5 s " * 6
+    t = Table("Failed runs", ["Run", "Reason"], [[3, reason]], slug="failed")
+    lines = t.to_text().splitlines()
+    rule = next(i for i, ln in enumerate(lines) if ln.startswith("---"))
+    assert max(map(len, lines)) <= WIDTH and rule >= 2
+    assert " ".join(" ".join(lines[rule + 1 :]).split()) == "3 " + " ".join(reason.split())
