@@ -24,6 +24,7 @@ import pydantic_core
 from pydantic import BaseModel, ConfigDict
 
 from bauv_sim.errors import ConfigError
+from bauv_sim.field_names import nearest, user_loc
 
 C = TypeVar("C", bound="Config")
 
@@ -709,8 +710,14 @@ def format_validation_error(
     A length error that pydantic adds to an array whose elements failed ("Tuple should have at
     least 1 item after validation, not 0", counted over the valid elements) is dropped: the
     elements' own errors say what is wrong. Type and length errors are worded in the scenario
-    file's terms (arrays, tables with their fields, numbers) when ``model`` is given.
+    file's terms (arrays, tables with their fields, numbers) when ``model`` is given; then a field
+    is named as the user types it (no union tags) and an unknown one with the nearest valid names
+    (:mod:`bauv_sim.field_names`).
     """
+
+    def typed(raw: Iterable[Any]) -> tuple[Any, ...]:
+        return user_loc(model, tuple(raw)) if model is not None else tuple(raw)
+
     errors = exc.errors(include_url=False)
     locs = [tuple(e["loc"]) for e in errors]
     errors = [
@@ -723,16 +730,18 @@ def format_validation_error(
     ]
     lines = []
     for err in errors:
-        loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
+        loc = ".".join(str(p) for p in typed(err["loc"])) or "(top level)"
         msg = err["msg"]
         if err["type"] == "extra_forbidden":
-            lines.append(f"{what}: unknown field {loc!r} (value {_shown(err['input'])})")
+            near = nearest(model, err["loc"]) if model is not None else []
+            hint = f"; did you mean {' or '.join(near)}?" if near else ""
+            lines.append(f"{what}: unknown field {loc!r} (value {_shown(err['input'])}){hint}")
             continue
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, ") :]
         if err["type"] == "number_type":
             ctx = err.get("ctx") or {}
-            where = ".".join([*(str(p) for p in err["loc"]), str(ctx.get("field"))])
+            where = ".".join([*(str(p) for p in typed(err["loc"])), str(ctx.get("field"))])
             lines.append(f"{what}: {where} = {ctx.get('value')}: {msg}")
             continue
         val = err.get("input")
@@ -740,7 +749,7 @@ def format_validation_error(
             err["type"] == "missing" and err["loc"] and isinstance(err["loc"][-1], int)
         ):
             at, msg = _shape_message(err, model)
-            loc = ".".join(str(p) for p in at) or "(top level)"
+            loc = ".".join(str(p) for p in typed(at)) or "(top level)"
             if err["type"] == "missing":
                 lines.append(f"{what}: {loc} = {_shown(val)}: {msg}")
                 continue

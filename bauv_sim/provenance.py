@@ -109,13 +109,14 @@ def collect() -> dict[str, Any]:
 
 
 def version_text() -> str:
-    """What ``bauv --version`` prints: ``bauv-sim 0.1.0``, with the commit from a git checkout
-    (``bauv-sim 0.1.0 (commit 65dac30c1f2e, modified)``), then Python, MuJoCo and numpy."""
+    """What ``bauv --version`` prints, four short lines: ``bauv-sim 0.1.0``, with the commit from
+    a git checkout (``bauv-sim 0.1.0 (commit 65dac30c1f2e, modified)``); the versions of Python,
+    MuJoCo and numpy; the platform; the Python interpreter's path."""
     p = collect()
     text = f"{p['package']} {p['version']}"
     if p["commit"] is not None:
         text += f" (commit {p['commit'][:12]}{', modified' if p['dirty'] else ''})"
     return (
-        f"{text}\nPython {p['python']} ({sys.executable}), mujoco {p['mujoco']}, "
-        f"numpy {p['numpy']}, {p['platform']}"
+        f"{text}\nPython {p['python']}, mujoco {p['mujoco']}, numpy {p['numpy']}\n"
+        f"platform {p['platform']}\ninterpreter {sys.executable}"
     )

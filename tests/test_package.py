@@ -105,12 +105,16 @@ def test_bauv_version_and_python_m_bauv_sim(tmp_path):
         cwd=tmp_path,
     )
     assert res.returncode == 0, res.stderr
-    first, second = res.stdout.splitlines()
+    first, second, third, fourth = res.stdout.splitlines()
     assert first.startswith(f"bauv-sim {metadata.version('bauv-sim')}")
     if HAS_GIT:
         assert f"(commit {_git('rev-parse', 'HEAD')[:12]}" in first
     assert f"Python {platform.python_version()}" in second
     assert f"mujoco {mujoco.__version__}" in second and f"numpy {np.__version__}" in second
+    assert third == f"platform {platform.platform()}"
+    assert fourth == f"interpreter {sys.executable}"
+    # the terminal's 100 columns (the interpreter's own path excepted: it is as long as it is)
+    assert max(len(first), len(second), len(third)) <= 100
     listed = subprocess.run(
         [sys.executable, "-m", "bauv_sim", "list"], capture_output=True, text=True, cwd=tmp_path
     )

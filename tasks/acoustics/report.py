@@ -276,6 +276,7 @@ def tables(m: SoundSpeedMetrics) -> list[Table]:
         cols2,
         rows2,
         digits=3,
+        key=4,  # the depths and the ranges name a row (repeated on a narrow screen)
         note=(
             f"Signed slant-range error (estimate minus truth); nominal speed "
             f"{m.modem_nominal_speed_m_s:g} m/s. nominal: the measured range (nominal speed x "

@@ -66,11 +66,12 @@ def cli() -> None:
 def list_cmd() -> None:
     """List the registered experiments and missions."""
     from tasks.core import catalog
+    from tasks.core.console import labelled
 
     entries = catalog.load()  # no experiment package imported (tests keep it equal)
     width = max(len(name) for name, _ in entries)
     for name, summary in entries:
-        click.echo(f"{name.ljust(width)}  {summary}")
+        click.echo(labelled(name, summary, width))
 
 
 @cli.command("show")
@@ -161,6 +162,7 @@ def run_cmd(
         # before the project's imports: where workers come from a fork server (not where bauv
         # forks them itself), the server imports the project meanwhile
         workers_mod.start_fork_server(name)
+    from tasks.core.console import wrap
     from tasks.core.runner import run
 
     out_dir, summary = run(
@@ -176,7 +178,7 @@ def run_cmd(
         resume=resume,
         progress=not quiet,
     )
-    click.echo(summary.text, nl=False)
+    click.echo(wrap(summary.text), nl=False)  # tables are fitted already, prose is wrapped
     rec = out_dir / "recording.rrd"
     if rec.is_file():
         click.echo(f"recording: {rec}  (open it with: bauv view {out_dir} [--web])")

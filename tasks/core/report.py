@@ -19,6 +19,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from tasks.core import console
 from tasks.core.run_folder import atomic_write_text
 
 Cell = str | float | int | None
@@ -62,6 +63,9 @@ class Table:
         rows: rows of cells; floats are printed with ``digits`` decimals, ``None`` as a dash.
         digits: decimals for floats.
         note: a line printed under the table.
+        slug: the CSV's file name stem (default: from the title).
+        key: how many leading columns name a row, repeated in every group of columns when the
+            terminal's copy is split (0: the leading columns of text, see :meth:`key_columns`).
     """
 
     title: str
@@ -70,6 +74,7 @@ class Table:
     digits: int = 1
     note: str = ""
     slug: str = field(default="")
+    key: int = 0
 
     def _fmt(self, c: Cell) -> str:
         if c is None:
@@ -92,19 +97,22 @@ class Table:
         return "\n".join(lines) + "\n"
 
     def to_text(self) -> str:
-        """Aligned plain text for the console."""
-        body = [list(self.columns), *self.cells()]
-        widths = [max(len(r[i]) for r in body) for i in range(len(self.columns))]
+        """Aligned plain text for the terminal, within :data:`tasks.core.console.WIDTH` columns (a
+        wider table is narrowed on the screen only: headers wrapped, then groups of columns that
+        repeat the key columns; see :func:`tasks.core.console.table`)."""
+        return console.table(self.title, self.columns, self.cells(), self.note, self.key_columns())
 
-        def line(r: Sequence[str]) -> str:
-            first = r[0].ljust(widths[0])
-            return "  ".join([first] + [c.rjust(w) for c, w in zip(r[1:], widths[1:], strict=True)])
-
-        out = [self.title, line(body[0]), "  ".join("-" * w for w in widths)]
-        out += [line(r) for r in body[1:]]
-        if self.note:
-            out.append(self.note)
-        return "\n".join(out) + "\n"
+    def key_columns(self) -> int:
+        """How many leading columns name a row: :attr:`key`, or else the leading columns whose
+        cells are all text (at least 1, at most 3)."""
+        if self.key:
+            return self.key
+        k = 0
+        while k < min(3, len(self.columns) - 1) and all(
+            isinstance(r[k], str) or r[k] is None for r in self.rows
+        ):
+            k += 1
+        return max(k, 1)
 
     def to_csv(self) -> str:
         """CSV with full-precision numbers."""

@@ -269,11 +269,13 @@ def report_paper000(exp: PassageTest, ctx: ReportContext) -> ReportSummary:
     if consistent:
         note = "consistent: the mean NEES stays inside its chi-square band"
     elif mismatched:
-        what = ", ".join(f"{d.quantity} std {d.ratio:.2f}x the filter's sigma" for d in mismatched)
+        by_ratio: dict[str, list[str]] = {}
+        for d in mismatched:  # "COG (deg)" -> "COG", grouped by their ratio
+            by_ratio.setdefault(f"{d.ratio:.2f}", []).append(d.quantity.split(" (")[0])
+        what = "; ".join(f"{r}x ({', '.join(q)})" for r, q in by_ratio.items())
         note = (
-            "inconsistent: the filter is mis-tuned for the simulated errors (" + what + "); "
-            "seed 000 draws errors uniform on +-3 sigma, whose standard deviation is "
-            "sqrt(3) sigma"
+            f"inconsistent, the filter mis-tuned: the simulated errors' std is {what} its sigma; "
+            "seed 000 draws errors uniform on +-3 sigma, whose std is sqrt(3) sigma"
         )
     else:
         note = (

@@ -234,6 +234,7 @@ def tables(m: TrnReliefMetrics) -> list[Table]:
             digits=2,
             note=note,
             slug="trn-relief",
+            key=2,  # relief and map sigma name a row (repeated on a narrow screen)
         )
     ]
 

@@ -70,7 +70,11 @@ def test_run_folder_is_complete(test1):
 def test_paper_tuning_is_reported_out_of_band(test1):
     c = _metrics(test1)["consistency"]
     assert not c["consistent"] and c["fraction_in_band"] < 0.5
-    assert "mis-tuned" in c["note"] and "sqrt(3)" in c["note"]
+    assert (
+        "mis-tuned" in c["note"]
+        and "1.73x (COG, SOG, dz, r, alpha, beta)" in c["note"]
+        and "sqrt(3)" in c["note"]
+    )
 
 
 def test_matched_gaussian_errors_are_consistent(tmp_path):

@@ -156,7 +156,11 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
         ],
         digits=3,
         slug="current",
-        note=f"Mean error {mean('compensated', 'current_error_m_s'):.3f} m/s.",
+        note=(
+            f"{p}'s current estimate is {mean('compensated', 'current_error_m_s'):.3f} m/s off "
+            "the true current at the vehicle averaged over legs 1-2 (Error: the size of the "
+            "difference; its mean over the runs)."
+        ),
     )
     ta = along_track_table(p, ok)
     tables = [t1, t3, tc, ta]
