@@ -54,9 +54,9 @@ STATUS = {
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _psi_slope(x, y, z, ex, ey, ez, K, a, b, c, d, p, wx, wy, a0, px, py):  # pragma: no cover
-    """``psi`` at ``(x, y, z)`` (m) and its derivative along the ray ``e`` for path ``p``'s
-    coefficients (rows of ``a, b, c, d``, (P, K), m) and frequencies (``wx, wy``, (K,), rad/m)."""
+def _psi_slope(x, y, z, ex, ey, ez, K, a, b, c, d, wx, wy, a0, px, py):  # pragma: no cover
+    """``psi`` at ``(x, y, z)`` (m) and its derivative along the ray ``e`` for one path's
+    coefficients (``a, b, c, d``, (K,) each, m) and frequencies (``wx, wy``, (K,), rad/m)."""
     tx = wx[0] * (x - px * np.rint(x / px))  # round half to even, as numpy's round
     ty = wy[0] * (y - py * np.rint(y / py))
     sx1, cx1, sy1, cy1 = math.sin(tx), math.cos(tx), math.sin(ty), math.cos(ty)
@@ -71,9 +71,9 @@ def _psi_slope(x, y, z, ex, ey, ez, K, a, b, c, d, p, wx, wy, a0, px, py):  # pr
             syn = sy * cy1 + cy * sy1
             cyn = cy * cy1 - sy * sy1
             sx, cx, sy, cy = sxn, cxn, syn, cyn
-        f = f + (a[p, l] * sx + b[p, l] * cx) + (c[p, l] * sy + d[p, l] * cy)
-        gx = gx + wx[l] * (a[p, l] * cx - b[p, l] * sx)
-        gy = gy + wy[l] * (c[p, l] * cy - d[p, l] * sy)
+        f = f + (a[l] * sx + b[l] * cx) + (c[l] * sy + d[l] * cy)
+        gx = gx + wx[l] * (a[l] * cx - b[l] * sx)
+        gy = gy + wy[l] * (c[l] * cy - d[l] * sy)
     return f, ez + ex * gx + ey * gy
 
 
@@ -160,6 +160,7 @@ def march(
         if not (s <= max_range):
             continue
         m2 = ex * ex * cxx[p] + ey * ey * cyy[p]
+        ap, bp, cp, dp = a[p], b[p], c[p], d[p]  # the path's rows
         live = True
         k = 0
         while k < steps and live:
@@ -172,11 +173,10 @@ def march(
                 ey,
                 ez,
                 K,
-                a,
-                b,
-                c,
-                d,
-                p,
+                ap,
+                bp,
+                cp,
+                dp,
                 wx,
                 wy,
                 a0,
