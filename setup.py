@@ -1,4 +1,5 @@
-"""Build of the three C libraries; everything else is declared in ``pyproject.toml``.
+"""Build of the one C library, the MuJoCo engine plugin; everything else is declared in
+``pyproject.toml``.
 
 * The MuJoCo engine plugin ``bauv.hydro`` (``bauv_sim/plugin/hydro.c``): a shared library that
   MuJoCo loads with ``mj_loadPluginLibrary`` (``bauv_sim.hydro.load_plugin``); it is compiled
@@ -6,20 +7,14 @@
   layouts) and linked to that release's library, found in its ``mujoco`` package. The release is
   written beside the library (``_bauv_hydro.build.json``: the header's ``mjVERSION_HEADER``), and
   ``bauv_sim.hydro.load_plugin`` refuses another MuJoCo at run time.
-* The harmonic seabed's ray march (``bauv_sim/sensors/harmonic_rays.c``): a plain C library (no
-  Python API) that ``bauv_sim.sensors.multibeam`` loads with ``ctypes`` through ``nav.clib``. No
-  fast-math and no FMA contraction (its ranges are those of the numpy code it replaced, to
-  rounding, on any machine), no ``-march`` (the build runs on any x86_64).
-* The seabed shift's per-path arithmetic (``nav/seabed/seabed_shift.c``: Appendix A's slope fit
-  and eq. 15 of seed 004 with its covariance): a plain C library that ``nav.seabed`` loads with
-  ``ctypes`` through ``nav.clib``, compiled as the ray march.
 
 A wheel also carries the data files the package reads through ``bauv_sim.PROJECT_ROOT`` (the
 vehicle model ``models/``, the seabed and site files ``assets/``) under ``bauv_sim/_data/``
 (:class:`BuildPy`); an editable install reads them from the source tree.
 
-The two ctypes libraries include the shared header ``nav/clib.h`` (their entry points' argument
-structs, mirrored in ``nav/clib.py``, which checks the layout when it loads them).
+The seabed's hot loops (the harmonic ray march, the seabed shift) were two more C libraries
+loaded with ctypes until issue 26; they are numba functions now (``pyproject.toml``: numba), with
+the same numbers bit for bit and within 1.5 times the C's time (``benchmarks/bench_kernels.py``).
 """
 
 from __future__ import annotations
@@ -121,22 +116,6 @@ setup(
             library_dirs=[_libdir],
             libraries=[":" + _lib],
             extra_compile_args=["-O2", "-std=c11", "-D_POSIX_C_SOURCE=200809L", "-Wall"],
-        ),
-        Extension(
-            "bauv_sim.sensors._harmonic_rays",
-            sources=["bauv_sim/sensors/harmonic_rays.c"],
-            include_dirs=["nav"],
-            depends=["nav/clib.h"],
-            extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
-            libraries=["m"],
-        ),
-        Extension(
-            "nav.seabed._seabed_shift",
-            sources=["nav/seabed/seabed_shift.c"],
-            include_dirs=["nav"],
-            depends=["nav/clib.h"],
-            extra_compile_args=["-O2", "-std=c11", "-ffp-contract=off", "-Wall"],
-            libraries=["m"],
         ),
     ],
 )

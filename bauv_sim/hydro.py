@@ -33,6 +33,7 @@ the world frame (ENU, m, m/s, N) unless the name says otherwise.
 
 from __future__ import annotations
 
+import importlib.machinery
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -102,16 +103,23 @@ _PLUGIN_LOADED = False
 def plugin_path() -> Path:
     """Path of the compiled plugin library (built by ``pip install``, see ``setup.py``).
 
+    The library is the extension module ``bauv_sim.plugin._bauv_hydro``, so its file name ends
+    with one of this interpreter's extension suffixes (``importlib.machinery.EXTENSION_SUFFIXES``,
+    tried in their order): a library built for another Python beside it is not taken.
+
     Raises:
         ConfigError: if it was not built.
     """
-    found = sorted((Path(__file__).parent / "plugin").glob("_bauv_hydro*.so"))
-    if not found:
-        raise ConfigError(
-            "the hydrodynamics plugin bauv_sim/plugin/_bauv_hydro*.so is not built: "
-            "reinstall the package (pip install -e .)"
-        )
-    return found[-1]
+    directory = Path(__file__).parent / "plugin"
+    suffixes = importlib.machinery.EXTENSION_SUFFIXES
+    for suffix in suffixes:
+        path = directory / ("_bauv_hydro" + suffix)
+        if path.is_file():
+            return path
+    raise ConfigError(
+        f"the hydrodynamics plugin bauv_sim/plugin/_bauv_hydro{suffixes[0]} is not built: "
+        "reinstall the package (pip install -e .)"
+    )
 
 
 def _version_number(version: str) -> int:

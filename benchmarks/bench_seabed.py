@@ -2,22 +2,23 @@
 the rays against a physics scene's heightfield, and a row-2 path-step.
 
 * ``rays``: :meth:`bauv_sim.sensors.multibeam.HarmonicSeabed.ray_ranges` (the curvature-bounded
-  march, in C: ``bauv_sim/sensors/harmonic_rays.c``) against the same march in numpy (vectorised
-  over the rays, the implementation before the C one, kept as the tests' reference in
-  ``tests/bauv_sim/multibeam_reference.py``) and against the first-order march
-  (:meth:`HarmonicSeabed._lipschitz_ranges`, the Lipschitz march and safeguarded Newton that was
-  the whole method before that), on seed 004's 8 x 8 beams from 10 m below the surface over
-  seabeds ~30 m deep (section 6), per ray. All give the same first crossings
+  march, compiled by numba: ``bauv_sim/sensors/harmonic_march.py``, C until issue 26) against the
+  same march in numpy (vectorised over the rays, the implementation before the C one, kept as the
+  tests' reference in ``tests/bauv_sim/multibeam_reference.py``) and against the first-order march
+  (:meth:`HarmonicSeabed._lipschitz_ranges`, the Lipschitz march and safeguarded Newton that was the
+  whole method before that), on seed 004's 8 x 8 beams from 10 m below the surface over seabeds ~30
+  m deep (section 6), per ray. All give the same first crossings
   (``tests/bauv_sim/test_multibeam.py``).
 * ``heightfield``: :meth:`bauv_sim.seabed.Seabed.ray_ranges` on ``mission/seed004``'s seabed
   against MuJoCo's ``mj_multiRay`` (:meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances`,
   one image per call as the vehicle's device casts it), per ray.
 * ``row2``: one block of ``paper-004/table-1-seabed``'s test paths (:func:`tasks.paper004.sim.fly`,
   the three filters, one reading, gains trained beforehand), per path-step (three filters count
-  three), an absolute time beside the load, the same block with the numpy march patched in
-  for ``HarmonicSeabed.ray_ranges`` (what the C march saves in the row), and with the numpy seabed
-  shift patched in for :func:`nav.seabed.shift_estimate` (``tests/nav/seabed_reference.py``, the
-  implementation before the C one in ``nav/seabed/seabed_shift.c``: what that saves in the row).
+  three), an absolute time beside the load, the same block with the numpy march patched in for
+  ``HarmonicSeabed.ray_ranges`` (what the compiled march saves in the row), and with the numpy
+  seabed shift patched in for :func:`nav.seabed.shift_estimate` (``tests/nav/seabed_reference.py``,
+  the implementation before the compiled one in ``nav/seabed/kernel.py``: what that saves in the
+  row).
 
 Usage: ``python benchmarks/bench_seabed.py [--paths 2000] [--steps 60] [--repeats 3]``
 """
@@ -46,8 +47,8 @@ from tests.nav import seabed_reference  # noqa: E402
 
 
 def rays(paths: int, repeats: int) -> str:
-    """The harmonic seabed's march (C) against the numpy march and the first-order march, per
-    ray."""
+    """The harmonic seabed's march (compiled: numba) against the numpy march and the first-order
+    march, per ray."""
     rng = np.random.default_rng(0)
     bed = HarmonicSeabed.draw(0, tuple(range(paths)))
     cfg = MultibeamConfig()
@@ -63,7 +64,7 @@ def rays(paths: int, repeats: int) -> str:
     n = len(ee)
     res = measure(
         {
-            "curvature march (C)": lambda: bed.ray_ranges(o[:, None], e, cfg.max_range_m),
+            "curvature march (compiled)": lambda: bed.ray_ranges(o[:, None], e, cfg.max_range_m),
             "curvature march (numpy)": lambda: multibeam_reference.ray_ranges(
                 bed, o[:, None], e, cfg.max_range_m
             ),
@@ -72,7 +73,7 @@ def rays(paths: int, repeats: int) -> str:
             ),
         },
         repeats=repeats,
-        per={"curvature march (C)": n, "curvature march (numpy)": n, "first-order march": n},
+        per={"curvature march (compiled)": n, "curvature march (numpy)": n, "first-order march": n},
     )
     return table(res, reference="first-order march", unit="us per ray", scale=1e6)
 

@@ -3,9 +3,7 @@ and accumulators that reduce a batch block by block without holding the paths.""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from statistics import NormalDist
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,127 +54,6 @@ def nees(err: Array, P: Array) -> Array:
     return np.einsum("...i,...i->...", err, np.linalg.solve(P, err[..., None])[..., 0])
 
 
-def chi2_ppf(probability: float | Array, dof: float | Array) -> float | Array:
-    """Quantile of the chi-square distribution with ``dof`` degrees of freedom.
-
-    ``x = 2 P^-1(dof / 2, probability)`` with ``P(a, x)`` the regularised lower incomplete gamma
-    function, solved here in double precision (:func:`_gamma_p_inverse`; equal to
-    ``scipy.stats.chi2.ppf`` to 1e-12 relative, tested) so that a report's NEES band and the
-    gates' limits do not import scipy (``scipy.special`` alone takes 0.2 s of CPU, on the
-    critical path of a short batch: issue 13).
-
-    Args:
-        probability: lower-tail probability in [0, 1], scalar or array.
-        dof: degrees of freedom (> 0), scalar or array broadcast with ``probability``.
-
-    Returns:
-        The quantile, a float for scalar arguments, else an array of the broadcast shape;
-        ``inf`` for probability 1, ``0`` for probability 0, NaN outside [0, 1].
-    """
-    p, k = np.broadcast_arrays(np.asarray(probability, dtype=float), np.asarray(dof, dtype=float))
-    out = np.array(
-        [2.0 * _gamma_p_inverse(kk / 2.0, pp) for pp, kk in zip(p.ravel(), k.ravel(), strict=True)]
-    ).reshape(p.shape)
-    return float(out) if out.ndim == 0 else out
-
-
-def _gamma_p_q(a: float, x: float) -> tuple[float, float]:
-    """Regularised incomplete gamma functions ``(P(a, x), Q(a, x))``, ``P + Q = 1``.
-
-    The one computed directly is the smaller: ``P`` by its power series
-    ``P = x^a e^-x / Gamma(a + 1) * sum_n x^n / ((a + 1) ... (a + n))`` for ``x < a + 1``, ``Q``
-    by its continued fraction (evaluated with the modified Lentz method) above; the prefactor is
-    formed in logarithms (Abramowitz & Stegun 6.5.29 and 6.5.31).
-    """
-    if x <= 0.0:
-        return 0.0, 1.0
-    log_prefactor = _log_gamma_density(a, x) + math.log(x)
-    eps = 1e-17
-    if x < a + 1.0:
-        term = total = 1.0 / a
-        n = a
-        while abs(term) > abs(total) * eps:
-            n += 1.0
-            term *= x / n
-            total += term
-        p = total * math.exp(log_prefactor)
-        return p, 1.0 - p
-    tiny = 1e-300
-    b = x + 1.0 - a
-    c = 1.0 / tiny
-    d = 1.0 / b
-    h = d
-    i = 0
-    while True:
-        i += 1
-        an = -i * (i - a)
-        b += 2.0
-        d = an * d + b
-        d = tiny if abs(d) < tiny else d
-        c = b + an / c
-        c = tiny if abs(c) < tiny else c
-        d = 1.0 / d
-        delta = d * c
-        h *= delta
-        if abs(delta - 1.0) <= eps or i > 100_000:
-            break
-    q = math.exp(log_prefactor) * h
-    return 1.0 - q, q
-
-
-def _log_gamma_density(a: float, x: float) -> float:
-    """``log(x^(a - 1) e^-x / Gamma(a))`` (x > 0). For ``a >= 50`` it is written
-    ``a (log1p(t) - t) + 1/2 log(a / 2 pi) - log x - Stirling's correction`` with
-    ``t = (x - a) / a``, which keeps full precision where ``a log x`` and ``log Gamma(a)`` are
-    both ~1e7 and cancel (Abramowitz & Stegun 6.1.41)."""
-    if a < 50.0:
-        return (a - 1.0) * math.log(x) - x - math.lgamma(a)
-    t = (x - a) / a
-    a2 = a * a
-    stirling = (1.0 / 12.0 - (1.0 / 360.0 - (1.0 / 1260.0 - 1.0 / (1680.0 * a2)) / a2) / a2) / a
-    return a * (math.log1p(t) - t) + 0.5 * math.log(a / (2.0 * math.pi)) - math.log(x) - stirling
-
-
-def _gamma_p_inverse(a: float, p: float) -> float:
-    """``x`` with ``P(a, x) = p`` (a > 0): Halley's iteration on the smaller tail, from the
-    Wilson-Hilferty cube-root normal approximation, kept inside a shrinking bracket (bisection
-    when a step leaves it)."""
-    if not (a > 0.0) or not (0.0 <= p <= 1.0):
-        return math.nan
-    if p == 0.0:
-        return 0.0
-    if p == 1.0:
-        return math.inf
-    z = NormalDist().inv_cdf(p)
-    h = 1.0 / (9.0 * a)
-    x = a * (1.0 - h + z * math.sqrt(h)) ** 3
-    if not x > 0.0:  # small a, small p: P ~ x^a / Gamma(a + 1)
-        x = math.exp((math.log(p) + math.lgamma(a + 1.0)) / a)
-    lo, hi = 0.0, math.inf
-    upper = p > 0.5  # solve on Q = 1 - p, the accurate tail
-    target = 1.0 - p if upper else p
-    for _ in range(200):
-        pp, qq = _gamma_p_q(a, x)
-        value = (target - qq) if upper else (pp - target)  # increasing in x
-        if value == 0.0:
-            return x
-        if value > 0.0:
-            hi = x
-        else:
-            lo = x
-        density = math.exp(_log_gamma_density(a, x))
-        step = value / density if density > 0.0 else math.inf
-        # Halley: the density's log-derivative is (a - 1) / x - 1
-        step /= 1.0 + 0.5 * step * ((a - 1.0) / x - 1.0) if abs(step) < x else 1.0
-        new = x - step
-        if not (lo < new < hi) or not math.isfinite(new):
-            new = 0.5 * (lo + hi) if math.isfinite(hi) else 2.0 * x
-        if abs(new - x) <= 4e-16 * x:
-            return new
-        x = new
-    return x
-
-
 def nees_band(dim: int, n_runs: int, probability: float = 0.95) -> tuple[float, float]:
     """Two-sided band of the NEES averaged over ``n_runs`` consistent runs.
 
@@ -186,9 +63,11 @@ def nees_band(dim: int, n_runs: int, probability: float = 0.95) -> tuple[float, 
     Returns:
         ``(low, high)`` for the average.
     """
+    from scipy.stats import chi2  # imported here: the metrics alone do not need it
+
     k = dim * n_runs
     a = (1.0 - probability) / 2.0
-    return float(chi2_ppf(a, k) / n_runs), float(chi2_ppf(1.0 - a, k) / n_runs)
+    return float(chi2.ppf(a, k) / n_runs), float(chi2.ppf(1.0 - a, k) / n_runs)
 
 
 @dataclass(frozen=True)

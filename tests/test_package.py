@@ -74,6 +74,23 @@ def test_load_plugin_checks_the_loaded_library(monkeypatch):
     assert loaded == [] and hydro._PLUGIN_LOADED is False
 
 
+def test_plugin_path_takes_this_interpreters_extension_suffix(tmp_path, monkeypatch):
+    """The plugin is found by this Python's extension suffixes, in their order: a library built
+    for another Python (another ABI tag) beside it is not taken, and none is a ConfigError."""
+    import importlib.machinery
+
+    plugin = tmp_path / "plugin"
+    plugin.mkdir()
+    monkeypatch.setattr(hydro, "__file__", str(tmp_path / "hydro.py"))
+    other = plugin / "_bauv_hydro.cpython-399-x86_64-linux-gnu.so"  # sorts after any real tag
+    other.write_bytes(b"")
+    with pytest.raises(ConfigError, match="is not built"):
+        hydro.plugin_path()
+    ours = plugin / ("_bauv_hydro" + importlib.machinery.EXTENSION_SUFFIXES[0])
+    ours.write_bytes(b"")
+    assert hydro.plugin_path() == ours
+
+
 def test_the_build_record_is_read_and_checked(tmp_path):
     library = tmp_path / "_bauv_hydro.so"
     assert hydro.plugin_built_for(library) == 3017000  # no record: built under the 3.17.0 pin

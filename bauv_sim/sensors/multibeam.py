@@ -16,9 +16,9 @@ The defaults are seed 004's (section 6): 8 x 8 beams, ``gamma^i`` uniformly over
   (:class:`HarmonicSeabed`), by root finding along each ray (:meth:`HarmonicSeabed.ray_ranges`):
   a march whose steps are the first root of a parabola bounding ``psi`` from below along the ray
   (the curvature of eq. 24 is bounded by its coefficients), so that no step passes the first
-  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m), in C
-  (``harmonic_rays.c``); grazing rays finish with a Lipschitz march and safeguarded
-  Newton-bisection.
+  crossing while the steps near it are Newton's, to ``tol_m`` (1e-9 m), compiled by numba
+  (:mod:`bauv_sim.sensors.harmonic_march`); grazing rays finish with a Lipschitz march and
+  safeguarded Newton-bisection.
 * Physics world: MuJoCo's ``mj_multiRay`` against the scene's seabed heightfield, through
   :meth:`bauv_sim.physics.BauvPhysics.seabed_ray_distances` (the only code that reads MuJoCo
   arrays); the beams start at the ``sonar`` site of the vehicle model. The direction of motion
@@ -34,10 +34,7 @@ never NaN. Measured ranges are clipped at 0.
 
 from __future__ import annotations
 
-import functools
-from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,7 +51,6 @@ from bauv_sim.sensors.online import (
     TickContext,
     register_device,
 )
-from nav import clib
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -62,31 +58,6 @@ BoolArray = NDArray[np.bool_]
 CURVATURE_STEPS = 60
 """Steps of :meth:`HarmonicSeabed.ray_ranges`' curvature-bounded march before a ray still
 unresolved (grazing a crest) is handed to the first-order march."""
-
-
-_MARCH_LIBRARY = "_harmonic_rays"
-"""The C library of :meth:`HarmonicSeabed._curvature_march` (``harmonic_rays.c``, built beside this
-module by ``pip install``, see ``setup.py``)."""
-
-
-@functools.cache
-def _march_library() -> Callable[[clib.MarchArgs], int]:
-    """``bauv_harmonic_march`` of the C library, bound through :mod:`nav.clib` with the layout of
-    its argument struct checked (loaded once per process, on first use).
-
-    Raises:
-        ConfigError: if the library is not built.
-    """
-    lib = clib.load_library(Path(__file__).parent, _MARCH_LIBRARY, ConfigError)
-    return clib.entry_point(lib, "bauv_harmonic_march", clib.MarchArgs)
-
-
-_MARCH_STATUS = {
-    -1: "a buffer shorter than its shape (n, paths, harmonics) says",
-    -2: "a ray's path index outside [0, paths)",
-    -3: "a count out of range (rays >= 0, paths >= 1, harmonics >= 1, no size overflow)",
-}
-"""The C march's refusals (``bauv_harmonic_march``'s negative return values)."""
 
 
 class MultibeamConfig(Config):
@@ -330,18 +301,18 @@ class HarmonicSeabed:
 
             h = 2 f / (sqrt(f'^2 + 2 M2 f) - f')      (= (f' + sqrt(...)) / M2 for f' > 0)
 
-        is a step that cannot pass the first crossing, and near a simple root it is Newton's step
-        to second order (quadratic convergence). The upper parabola ``f + f' h + M2 h^2 / 2``
-        crosses zero at ``h_up``, so the first crossing lies in ``[s + h, s + h_up]``: the march
-        takes its middle once that interval is at most ``tol_m`` wide (or the step is), and has no
-        echo past ``max_range_m``. It starts where the ray enters the slab ``|z + a0| <= sum_l
-        (hypot(a_l, b_l) + hypot(c_l, d_l))`` that holds the seabed. The harmonics ``l = 2..K``
-        come from those of ``l = 1`` by the angle-addition recurrence (4 sines and cosines per
-        evaluation). The march runs in C, one ray at a time (:meth:`_curvature_march`,
-        ``bauv_sim/sensors/harmonic_rays.c``; the numpy march it replaced, vectorised over the
-        rays, is the tests' reference and gives the same ranges). A ray that grazes a crest
-        converges slowly (a double root): rays not resolved in :data:`CURVATURE_STEPS` steps
-        finish with the first-order march (:meth:`_lipschitz_ranges`, numpy).
+        is a step that cannot pass the first crossing, and near a simple root it is Newton's step to
+        second order (quadratic convergence). The upper parabola ``f + f' h + M2 h^2 / 2`` crosses
+        zero at ``h_up``, so the first crossing lies in ``[s + h, s + h_up]``: the march takes its
+        middle once that interval is at most ``tol_m`` wide (or the step is), and has no echo past
+        ``max_range_m``. It starts where the ray enters the slab ``|z + a0| <= sum_l (hypot(a_l,
+        b_l) + hypot(c_l, d_l))`` that holds the seabed. The harmonics ``l = 2..K`` come from those
+        of ``l = 1`` by the angle-addition recurrence (4 sines and cosines per evaluation). The
+        march is compiled by numba, one ray at a time (:meth:`_curvature_march`,
+        :func:`bauv_sim.sensors.harmonic_march.march`; the numpy march it replaced, vectorised over
+        the rays, is the tests' reference and gives the same ranges). A ray that grazes a crest
+        converges slowly (a double root): rays not resolved in :data:`CURVATURE_STEPS` steps finish
+        with the first-order march (:meth:`_lipschitz_ranges`, numpy).
 
         Args:
             origin_m: ray origins, shape (P, ..., 3), m, world.
@@ -403,7 +374,8 @@ class HarmonicSeabed:
         self, o: Array, e: Array, path: NDArray[np.int64], max_range_m: float, tol_m: float
     ) -> tuple[Array, BoolArray, BoolArray, Array]:
         """The curvature-bounded march of :meth:`ray_ranges`, :data:`CURVATURE_STEPS` steps per
-        ray, in C (``bauv_sim/sensors/harmonic_rays.c``, one ray at a time).
+        ray, compiled by numba (:func:`bauv_sim.sensors.harmonic_march.march`, one ray at a
+        time).
 
         Args:
             o: ray origins, shape (r, 3), m, world.
@@ -418,46 +390,45 @@ class HarmonicSeabed:
             :data:`CURVATURE_STEPS` steps, and for those the distance reached (m, else 0).
 
         Raises:
-            ConfigError: if the C library is not built.
+            ConfigError: if the march refuses its arguments (a programming error).
         """
-        march = _march_library()
+        from bauv_sim.sensors import harmonic_march  # numba: imported on the first march
+
         wx, wy = self._w()
         n = path.size
         r = np.zeros(n)
         hit = np.zeros(n, np.uint8)
         unresolved = np.zeros(n, np.uint8)
         s = np.zeros(n)
-        coef = {c: np.ascontiguousarray(getattr(self, c), dtype=float) for c in "abcd"}
-        args = clib.pack(
-            clib.MarchArgs,
-            n=n,
-            paths=self.paths,
-            harmonics=self.a.shape[1],
-            steps=CURVATURE_STEPS,
-            a0=self.a0_m,
-            px=self.period_x_m,
-            py=self.period_y_m,
-            max_range=max_range_m,
-            tol=tol_m,
-            o=np.ascontiguousarray(o, dtype=float),
-            e=np.ascontiguousarray(e, dtype=float),
-            path=np.ascontiguousarray(path, dtype=np.int64),
-            **coef,
-            wx=np.ascontiguousarray(wx),
-            wy=np.ascontiguousarray(wy),
-            top=np.ascontiguousarray(-self.a0_m + self.relief_bound()),
-            cxx=np.ascontiguousarray((wx**2 * np.hypot(self.a, self.b)).sum(-1)),
-            cyy=np.ascontiguousarray((wy**2 * np.hypot(self.c, self.d)).sum(-1)),
-            range=r,
-            hit=hit,
-            unresolved=unresolved,
-            s=s,
+        a, b, c, d = (np.ascontiguousarray(getattr(self, k), dtype=float) for k in "abcd")
+        status = harmonic_march.march(
+            np.ascontiguousarray(o, dtype=float).reshape(n, 3),
+            np.ascontiguousarray(e, dtype=float).reshape(n, 3),
+            np.ascontiguousarray(path, dtype=np.int64).reshape(n),
+            a,
+            b,
+            c,
+            d,
+            np.ascontiguousarray(wx, dtype=float),
+            np.ascontiguousarray(wy, dtype=float),
+            np.ascontiguousarray(-self.a0_m + self.relief_bound(), dtype=float),
+            np.ascontiguousarray((wx**2 * np.hypot(self.a, self.b)).sum(-1), dtype=float),
+            np.ascontiguousarray((wy**2 * np.hypot(self.c, self.d)).sum(-1), dtype=float),
+            float(self.a0_m),
+            float(self.period_x_m),
+            float(self.period_y_m),
+            float(max_range_m),
+            float(tol_m),
+            CURVATURE_STEPS,
+            r,
+            hit,
+            unresolved,
+            s,
         )
-        status = march(args)
         if status < 0:
             raise ConfigError(
-                f"ray_ranges: the C march refused its arguments (status {status}: "
-                f"{_MARCH_STATUS.get(status, 'unknown')})"
+                f"ray_ranges: the march refused its arguments (status {status}: "
+                f"{harmonic_march.STATUS[status]})"
             )
         return r, hit.view(np.bool_), unresolved.view(np.bool_), s
 

@@ -56,16 +56,14 @@ ignores slope and linearisation errors, which dominate on the seed's seabed). Di
 beams do not observe (a plane seabed leaves the two directions along it unobserved) get the
 variance ``fallback_var_m2``; the shift has no component along them (minimum-norm solution).
 
-**Implementation.** The per-path arithmetic of :func:`fit_slopes` and :func:`shift_estimate`
-(the basis, the fit's normal equations, eq. 12-15 and the covariance) runs in C,
-``nav/seabed/seabed_shift.c``, built by ``pip install`` (``setup.py``) and loaded through
-:mod:`nav.clib` (:mod:`nav.seabed.kernel`: one argument struct per entry point, its layout
-checked at load); numpy
-keeps the input checks, the beam vectors (eq. 8, 10) and the rare branches (fits whose scaled
-Gram matrix may have a condition number above :data:`FIT_C_CONDITION`, ``rcond < 1e-8``). The
-numpy implementation it replaced is the tests' reference (``tests/nav/seabed_reference.py``);
-the two agree to rounding times the condition numbers of the fit and of eq. 15 (about 1e-11
-relative on seed 004's images), not bit for bit.
+**Implementation.** The per-path arithmetic of :func:`fit_slopes` and :func:`shift_estimate` (the
+basis, the fit's normal equations, eq. 12-15 and the covariance) is compiled by numba
+(:mod:`nav.seabed.kernel`, at first use, cached beside the module); numpy keeps the input checks,
+the beam vectors (eq. 8, 10) and the rare branches (fits whose scaled Gram matrix may have a
+condition number above :data:`FIT_C_CONDITION`, ``rcond < 1e-8``). The numpy implementation it
+replaced is the tests' reference (``tests/nav/seabed_reference.py``); the two agree to rounding
+times the condition numbers of the fit and of eq. 15 (about 1e-11 relative on seed 004's images),
+not bit for bit.
 
 References:
     Seed 004 (Miller, Miller & Miller 2019), eq. 8-16 and Appendix A (A1).

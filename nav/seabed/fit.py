@@ -1,5 +1,5 @@
 """Appendix A of seed 004 (:mod:`nav.seabed`): the seabed's slopes at the beam feet fitted from
-one acoustic image, in C (``seabed_shift.c`` through :mod:`nav.seabed.kernel`) with numpy for the
+one acoustic image, compiled by numba (:func:`nav.seabed.kernel.seabed_fit`) with numpy for the
 rare ill-conditioned paths.
 """
 
@@ -8,9 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from nav import clib
 from nav.errors import NavError, NavInputError
-from nav.seabed import kernel
 from nav.seabed.geometry import SlopeBasis, _finite, check_basis
 
 Array = NDArray[np.float64]
@@ -24,9 +22,9 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
     each path in least squares, then returns ``grad psi = (sum p_l dpsi_l/dx, sum p_l dpsi_l/dy,
     1)`` at every point.
 
-    The per-path arithmetic runs in C (``seabed_shift.c``: the basis, the normal equations
-    scaled to a unit diagonal, solved by Cholesky); paths whose scaled Gram matrix may have a
-    condition number above :data:`FIT_C_CONDITION` are fitted in numpy
+    The per-path arithmetic is compiled by numba (:func:`nav.seabed.kernel.seabed_fit`: the
+    basis, the normal equations scaled to a unit diagonal, solved by Cholesky); paths whose
+    scaled Gram matrix may have a condition number above :data:`FIT_C_CONDITION` are fitted in numpy
     (:func:`_least_squares`: LAPACK's eigen-decomposition or the SVD), as are bases of more
     than :data:`FIT_MAX_FUNCTIONS` functions.
 
@@ -43,7 +41,7 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
         NavInputError: if ``points`` and ``valid`` do not match, a valid foot is not finite, or
             the basis has at least as many functions as an image has feet (no path could be
             fitted; :func:`check_basis`).
-        NavError: if the C library is not built.
+        NavError: if the compiled fit refuses its arguments (a programming error).
     """
     pts = np.ascontiguousarray(points, dtype=float)
     w = np.asarray(valid, dtype=bool)
@@ -55,7 +53,7 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
     P, m = w.shape
     check_basis(basis, m)
     _finite("fit_slopes: points (at a valid foot)", pts, np.broadcast_to(w[..., None], pts.shape))
-    if not np.isfinite(pts).all():  # feet without echo take no part: keep their NaN out of C
+    if not np.isfinite(pts).all():  # feet without echo take no part: keep their NaN out
         pts = np.where(w[..., None], pts, 0.0)
     if basis.size > FIT_MAX_FUNCTIONS:
         return _fit_slopes_numpy(pts, w, basis)
@@ -63,25 +61,22 @@ def fit_slopes(points: Array, valid: BoolArray, basis: SlopeBasis) -> tuple[Arra
     ok = np.empty(P, np.uint8)
     to_numpy = np.empty(P, np.uint8)
     kind = {"harmonic": 0, "plane": 1, "quadratic": 2}[basis.kind]
-    valid_c = np.ascontiguousarray(w, dtype=np.uint8)
-    args = clib.pack(
-        clib.SeabedFitArgs,
-        paths=P,
-        feet=m,
-        kind=kind,
-        harmonics=basis.harmonics,
-        px=float(basis.period_x_m),
-        py=float(basis.period_y_m),
-        max_condition=FIT_C_CONDITION,
-        points=pts,
-        valid=valid_c,
-        grad=grad,
-        fit_ok=ok,
-        to_numpy=to_numpy,
+    from nav.seabed import kernel  # numba: imported (and its cache loaded) on the first fit
+
+    flagged = kernel.seabed_fit(
+        pts,
+        np.ascontiguousarray(w, dtype=np.uint8),
+        kind,
+        int(basis.harmonics),
+        float(basis.period_x_m),
+        float(basis.period_y_m),
+        FIT_C_CONDITION,
+        grad,
+        ok,
+        to_numpy,
     )
-    flagged = kernel.library().fit(args)
     if flagged < 0:
-        raise NavError(f"fit_slopes: the C fit refused: {kernel.STATUS.get(flagged, flagged)}")
+        raise NavError(f"fit_slopes: the compiled fit refused: {kernel.STATUS[flagged]}")
     if flagged:  # less well conditioned: numpy (LAPACK) on those paths
         bad = np.flatnonzero(to_numpy)
         grad[bad] = _fit_slopes_numpy(pts[bad], w[bad], basis)[0]
@@ -116,14 +111,14 @@ FIT_RCOND = 1e-10
 """Relative singular-value cut-off of Appendix A's fit (:func:`fit_slopes`)."""
 
 FIT_C_CONDITION = 1e4
-"""Largest condition number of the scaled Gram matrix of Appendix A's fit solved in C
-(:func:`fit_slopes`, by the bound ``max_row_sum(G) trace(G^-1)``); the C solution (Cholesky)
+"""Largest condition number of the scaled Gram matrix of Appendix A's fit solved by the compiled
+kernel (:func:`fit_slopes`, by the bound ``max_row_sum(G) trace(G^-1)``); its solution (Cholesky)
 and numpy's (LAPACK's eigen-decomposition) differ by about the condition number times the
 rounding error, so up to here they agree to ~1e-11, and the paths beyond it (about 5 per cent
 of seed 004's) keep numpy's numbers."""
 
 FIT_MAX_FUNCTIONS = 64
-"""Most basis functions of Appendix A's fit in C (``FIT_MAX`` of ``nav/seabed/seabed_shift.c``); a
+"""Most basis functions of Appendix A's compiled fit (:data:`nav.seabed.kernel.FIT_MAX`); a
 larger basis (a harmonic one with more than 15 harmonics) is fitted in numpy."""
 
 GRAM_CONDITION = 1e12

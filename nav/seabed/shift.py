@@ -1,5 +1,5 @@
 """Eq. 8-16 of seed 004 (:mod:`nav.seabed`): the shift between two acoustic images with its error
-covariance (in C, ``seabed_shift.c`` through :mod:`nav.seabed.kernel`; numpy's SVD for tiny
+covariance (compiled by numba, :func:`nav.seabed.kernel.seabed_shift`; numpy's SVD for tiny
 ``rcond``) and the dead reckoning on those shifts.
 """
 
@@ -11,10 +11,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from nav import clib
 from nav.dead_reckoning import DeadReckoning
 from nav.errors import NavError, NavInputError
-from nav.seabed import kernel
 from nav.seabed.fit import fit_slopes
 from nav.seabed.geometry import BeamGeometry, SlopeBasis, _finite
 
@@ -126,7 +124,7 @@ def shift_estimate(
             ``sigma_range_m``, ``fallback_var_m2`` or ``rcond`` out of range, a basis with at
             least as many functions as the image has beams (:func:`check_basis`), an unknown
             reading, or ``"turning"`` without ``next_attitude_rad``.
-        NavError: if the C library (``nav/seabed/seabed_shift.c``) is not built.
+        NavError: if the compiled kernel refuses its arguments (a programming error).
     """
     L0 = np.asarray(ranges_m, dtype=float)
     if L0.ndim != 3 or L0.shape[1:] != geometry.shape:
@@ -203,44 +201,42 @@ def shift_estimate(
             rcond,
             cmd,
         )
-    # steps 4-5 in C (seabed_shift.c): eq. 12 and 14 over the used beams, eq. 15 by the
-    # singular values of A from the eigen-decomposition of the 3 x 3 A^T A with an absolute floor
-    # (rank-deficient A: minimum-norm shift), and the stated covariance
+    # steps 4-5 compiled (nav.seabed.kernel.seabed_shift): eq. 12 and 14 over the used beams,
+    # eq. 15 by the singular values of A from the eigen-decomposition of the 3 x 3 A^T A with an
+    # absolute floor (rank-deficient A: minimum-norm shift), and the stated covariance
     shift = np.empty((P, 3))
     cov = np.empty((P, 3, 3))
     beams = np.empty(P, np.int64)
     rank = np.empty(P, np.int64)
     ok = np.empty(P, np.uint8)
     rms = np.empty(P)
-    de_c = None if de is None else np.ascontiguousarray(de, dtype=float)
-    cmd_c = None if cmd is None else np.ascontiguousarray(cmd, dtype=float)
-    args = clib.pack(
-        clib.SeabedShiftArgs,
-        paths=P,
-        beams=m,
-        residual=int(covariance == "residual"),
-        sigma=float(sigma_range_m),
-        fallback=float(fallback_var_m2),
-        rcond=float(rcond),
-        singular_floor=SINGULAR_FLOOR,
-        grad=np.ascontiguousarray(grad, dtype=float),
-        e=np.ascontiguousarray(e, dtype=float),
-        de=de_c,
-        l0=np.ascontiguousarray(L0.reshape(P, m)),
-        l1=np.ascontiguousarray(L1.reshape(P, m)),
-        use=np.ascontiguousarray(usef, dtype=np.uint8),
-        fit_ok=np.ascontiguousarray(fit_ok, dtype=np.uint8),
-        cmd=cmd_c,
-        shift=shift,
-        cov=cov,
-        used=beams,
-        rank=rank,
-        ok=ok,
-        rms=rms,
+    from nav.seabed import kernel  # numba: imported (and its cache loaded) on the first shift
+
+    status = kernel.seabed_shift(
+        np.ascontiguousarray(grad, dtype=float).reshape(P, m, 3),
+        np.ascontiguousarray(e, dtype=float).reshape(P, m, 3),
+        np.empty((0, 0, 3))
+        if de is None
+        else np.ascontiguousarray(de, dtype=float).reshape(P, m, 3),
+        np.ascontiguousarray(L0, dtype=float).reshape(P, m),
+        np.ascontiguousarray(L1, dtype=float).reshape(P, m),
+        np.ascontiguousarray(usef, dtype=np.uint8).reshape(P, m),
+        np.ascontiguousarray(fit_ok, dtype=np.uint8),
+        covariance == "residual",
+        float(sigma_range_m),
+        float(fallback_var_m2),
+        float(rcond),
+        SINGULAR_FLOOR,
+        np.empty((0, 3)) if cmd is None else np.ascontiguousarray(cmd, dtype=float),
+        shift,
+        cov,
+        beams,
+        rank,
+        ok,
+        rms,
     )
-    status = kernel.library().shift(args)
     if status < 0:
-        raise NavError(f"shift_estimate: the C shift refused: {kernel.STATUS.get(status, status)}")
+        raise NavError(f"shift_estimate: the compiled shift refused: {kernel.STATUS[status]}")
     return ShiftEstimate(shift, cov, beams, rank, ok.view(np.bool_), rms)
 
 

@@ -50,7 +50,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nav.errors import NavInputError
-from nav.metrics import chi2_ppf
 from nav.trn.map import TerrainMap
 from nav.trn.options import beam_sigmas
 from nav.trn.soundings import Soundings
@@ -213,7 +212,9 @@ class DivergenceWindow:
         total = sum(v for v, _ in self._nis)
         dof_sum = sum(d for _, d in self._nis)
         if dof_sum not in self._limits:
-            self._limits[dof_sum] = float(chi2_ppf(1.0 - self.probability, dof_sum))
+            from scipy.stats import chi2  # imported at the first full window
+
+            self._limits[dof_sum] = float(chi2.ppf(1.0 - self.probability, dof_sum))
         return bool(total > self._limits[dof_sum])
 
 

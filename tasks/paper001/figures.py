@@ -138,7 +138,8 @@ def _draw(out_dir: Path, block: MissionBlock, scenario: Paper001Scenario, style)
         ax.set_ylabel("north (m)")
         ax.set_aspect("equal", adjustable="datalim")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        # below the axes, one entry a row: inside, it hid the end of the baseline's track
+        style.figure_legend(fig, [ax], ncol=1, fontsize=8)
         name = f"course-{tr['procedure']}-mission{tr['run']}.png"
         files += style.save(fig, out_dir / name)
 

@@ -85,7 +85,7 @@ def write_figures(
             figures.routes(
                 out / "paths-all.png",
                 ref,
-                {k: [routes[r][k] for r in runs] for k in ("DR", "GA1", "GA2")},
+                {k: [routes[r][k] for r in runs] for k in names},
                 title=f"{_words(exp)}: reference and estimated paths of F ({len(runs)} samples)",
                 extra={"leader": leader},
             )

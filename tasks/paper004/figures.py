@@ -35,7 +35,7 @@ def nominal(out: Path, xn: np.ndarray, beacons: np.ndarray, t: np.ndarray) -> li
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")
-    ax.legend(loc="upper left")
+    style.figure_legend(fig, [ax])  # below the axes: inside, it hid a beacon
     style.title(ax, "Nominal path and beacons")
     files += style.save(fig, out / "nominal-3d.png")
     fig, axes = style.subplots("column", height_in=3.6, nrows=3, sharex=True)
@@ -50,25 +50,30 @@ def nominal(out: Path, xn: np.ndarray, beacons: np.ndarray, t: np.ndarray) -> li
 
 @style.styled
 def sample_paths(out: Path, name: str, xn: np.ndarray, t: np.ndarray, runs: dict) -> list[str]:
-    """Figure 7: true paths of the sample runs under each filter's control."""
-    fig, axes = style.subplots("page", height_in=2.6, ncols=2)
+    """Figure 7: true paths of the sample runs under each filter's control.
+
+    The filters' paths of one run lie close together: they are drawn half-transparent, the
+    dashed one last, so that none hides another, and the legend goes below the panels."""
+    fig, axes = style.subplots("page", height_in=2.9, ncols=2)
     axes[0].plot(xn[:, 0], xn[:, 1], **style.line("reference", label="nominal"), zorder=3)
     axes[1].plot(t, xn[:, 2], **style.line("reference", label="nominal"), zorder=3)
+    order = sorted(FILTERS, key=lambda f: style.line(f).get("ls", "-") not in ("-", "solid"))
     for r, (_run, tracks) in enumerate(sorted(runs.items())):
-        for f in FILTERS:
+        for f in order:
             if f not in tracks:
                 continue
             tr = np.asarray(tracks[f], dtype=float)
             lab = f if r == 0 else "_"
-            axes[0].plot(tr[:, 0], tr[:, 1], **style.line(f, label=lab, lw=0.7))
-            axes[1].plot(t, tr[:, 2], **style.line(f, label=lab, lw=0.7))
+            look = style.line(f, label=lab, lw=0.8, alpha=0.7)
+            axes[0].plot(tr[:, 0], tr[:, 1], **look)
+            axes[1].plot(t, tr[:, 2], **look)
     axes[0].set_xlabel("x (m)")
     axes[0].set_ylabel("y (m)")
     axes[1].set_xlabel(style.label("time", "s"))
     axes[1].set_ylabel("z (m)")
     style.title(axes[0], f"Sample paths ({len(runs)} runs), plan")
     style.title(axes[1], "Sample paths, depth axis")
-    axes[0].legend(loc="best")
+    style.figure_legend(fig, axes)  # below the panels: inside, it hid a trough of the paths
     return style.save(fig, out / f"sample-paths-{name}.png")
 
 

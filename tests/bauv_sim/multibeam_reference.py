@@ -1,6 +1,7 @@
-"""The numpy curvature-bounded march of :meth:`HarmonicSeabed.ray_ranges`, as it was before its
-loop moved to C (``bauv_sim/sensors/harmonic_rays.c``): the reference the tests compare the C march
-with (``tests/bauv_sim/test_multibeam.py``), and a variant of ``benchmarks/bench_seabed.py``.
+"""The numpy curvature-bounded march of :meth:`HarmonicSeabed.ray_ranges`, as it was before its loop
+moved to C (``bauv_sim/sensors/harmonic_rays.c``, numba's :mod:`bauv_sim.sensors.harmonic_march`
+since issue 26): the reference the tests compare the compiled march with
+(``tests/bauv_sim/test_multibeam.py``), and a variant of ``benchmarks/bench_seabed.py``.
 
 Vectorised over the rays (the live rays compacted as they finish); the rays still unresolved after
 :data:`bauv_sim.sensors.multibeam.CURVATURE_STEPS` steps go to the library's first-order march

@@ -16,7 +16,6 @@ from bauv_sim.sensors.multibeam import (
     beam_directions,
 )
 from bauv_sim.sensors.rig import SensorRig
-from nav import clib
 
 from . import multibeam_reference
 
@@ -321,10 +320,11 @@ def _test_rays(seed, paths):
 @pytest.mark.parametrize("steps", [60, 4], ids=["curvature", "handed-over"])
 @pytest.mark.parametrize("max_range_m", [100.0, 20.0])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_c_march_equals_the_numpy_reference(seed, max_range_m, steps, monkeypatch):
-    # the C march against the numpy march it replaced (tests/bauv_sim/multibeam_reference.py):
-    # the same first crossings to rounding, the same hits; rays unresolved after `steps` go on
-    # in the first-order march from where the march stopped, in both
+def test_compiled_march_equals_the_numpy_reference(seed, max_range_m, steps, monkeypatch):
+    # the compiled march against the numpy march it replaced
+    # (tests/bauv_sim/multibeam_reference.py): the same first crossings to rounding, the same
+    # hits; rays unresolved after `steps` go on in the first-order march from where the march
+    # stopped, in both
     monkeypatch.setattr(multibeam, "CURVATURE_STEPS", steps)
     handed = []
     first_order = HarmonicSeabed._lipschitz_ranges
@@ -357,7 +357,7 @@ def test_c_march_equals_the_numpy_reference(seed, max_range_m, steps, monkeypatc
     ],
     ids=["zero", "nan", "infinite-origin", "unfinished"],
 )
-def test_c_march_refuses_bad_rays_as_the_reference(origin, direction, kwargs, monkeypatch):
+def test_compiled_march_refuses_bad_rays_as_the_reference(origin, direction, kwargs, monkeypatch):
     monkeypatch.setattr(multibeam, "CURVATURE_STEPS", 0)  # the first-order march: 2 steps are few
     bed = HarmonicSeabed.draw(3, (0,))
     o, e = np.array([[origin]]), np.array([[direction]])
@@ -392,9 +392,9 @@ def test_harmonic_seabed_refuses_inconsistent_or_non_finite_coefficients():
 
 
 def _march_args(bed, o, e, path):
-    """bauv_harmonic_march's buffers for rays (r, 3) of seabed ``bed``, as _curvature_march
-    passes them (struct fields of nav.clib.MarchArgs), the inputs and the outputs apart (the
-    caller can then break either)."""
+    """The compiled march's arrays for rays (r, 3) of seabed ``bed``, as _curvature_march passes
+    them (bauv_sim.sensors.harmonic_march.march), the inputs and the outputs apart (the caller
+    can then break either)."""
     wx, wy = bed._w()
     inputs = {
         "o": np.ascontiguousarray(o, float),
@@ -417,24 +417,27 @@ def _march_args(bed, o, e, path):
     return inputs, outs
 
 
-def _march(bed, n, P, inputs, outs):
-    march = multibeam._march_library()
-    scalars = {"harmonics": bed.a.shape[1], "steps": 60, "a0": bed.a0_m}
-    scalars |= {"px": bed.period_x_m, "py": bed.period_y_m, "max_range": 100.0, "tol": 1e-9}
-    return march(clib.pack(clib.MarchArgs, n=n, paths=P, **scalars, **inputs, **outs))
+def _march(bed, inputs, outs, steps=60):
+    from bauv_sim.sensors import harmonic_march
+
+    names = ("o", "e", "path", "a", "b", "c", "d", "wx", "wy", "top", "cxx", "cyy")
+    scalars = (bed.a0_m, bed.period_x_m, bed.period_y_m, 100.0, 1e-9, steps)
+    results = (outs[k] for k in ("range", "hit", "unresolved", "s"))
+    return harmonic_march.march(*(inputs[k] for k in names), *scalars, *results)
 
 
-def test_c_march_stays_inside_its_buffers_whatever_python_passes():
-    """The march checks every buffer's length and every path index before it reads: a seabed
-    whose coefficients were swapped for shorter ones behind the constructor's back, a path index
-    past the seabeds, an output shorter than the rays, or a path count beyond the arrays are
-    refused with nothing written; consistent arguments give the ranges of ray_ranges."""
+def test_compiled_march_stays_inside_its_arrays_whatever_python_passes():
+    """The march checks every array's length and every path index before it reads (numba
+    checks no bounds): a seabed whose coefficients were swapped for shorter ones behind the
+    constructor's back, a path index past the seabeds, an output shorter than the rays, per-path
+    arrays shorter than the coefficients, or no harmonics are refused with nothing written;
+    consistent arguments give the ranges of ray_ranges."""
     bed = HarmonicSeabed.draw(2, (0, 1, 2))
     o = np.tile([0.0, 0.0, -10.0], (3, 1))
     e = np.tile([0.2, 0.1, -1.0], (3, 1)) / np.linalg.norm([0.2, 0.1, -1.0])
     path = np.arange(3)
     inputs, outs = _march_args(bed, o, e, path)
-    assert _march(bed, 3, 3, inputs, outs) == 0
+    assert _march(bed, inputs, outs) == 0
     np.testing.assert_allclose(outs["range"], bed.ray_ranges(o, e, 100.0)[0], rtol=1e-13)
     for field, value, status in (
         ("path", np.array([0, 1, 3]), -2),  # path 3 of 3 seabeds
@@ -443,29 +446,21 @@ def test_c_march_stays_inside_its_buffers_whatever_python_passes():
     ):
         inputs, outs = _march_args(bed, o, e, path)
         inputs[field] = inputs[field][:1].copy() if value is None else value
-        assert _march(bed, 3, 3, inputs, outs) == status
+        assert _march(bed, inputs, outs) == status
         assert np.all(outs["range"] == -7.0) and np.all(outs["s"] == -7.0)  # nothing written
     inputs, outs = _march_args(bed, o, e, path)
-    assert _march(bed, 3, 4, inputs, outs) == -1  # 4 paths claimed, arrays of 3
+    assert _march(bed, inputs | {"top": inputs["top"][:2]}, outs) == -1  # per-path, of 2
     short = outs | {"s": np.full(2, -7.0)}
-    assert _march(bed, 3, 3, inputs, short) == -1  # an output shorter than the rays
+    assert _march(bed, inputs, short) == -1  # an output shorter than the rays
     assert np.all(short["range"] == -7.0)
-    assert _march(bed, 3, 0, inputs, outs) == -3
+    none = {c: np.ascontiguousarray(inputs[c][:, :0]) for c in "abcd"}
+    assert _march(bed, inputs | none, outs) == -3  # no harmonics
+    assert _march(bed, inputs, outs, steps=-1) == -3
     assert np.all(outs["range"] == -7.0)
     # through the class: coefficients swapped behind the constructor's back
     object.__setattr__(bed, "b", bed.b[:1])
     with pytest.raises(ConfigError, match=r"refused its arguments.*buffer shorter"):
         bed.ray_ranges(o, e, 100.0)
-
-
-def test_a_missing_c_march_is_an_error_that_says_how_to_build_it(monkeypatch):
-    monkeypatch.setattr(multibeam, "_MARCH_LIBRARY", "_no_such_library")
-    multibeam._march_library.cache_clear()
-    try:
-        with pytest.raises(ConfigError, match=r"not built: reinstall the package"):
-            HarmonicSeabed.draw(1, (0,)).ray_ranges(np.zeros((1, 3)), np.array([[0, 0, -1.0]]), 5)
-    finally:
-        multibeam._march_library.cache_clear()
 
 
 def test_online_multibeam_follows_the_moving_hull():

@@ -1,6 +1,7 @@
 """The numpy implementation of :func:`nav.seabed.shift_estimate` and :func:`nav.seabed.fit_slopes`
-as it was before their per-path arithmetic moved to C (``nav/seabed/seabed_shift.c``): the
-reference the tests compare the C path with (``tests/nav/test_seabed_c.py``), and a variant of
+as it was before their per-path arithmetic moved to C (``nav/seabed/seabed_shift.c``, numba's
+:mod:`nav.seabed.kernel` since issue 26): the reference the tests compare the compiled path with
+(``tests/nav/test_seabed_kernel.py``), and a variant of
 ``benchmarks/bench_seabed.py``.
 
 The functions are those of ``nav/seabed.py`` at the commit before the C library, unchanged but

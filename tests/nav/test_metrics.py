@@ -91,34 +91,27 @@ def test_batch_stats_are_series_stats_row_by_row():
     assert np.isnan(batch_stats(v, present)[3]).all()
 
 
-def test_chi2_quantile_closed_forms_and_scipy():
-    """Two degrees of freedom: ``x = -2 log(1 - p)``; one: the square of the normal quantile of
-    ``(1 + p) / 2`` (and ``pi p^2 / 2`` near zero); elsewhere scipy's ``chi2.ppf`` (Cephes), up
-    to three million degrees of freedom (the band of a million 3-D runs)."""
+def test_nees_band_is_the_chi_square_band_of_the_sum():
+    """The band of the NEES averaged over n runs of dimension d: the sum is chi-square with n d
+    degrees of freedom. Two degrees of freedom have the closed form ``x = -2 log(1 - p)``, one
+    the square of the normal quantile; many are near normal with mean k and variance 2 k."""
     from statistics import NormalDist
 
-    from scipy.stats import chi2
+    from nav.metrics import nees_band
 
-    from nav.metrics import chi2_ppf
-
-    for p in (1e-12, 1e-6, 0.001, 0.025, 0.3, 0.5, 0.95, 0.975, 0.999, 1 - 1e-9):
-        assert chi2_ppf(p, 2) == pytest.approx(-2.0 * np.log1p(-p), rel=1e-14, abs=0)
-        if p >= 0.001:  # (1 + p) / 2 keeps p to 1e-13; (1 - p) / 2 is exact above 1/2
-            z = NormalDist().inv_cdf((1 - p) / 2 if p > 0.5 else (1 + p) / 2)
-            assert chi2_ppf(p, 1) == pytest.approx(z * z, rel=1e-12, abs=0)
-    # and near zero, where P(1/2, x/2) = sqrt(2x / pi) (1 - x/6 + ...)
-    assert chi2_ppf(1e-12, 1) == pytest.approx(np.pi / 2 * 1e-24, rel=1e-14, abs=0)
-    for dof in (0.5, 1, 3, 7, 20, 99, 100, 101, 300, 30_000, 300_000, 3_000_000):
-        for p in (1e-10, 0.001, 0.025, 0.5, 0.95, 0.975, 0.999):
-            if p == 1e-10 and dof > 1e6:
-                continue  # scipy is off there (below)
-            assert chi2_ppf(p, dof) == pytest.approx(chi2.ppf(p, dof), rel=2e-12, abs=0)
-    # P(1.5e6, x / 2) of this x, summed in 40-digit arithmetic (the power series), is
-    # 9.99999999998898e-11; scipy's 2984444.26455415 gives 1.0000064e-10
-    assert chi2_ppf(1e-10, 3_000_000) == pytest.approx(2984444.2621490527, rel=1e-13, abs=0)
-    np.testing.assert_allclose(chi2_ppf(np.array([0.1, 0.9]), 3), chi2.ppf([0.1, 0.9], 3), 1e-14)
-    assert chi2_ppf(0.0, 3) == 0.0 and chi2_ppf(1.0, 3) == np.inf
-    assert np.isnan(chi2_ppf(1.5, 3)) and np.isnan(chi2_ppf(0.5, 0))
+    for q in (0.9, 0.95, 0.99):
+        a = (1 - q) / 2
+        lo, hi = nees_band(2, 1, q)
+        assert lo == pytest.approx(-2.0 * np.log1p(-a), rel=1e-13, abs=0)
+        assert hi == pytest.approx(-2.0 * np.log(a), rel=1e-13, abs=0)
+        lo, hi = nees_band(1, 1, q)
+        assert lo == pytest.approx(NormalDist().inv_cdf(0.5 + a / 2) ** 2, rel=1e-12, abs=0)
+        assert hi == pytest.approx(NormalDist().inv_cdf(1 - a / 2) ** 2, rel=1e-12, abs=0)
+        # a million 3-D runs: k = 3e6, the band of the average is 1 -+ z sqrt(2 / k) to 1e-6
+        k, z = 3_000_000, NormalDist().inv_cdf(1 - a)
+        lo, hi = nees_band(3, 1_000_000, q)
+        assert lo / 3 == pytest.approx(1 - z * np.sqrt(2 / k), abs=1e-5)
+        assert hi / 3 == pytest.approx(1 + z * np.sqrt(2 / k), abs=1e-5)
 
 
 def test_first_exceedance_is_the_first_time_beyond_the_limit():

@@ -32,8 +32,6 @@ import nav
 
 out = {"modules": []}
 for info in pkgutil.walk_packages(nav.__path__, "nav."):
-    if info.name.rpartition(".")[2].startswith("_seabed_shift"):
-        continue  # the C library beside nav.seabed, loaded with ctypes, not a Python module
     importlib.import_module(info.name)
     out["modules"].append(info.name)
 

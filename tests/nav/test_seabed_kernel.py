@@ -1,18 +1,12 @@
-"""The seabed shift's C arithmetic (``nav/seabed/seabed_shift.c``, behind
+"""The seabed shift's compiled arithmetic (:mod:`nav.seabed.kernel`, numba, behind
 :func:`nav.seabed.fit_slopes` and :func:`nav.seabed.shift_estimate`) against the numpy
 implementation it replaced (``tests/nav/seabed_reference.py``), on random images with dropouts and
 on degenerate cases."""
 
-import ctypes
-import gc
-import weakref
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from nav import clib
-from nav.errors import NavError, NavInputError
+from nav.errors import NavInputError
 from nav.seabed import BeamGeometry, SlopeBasis, fit_slopes, kernel, shift_estimate
 from nav.seabed import fit as seabed_fit
 
@@ -94,7 +88,7 @@ def _assert_close(got, want, rtol):
     [("one_attitude", "linear"), ("turning", "linear"), ("turning", "exact")],
 )
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_c_shift_equals_the_numpy_reference(seed, reading, delta_e, covariance):
+def test_compiled_shift_equals_the_numpy_reference(seed, reading, delta_e, covariance):
     L0, L1, att0, att1, echo0, echo1, pos, cmd = _images(seed)
     kw = dict(
         echo=echo0,
@@ -125,7 +119,7 @@ def test_c_shift_equals_the_numpy_reference(seed, reading, delta_e, covariance):
 
 @pytest.mark.parametrize("kind", ["harmonic", "plane", "quadratic"])
 @pytest.mark.parametrize("seed", [0, 3])
-def test_c_shift_with_other_bases_and_given_slopes_equals_the_reference(seed, kind):
+def test_compiled_shift_with_other_bases_and_given_slopes_equals_the_reference(seed, kind):
     L0, L1, att0, att1, echo0, echo1, pos, _ = _images(seed)
     basis = SlopeBasis(kind, 17.0, 23.0, 3) if kind == "harmonic" else SlopeBasis(kind)
     kw = dict(echo=echo0, next_echo=echo1, reading="turning", position_m=pos, basis=basis)
@@ -159,7 +153,7 @@ def test_tiny_rcond_takes_the_svd_as_the_reference():
 
 
 @pytest.mark.parametrize("kind", ["harmonic", "plane", "quadratic"])
-def test_c_slope_fit_equals_the_reference_and_hands_ill_conditioned_paths_to_numpy(
+def test_compiled_slope_fit_equals_the_reference_and_hands_ill_conditioned_paths_to_numpy(
     kind, monkeypatch
 ):
     rng = np.random.default_rng(7)
@@ -183,7 +177,7 @@ def test_c_slope_fit_equals_the_reference_and_hands_ill_conditioned_paths_to_num
     want, want_ok = seabed_reference.fit_slopes(pts, valid, basis)
     assert np.array_equal(ok, want_ok)
     _assert_close(grad, want, 1e-10)
-    assert 2 <= sum(handed) < 10  # the bad paths went to numpy, the rest were fitted in C
+    assert 2 <= sum(handed) < 10  # the bad paths went to numpy, the rest were fitted compiled
     # all paths to numpy: the numbers of the reference exactly
     monkeypatch.setattr(seabed_fit, "FIT_C_CONDITION", 0.0)
     grad, ok = fit_slopes(pts, valid, basis)
@@ -193,18 +187,6 @@ def test_c_slope_fit_equals_the_reference_and_hands_ill_conditioned_paths_to_num
 def test_slope_fit_refuses_mismatched_shapes():
     with pytest.raises(NavInputError, match="fit_slopes: points of shape"):
         fit_slopes(np.zeros((2, 10, 3)), np.ones((2, 9), bool), SlopeBasis.seed004())
-
-
-def test_a_missing_c_library_is_an_error_that_says_how_to_build_it(monkeypatch):
-    monkeypatch.setattr(kernel, "LIBRARY", "_no_such_library")
-    kernel.library.cache_clear()
-    try:
-        with pytest.raises(NavError, match=r"not built: reinstall the package"):
-            shift_estimate(
-                np.full((1, 8, 8), 20.0), np.full((1, 8, 8), 20.0), GEO, np.zeros((1, 2))
-            )
-    finally:
-        kernel.library.cache_clear()
 
 
 def test_a_basis_with_more_unknowns_than_feet_is_refused_at_once():
@@ -271,12 +253,11 @@ def test_non_finite_poses_and_slopes_are_refused_in_words():
         fit_slopes(pts, np.ones((1, 64), bool), SlopeBasis.seed004())
 
 
-def test_the_c_entry_points_refuse_buffers_shorter_than_their_sizes_say():
-    """Whatever the caller passes, the C reads and writes only inside the buffers it is told of:
-    a harmonic count whose basis size overflows an int (K = 2^30: (int)(1 + 4 K) was 1, then
-    the basis loop wrote 4 K rows into a buffer of one), a points buffer of one path for two, an
-    output shorter than the paths; nothing is written."""
-    lib = kernel.library()
+def test_the_kernels_refuse_arrays_whose_shapes_disagree():
+    """Whatever the caller passes, the compiled kernels read and write only inside the arrays
+    they are given (numba checks no bounds): a harmonic count beyond the basis the fit takes
+    (K = 2^30, 16, 0), an unknown kind, a points array of one path for two, an output shorter
+    than the paths; nothing is written."""
     P_, m = 2, 64
     pts = np.random.default_rng(1).normal(size=(P_, m, 3))
     valid = np.ones((P_, m), np.uint8)
@@ -285,11 +266,8 @@ def test_the_c_entry_points_refuse_buffers_shorter_than_their_sizes_say():
         grad = np.full((P_, m, 3), -7.0)
         ok = np.full(P_, 9, np.uint8)
         tn = np.full(to_numpy, 9, np.uint8)
-        args = clib.pack(
-            clib.SeabedFitArgs, paths=P_, feet=m, kind=kind, harmonics=K, px=20.0, py=20.0,
-            max_condition=1e4, points=points, valid=valid, grad=grad, fit_ok=ok, to_numpy=tn,
-        )  # fmt: skip
-        return lib.fit(args), grad, ok
+        st = kernel.seabed_fit(points, valid, kind, K, 20.0, 20.0, 1e4, grad, ok, tn)
+        return st, grad, ok
 
     st, grad, ok = fit(2)
     assert st >= 0 and ok.all()
@@ -309,72 +287,12 @@ def test_the_c_entry_points_refuse_buffers_shorter_than_their_sizes_say():
     for short, status in ((None, 0), ("grad", -3), ("cmd", -3), ("rms", -3)):
         grad = e.copy() if short != "grad" else np.ascontiguousarray(e[:1])
         cmd = np.zeros((P_, 3)) if short != "cmd" else np.zeros((1, 3))
-        outs = {"shift": np.full((P_, 3), -7.0), "cov": np.zeros((P_, 3, 3))}
-        outs |= {"used": np.zeros(P_, np.int64), "rank": np.zeros(P_, np.int64)}
-        outs |= {"ok": np.zeros(P_, np.uint8), "rms": np.zeros(P_ if short != "rms" else 1)}
-        args = clib.pack(
-            clib.SeabedShiftArgs, paths=P_, beams=m, residual=1, sigma=0.1, fallback=1e6,
-            rcond=1e-4, singular_floor=1e-9, grad=grad, e=e, de=None, l0=L, l1=L, use=valid,
-            fit_ok=np.ones(P_, np.uint8), cmd=cmd, **outs,
+        shift = np.full((P_, 3), -7.0)
+        rms = np.zeros(P_ if short != "rms" else 1)
+        st = kernel.seabed_shift(
+            grad, e, np.empty((0, 0, 3)), L, L, valid, np.ones(P_, np.uint8), True, 0.1, 1e6,
+            1e-4, 1e-9, cmd, shift, np.zeros((P_, 3, 3)), np.zeros(P_, np.int64),
+            np.zeros(P_, np.int64), np.zeros(P_, np.uint8), rms,
         )  # fmt: skip
-        st = lib.shift(args)
         assert st == status, short
-        assert np.all(outs["shift"] == -7.0) != (status == 0), short
-
-
-def test_the_loader_refuses_a_struct_that_differs_from_the_header():
-    """The loader compares each entry point's struct with its C declaration (nav/clib.h): a field
-    moved, retyped, renamed or missing in the Python mirror is refused when the library is
-    bound, before any call; the mirror as declared passes."""
-    lib = clib.load_library(Path(kernel.__file__).parent, kernel.LIBRARY)
-    clib.check_layout(lib, clib.SeabedFitArgs)
-    clib.check_layout(lib, clib.SeabedShiftArgs)
-    good = clib.SeabedFitArgs._fields_
-    moved = [good[1], good[0], *good[2:]]
-    retyped = [("paths", ctypes.c_double), *good[1:]]  # same size and offsets, another type
-    renamed = [("n_paths", good[0][1]), *good[1:]]
-    for fields in (moved, retyped, renamed, good[:-1]):
-        bad = type(
-            "Bad", (ctypes.Structure,), {"_fields_": fields, "c_name": "bauv_seabed_fit_args"}
-        )
-        with pytest.raises(NavError, match="bauv_seabed_fit_args differs from its mirror"):
-            clib.check_layout(lib, bad)
-    with pytest.raises(NavError, match="no layout of bauv_march_args"):
-        clib.check_layout(lib, clib.MarchArgs)  # a struct this library does not take
-
-
-def test_packing_refuses_what_the_c_cannot_take():
-    """A missing field, a buffer of another element type, a strided array or a read-only output
-    is a NavError naming the view, never a silent copy or a wrong pointer."""
-    full = dict(paths=1, feet=1, kind=1, harmonics=1, px=1.0, py=1.0, max_condition=1.0)
-    bufs = dict(points=np.zeros(3), valid=np.zeros(1, np.uint8), grad=np.zeros(3))
-    bufs |= dict(fit_ok=np.zeros(1, np.uint8), to_numpy=np.zeros(1, np.uint8))
-    clib.pack(clib.SeabedFitArgs, **full, **bufs)
-    with pytest.raises(NavError, match=r"missing fields \['to_numpy'\]"):
-        clib.pack(clib.SeabedFitArgs, **full, **{k: v for k, v in bufs.items() if k != "to_numpy"})
-    ro = np.zeros(3)
-    ro.flags.writeable = False
-    for name, value, match in (
-        ("points", np.zeros(3, np.float32), "bauv_in_f64: need a C-contiguous float64"),
-        ("points", np.zeros(6)[::2], "bauv_in_f64: need a C-contiguous float64"),
-        ("grad", ro, "bauv_out_f64: need a C-contiguous writeable float64"),
-    ):
-        with pytest.raises(NavError, match=match):
-            clib.pack(clib.SeabedFitArgs, **full, **(bufs | {name: value}))
-
-
-def test_a_packed_struct_keeps_its_temporary_arrays_alive():
-    """The struct holds only pointers for C: without a reference to the arrays a temporary (an
-    ``np.ascontiguousarray`` copy made in the call) would be freed before the C reads it."""
-    x = np.arange(5.0) * 2
-    alive = weakref.ref(x)
-    args = clib.pack(
-        clib.SeabedFitArgs, paths=1, feet=1, kind=1, harmonics=1, px=1.0, py=1.0,
-        max_condition=1.0, points=x, valid=None, grad=None, fit_ok=None, to_numpy=None,
-    )  # fmt: skip
-    del x
-    gc.collect()
-    assert alive() is not None
-    data = ctypes.cast(args.points.data, ctypes.POINTER(ctypes.c_double))
-    assert [data[i] for i in range(5)] == [0.0, 2.0, 4.0, 6.0, 8.0]
-    assert args.valid.size == 0 and not args.valid.data  # None: a NULL buffer of size 0
+        assert np.all(shift == -7.0) != (status == 0), short
