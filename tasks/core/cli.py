@@ -314,8 +314,20 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
 
 @cli.command("compare")
 @click.argument("runs", nargs=-1, required=True, metavar="RUN...")
-@click.option("--metric", "patterns", multiple=True, metavar="GLOB", help="Metrics to show.")
-@click.option("--out", default=None, help="Write compare.md, .csv, .png and .pdf here.")
+@click.option(
+    "--metric",
+    "patterns",
+    multiple=True,
+    metavar="GLOB",
+    help="Metrics by glob on metrics.json's dotted names, e.g. 'aggregate.*.mean' (repeatable; "
+    "default: every number outside a list).",
+)
+@click.option(
+    "--out",
+    metavar="DIR",
+    default=None,
+    help="Also write compare.md, compare.csv, compare.png and compare.pdf in DIR (new or empty).",
+)
 def compare_cmd(runs: tuple[str, ...], patterns: tuple[str, ...], out: str | None) -> None:
     """Show the metrics (metrics.json) of run folders RUN... side by side."""
     from tasks.core import compare

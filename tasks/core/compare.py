@@ -57,7 +57,7 @@ TERMINAL_COLUMNS = 100
 FIGURE_PANELS = 24
 """Most metrics drawn in ``compare.png`` (the first ones selected); the files hold them all."""
 
-Value = float | bool
+Value = float | int | bool
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,7 @@ class RunMetrics:
         experiment: the experiment named by ``run.json``.
         seed: the batch seed (``run.json``).
         n_runs: Monte Carlo runs of the batch (``run.json``).
-        values: dotted metric name -> value (numbers as float, booleans as bool), in file order.
+        values: dotted metric name -> value (int, float or bool as in the file), in file order.
     """
 
     folder: Path
@@ -106,8 +106,9 @@ def flatten(data: object, prefix: str = "") -> dict[str, Value]:
         prefix: the name of ``data`` itself ("" at the top).
 
     Returns:
-        Dotted name -> value: dict keys joined by ``.``, list items by their index; numbers as
-        float, booleans as bool. Text, null and non-finite numbers are left out.
+        Dotted name -> value: dict keys joined by ``.``, list items by their index; numbers and
+        booleans as JSON gave them (int, float, bool). Text, null and non-finite numbers are
+        left out.
     """
     out: dict[str, Value] = {}
     if isinstance(data, Mapping):
@@ -115,10 +116,10 @@ def flatten(data: object, prefix: str = "") -> dict[str, Value]:
     elif isinstance(data, list):
         items = ((str(i), v) for i, v in enumerate(data))
     else:
-        if isinstance(data, bool):
+        if isinstance(data, bool | int):
+            out[prefix] = data  # an int stays exact, however large
+        elif isinstance(data, float) and math.isfinite(data):
             out[prefix] = data
-        elif isinstance(data, int | float) and math.isfinite(data):
-            out[prefix] = float(data)
         return out
     for key, value in items:
         out.update(flatten(value, f"{prefix}.{key}" if prefix else key))
@@ -259,6 +260,10 @@ def _short(value: Value | None) -> str:
         return "-"
     if isinstance(value, bool):
         return "true" if value else "false"
+    if isinstance(value, int) and abs(value) >= 10**15:  # 'g' would go through a float
+        digits = str(abs(value))
+        sign = "-" if value < 0 else ""
+        return f"{sign}{digits[0]}.{digits[1:6]}e+{len(digits) - 1}"
     return f"{value:.6g}"
 
 
@@ -339,6 +344,16 @@ def csv_text(cmp: Comparison) -> str:
     return buf.getvalue()
 
 
+def _plotted(value: Value | None) -> float | None:
+    """A value as the bar's length (a boolean as 0 or 1); None if missing or beyond a float."""
+    if value is None:
+        return None
+    try:
+        return float(value)
+    except OverflowError:
+        return None
+
+
 @style.styled
 def figure(cmp: Comparison, path: Path) -> list[str]:
     """Draw the first :data:`FIGURE_PANELS` metrics: a panel each, a horizontal bar per run
@@ -367,12 +382,14 @@ def figure(cmp: Comparison, path: Path) -> list[str]:
         vals = [cmp.value(m, r) for r in cmp.runs]
         y = np.arange(n)[::-1]
         for yi, v, i in zip(y, vals, range(n), strict=True):
-            if v is None:
-                ax.text(0, yi, " missing", ha="left", va="center", fontsize=6, color="0.4")
+            x = _plotted(v)
+            if x is None:
+                why = " missing" if v is None else " beyond a float"
+                ax.text(0, yi, why, ha="left", va="center", fontsize=6, color="0.4")
                 continue
-            ax.barh(yi, float(v), color=colors[i % len(colors)], height=0.7)
-            side = "left" if float(v) >= 0 else "right"
-            ax.text(float(v), yi, f" {_short(v)} ", ha=side, va="center", fontsize=6)
+            ax.barh(yi, x, color=colors[i % len(colors)], height=0.7)
+            side = "left" if x >= 0 else "right"
+            ax.text(x, yi, f" {_short(v)} ", ha=side, va="center", fontsize=6)
         ax.set_yticks(y, ticks)
         ax.axvline(0.0, color="0.3", linewidth=0.6)
         ax.margins(x=0.25)

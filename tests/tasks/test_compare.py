@@ -46,7 +46,7 @@ def read_csv(path: Path) -> tuple[list[str], dict[str, list[str]]]:
 def cell(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
-    return repr(float(value))
+    return repr(value)  # an int as an int, a float as the shortest text that reads back exactly
 
 
 A = {
@@ -62,6 +62,7 @@ B = {
     "aggregate": {"ekf_mean_error_m": {"mean": 1e-17, "max": -3.0}, "n": 7},
     "all_reached": False,
     "extra_m": 12345678.901234567,
+    "events": 2**70,
     "runs": [{"run": 0, "summary": {"duration_s": 111.8}}],
 }
 
@@ -127,12 +128,13 @@ def test_terminal_table_fits_100_columns_and_shows_every_value(tmp_path):
 
 def test_not_finite_values_are_left_out(tmp_path, capsys):
     a = make_run(tmp_path, "a", {"x_m": 1.5, "y_m": 2.0})
-    (a / "metrics.json").write_text('{"x_m": NaN, "y_m": 2.0, "z": Infinity}')
+    huge = "1" + "0" * 400  # an int no float holds: exact in the files, drawn as no bar
+    (a / "metrics.json").write_text(f'{{"x_m": NaN, "y_m": 2.0, "z": Infinity, "n": {huge}}}')
     b = make_run(tmp_path, "b", {"x_m": 1.5, "y_m": 3.0})
     code, err = run_in_process(capsys, "compare", str(a), str(b), "--out", str(tmp_path / "o"))
     assert code == 0, err
     _, rows = read_csv(tmp_path / "o" / "compare.csv")
-    assert rows == {"x_m": ["", "1.5"], "y_m": ["2.0", "3.0"]}
+    assert rows == {"x_m": ["", "1.5"], "y_m": ["2.0", "3.0"], "n": [huge, ""]}
     for f in ("compare.csv", "compare.md"):
         text = (tmp_path / "o" / f).read_text().lower().split("| metric |")[-1]
         assert "nan" not in text and "inf" not in text, text
