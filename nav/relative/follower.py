@@ -52,7 +52,7 @@ class FollowerNavigator:
 
     Args:
         method: ``"dr"``, ``"ga1"``, ``"ga2"`` or ``"ekf"``.
-        position: initial position, shape (2,), m (east, north).
+        position0: initial position, shape (2,), m (east, north).
         sigma_course_rad: sigma_C of eq. 5, rad.
         sigma_speed_m_s: sigma_S of eq. 5, m/s.
         options: GA readings and guards (``restart``, ``sigma_range_m`` also used by the EKF).

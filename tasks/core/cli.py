@@ -8,6 +8,7 @@
     bauv run NAME [--runs N] [--seed S] [--out DIR] [--set k=v ...] [--scenario FILE ...]
                   [--workers K] [--executor local|dask] [--address tcp://host:8786] [--resume]
     bauv view RUN_DIR [--web] [--web-port P] [--grpc-port Q]
+    bauv compare RUN... [--metric GLOB ...] [--out DIR]   metrics of run folders side by side
 
 Exit status: 0 on success, 2 on invalid input (one line naming the field, the value and what is
 allowed; nothing written: bad options, a batch too big for memory, an out folder that cannot be
@@ -315,6 +316,37 @@ def view_cmd(run_dir: str, web: bool, web_port: int, grpc_port: int) -> None:
     if code != 0 and not web:
         click.echo("the native viewer needs a display; try: bauv view RUN_DIR --web", err=True)
     sys.exit(code)
+
+
+@cli.command("compare")
+@click.argument("runs", nargs=-1, required=True, metavar="RUN...")
+@click.option(
+    "--metric",
+    "patterns",
+    multiple=True,
+    metavar="GLOB",
+    help="Metrics by glob on metrics.json's dotted names, e.g. 'aggregate.*.mean' (repeatable; "
+    "default: every number outside a list).",
+)
+@click.option(
+    "--out",
+    metavar="DIR",
+    default=None,
+    help="Also write compare.md, compare.csv, compare.png and compare.pdf in DIR (new or empty).",
+)
+def compare_cmd(runs: tuple[str, ...], patterns: tuple[str, ...], out: str | None) -> None:
+    """Show the metrics (metrics.json) of run folders RUN... side by side."""
+    from tasks.core import compare
+
+    result = compare.compare(runs, patterns)
+    if out is not None:
+        compare.check_out(out)
+    click.echo(compare.terminal_table(result), nl=False)
+    if out is not None:
+        click.echo(f"wrote {', '.join(str(p) for p in compare.write(result, out))}")
+        if len(result.metrics) > compare.FIGURE_PANELS:
+            n = f"{compare.FIGURE_PANELS} of {len(result.metrics)}"
+            click.echo(f"compare.png shows the first {n} metrics (choose them with --metric)")
 
 
 def _stop_signals() -> list[signal.Signals]:
