@@ -249,7 +249,11 @@ def fix_columns(fixes) -> dict[str, dict[str, Column]]:
         for k in spec:
             if k in ENUM_LABELS:  # codes carried as floats in the fix's measurement vector
                 values[k] = values[k].astype(np.int64)
-        out[device] = {k: Column(values[k], *spec[k], labels=ENUM_LABELS.get(k, ())) for k in spec}
+        # spec[k] is (unit, description, components[, nullable]): never as far as labels
+        out[device] = {
+            k: Column(values[k], *spec[k], labels=ENUM_LABELS.get(k, ()))  # type: ignore[misc]
+            for k in spec
+        }
     return out
 
 

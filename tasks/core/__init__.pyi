@@ -6,6 +6,7 @@ from .errors import BatchFailed as BatchFailed, BatchInterrupted as BatchInterru
 from .export import (
     Column as Column,
     ExportError as ExportError,
+    open_dataset as open_dataset,
     read_parquet as read_parquet,
     write_parquet as write_parquet,
 )

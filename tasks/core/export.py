@@ -411,8 +411,7 @@ def key_columns(n: int, run: int, vehicle: str, variant: str | None = None) -> d
         out["variant"] = Column(
             zeros.copy(),
             "text",
-            "variant flown (mission/correction: leg 3's course; "
-            "mission/swarm: the navigation method)",
+            "variant of the run the mission flew (its own name: a course, a navigation method)",
             labels=(variant,),
         )
     return out
