@@ -14,6 +14,11 @@ from .parts import (
     VehicleParts as VehicleParts,
     WaypointSteering as WaypointSteering,
 )
+from .recording import (
+    mission_scene as mission_scene,
+    record_flights as record_flights,
+    RecordingScene as RecordingScene,
+)
 from .report import (
     export_runs as export_runs,
     mission_figures as mission_figures,
@@ -21,8 +26,10 @@ from .report import (
     report_mission as report_mission,
 )
 from .result import (
+    EstimateTrack as EstimateTrack,
     FIX_COLUMNS as FIX_COLUMNS,
     MissionRun as MissionRun,
+    STANDARD_ESTIMATES as STANDARD_ESTIMATES,
     TICK_COLUMNS as TICK_COLUMNS,
     VehicleRun as VehicleRun,
 )

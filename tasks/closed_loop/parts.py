@@ -29,6 +29,7 @@ from bauv_sim.sea import Sea
 from bauv_sim.sensors.rig import RigTick, SensorRig
 from nav.guidance import GuidanceCommand, WaypointGuidance, horizontal_sigma_m
 from tasks.closed_loop.navigation import NavOutput
+from tasks.closed_loop.result import STANDARD_ESTIMATES, EstimateTrack
 
 ACTIONS = (
     ("tail_beat_frequency_hz", "Hz"),
@@ -189,6 +190,10 @@ class VehicleParts:
         extra_columns: per-tick columns a mission adds from the navigation output's typed
             report (:attr:`~tasks.closed_loop.navigation.NavOutput.report`): column name ->
             (field of the report, unit, description, components, nullable).
+        estimates: the position estimates its navigation part yields, by their per-tick
+            columns (the standard part's: the EKF with its covariance, and DR); the recording
+            draws each as this vehicle's track of that method
+            (:mod:`tasks.closed_loop.recording`).
     """
 
     name: str
@@ -200,6 +205,7 @@ class VehicleParts:
     extra_columns: Mapping[str, tuple[str, str, str, tuple[str, ...], bool]] = field(
         default_factory=dict
     )
+    estimates: Sequence[EstimateTrack] = STANDARD_ESTIMATES
 
 
 @dataclass

@@ -134,6 +134,35 @@ ENUM_LABELS: Mapping[str, tuple[str, ...]] = {"guidance_mode": MODES, "refusal":
 files hold them as labelled (dictionary-encoded) columns."""
 
 
+@store.plain_data("closed_loop.EstimateTrack")
+@dataclass(frozen=True)
+class EstimateTrack:
+    """One position estimate a vehicle's navigation part declares, by the per-tick columns that
+    hold it: what the recording draws as that vehicle's track of ``method`` (with its covariance
+    ellipsoid when it has one) and what the run data names.
+
+    Attributes:
+        column: the per-tick position column, shape (T, 3) (east, north, up) or (T, 2) (east,
+            north; drawn at the true depth), m, world ENU.
+        method: the method's name in labels and colours (``"EKF"``, ``"DR"``, ``"GA1"``...):
+            :func:`tasks.core.style.rgb` gives its colour.
+        covariance: the column of its position covariance, shape (T, 3, 3) or (T, 2, 2)
+            (horizontal), m^2, world ENU; ``None`` for an estimate without one (dead reckoning).
+    """
+
+    column: str
+    method: str
+    covariance: str | None = None
+
+
+STANDARD_ESTIMATES: tuple[EstimateTrack, ...] = (
+    EstimateTrack("ekf_pos", "EKF", "ekf_P"),
+    EstimateTrack("dr_pos", "DR"),
+)
+"""The estimates of the standard navigation part (:data:`TICK_COLUMNS`): the EKF with its
+covariance and dead reckoning."""
+
+
 @store.plain_data("closed_loop.VehicleRun")
 @dataclass
 class VehicleRun:
@@ -148,6 +177,8 @@ class VehicleRun:
             leg_end_s.
         summary: scalar results (errors in m, duration s, energy J, fix counts).
         outcome: plain data the mission's parts report at the end (see their ``outcome``).
+        estimates: the position estimates its navigation part declared
+            (:attr:`~tasks.closed_loop.parts.VehicleParts.estimates`), for the recording.
     """
 
     name: str
@@ -156,6 +187,7 @@ class VehicleRun:
     waypoints: list[dict[str, Any]] = field(default_factory=list)
     summary: dict[str, float] = field(default_factory=dict)
     outcome: dict[str, Any] = field(default_factory=dict)
+    estimates: tuple[EstimateTrack, ...] = STANDARD_ESTIMATES
 
     def __getitem__(self, name: str) -> NDArray:
         """The values of a per-tick column."""

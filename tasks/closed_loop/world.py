@@ -434,6 +434,7 @@ class MissionWorld(control.Task):
                 self._logs[v.name].columns(),
                 fix_columns(self._fixes[v.name]),
                 outcome=outcome,
+                estimates=tuple(v.estimates),
             )
             summarise(vr, v.guidance.waypoints(), v.guidance.legs(), v.guidance.done)
             out.vehicles[v.name] = vr

@@ -12,6 +12,8 @@ from .export import (
 )
 from .plan import BatchPlan as BatchPlan, plan_batch as plan_batch
 from .recording import (
+    entity_paths as entity_paths,
+    read_static as read_static,
     read_text_log as read_text_log,
     read_time_series as read_time_series,
     Recording as Recording,

@@ -99,6 +99,7 @@ class Recording:
         color: Color,
         radius_m: float = -5.0,
         strip: bool = True,
+        label: str | None = None,
     ) -> None:
         """A moving point over time (one row per time) and, if ``strip``, its whole path once.
 
@@ -107,6 +108,7 @@ class Recording:
             t_s: times, shape (T,), s.
             pos_world_m: positions, shape (T, 3), m, world.
             radius_m: the moving point's radius, m (negative: UI points).
+            label: the moving point's label in the 3-D view (e.g. ``"f1 GA1"``), or None.
         """
         pos = np.asarray(pos_world_m, dtype=float)
         self.rec.send_columns(
@@ -116,7 +118,9 @@ class Recording:
         )
         self.rec.log(
             f"world/{entity}/position",
-            rr.Points3D.from_fields(radii=radius_m, colors=color),
+            rr.Points3D.from_fields(
+                radii=radius_m, colors=color, labels=None if label is None else [label]
+            ),
             static=True,
         )
         if strip:
@@ -342,6 +346,29 @@ def covariance_ellipsoids(
     V[..., :, 2] *= np.sign(det)[..., None]
     half = k_sigma * np.sqrt(np.maximum(w, 0.0))
     return half, quat_wxyz_to_xyzw(quat_wxyz_from_R(V))
+
+
+def entity_paths(path: Path) -> set[str]:
+    """The entity paths of an ``.rrd`` file (static and temporal), e.g. ``"/world/bauv/body"``."""
+    import rerun.chunk as rc
+
+    return {chunk.entity_path for chunk in rc.RrdReader(str(path)).stream().to_chunks()}
+
+
+def read_static(path: Path, entity: str, component: str) -> list:
+    """Read one static component of one entity back from an ``.rrd`` file: its rows' values
+    (e.g. ``("world/bauv/ekf/position", "Points3D:labels")`` -> ``[["bauv EKF"]]``)."""
+    import rerun.chunk as rc
+
+    want = "/" + entity.strip("/")
+    out: list = []
+    for chunk in rc.RrdReader(str(path)).stream().to_chunks():
+        if chunk.entity_path != want or not chunk.is_static:
+            continue
+        rb = chunk.to_record_batch()
+        if component in rb.schema.names:
+            out += rb.column(component).to_pylist()
+    return out
 
 
 def read_text_log(path: Path, entity: str) -> list[tuple[float, str, str]]:

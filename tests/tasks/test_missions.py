@@ -236,17 +236,17 @@ def test_recording_holds_the_physics_trajectory_and_the_estimates(tmp_path):
     res = fly(WaypointMission(), scn, 0, 0)
     rec = tmp_path / record_mission(SHORT, scn, res, tmp_path)
     a = res.lead
-    t, truth = read_time_series(rec, "world/truth/position", "Points3D:positions")
+    t, truth = read_time_series(rec, "world/bauv/truth/position", "Points3D:positions")
     assert np.allclose(t, a["t"]) and np.allclose(truth, a["truth_pos"], atol=1e-4)
-    _, ekf = read_time_series(rec, "world/ekf/position", "Points3D:positions")
+    _, ekf = read_time_series(rec, "world/bauv/ekf/position", "Points3D:positions")
     assert np.allclose(ekf, a["ekf_pos"], atol=1e-4)
-    _, trans = read_time_series(rec, "world/vehicle", "Transform3D:translation")
+    _, trans = read_time_series(rec, "world/bauv/body", "Transform3D:translation")
     assert np.allclose(trans, a["truth_pos"], atol=1e-4)
-    _, quat = read_time_series(rec, "world/vehicle", "Transform3D:quaternion")
+    _, quat = read_time_series(rec, "world/bauv/body", "Transform3D:quaternion")
     assert np.allclose(
         np.abs(np.einsum("ij,ij->i", quat, a["truth_quat_wxyz"][:, [1, 2, 3, 0]])), 1.0, atol=1e-5
     )
-    _, half = read_time_series(rec, "world/ekf/covariance", "Ellipsoids3D:half_sizes")
+    _, half = read_time_series(rec, "world/bauv/ekf/covariance", "Ellipsoids3D:half_sizes")
     assert len(half) > 50 and np.all(half > 0)
 
 

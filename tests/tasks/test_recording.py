@@ -33,29 +33,29 @@ def test_survey_recording_has_the_estimated_current_beside_the_true_one(survey):
     rec, a = survey
     every = max(1, round(1.0 / float(a["t"][1] - a["t"][0])))
     for comp, j in (("east", 0), ("north", 1)):
-        t, est = read_time_series(rec, f"current/ekf_{comp}", SCALARS)
+        t, est = read_time_series(rec, f"current/bauv/ekf_current_{comp}", SCALARS)
         assert np.allclose(t, a["t"][::every])
         assert np.allclose(est.ravel(), a["ekf_current"][::every, j])
-        _, true = read_time_series(rec, f"current/true_{comp}", SCALARS)
+        _, true = read_time_series(rec, f"current/bauv/true_{comp}", SCALARS)
         assert np.allclose(true.ravel(), a["truth_current"][::every, j])
     # the survey's EKF learns the 0.25 m/s current: at the end within 0.1 m/s of the truth
     assert np.hypot(*(a["ekf_current"][-1] - a["truth_current"][-1, :2])) < 0.1
-    _, arrows = read_time_series(rec, "world/current/estimated", "Arrows3D:vectors")
+    _, arrows = read_time_series(rec, "world/bauv/current/ekf_current", "Arrows3D:vectors")
     assert np.allclose(arrows[:, :2], 20.0 * a["ekf_current"][::every], atol=1e-5)
 
 
 def test_survey_recording_has_the_position_nees_and_its_band(survey):
     rec, a = survey
-    t, nees = read_time_series(rec, "consistency/nees", SCALARS)
+    t, nees = read_time_series(rec, "consistency/bauv/ekf_nees", SCALARS)
     e = a["ekf_pos"] - a["truth_pos"]
     expected = np.array([ei @ np.linalg.inv(Pi) @ ei for ei, Pi in zip(e, a["ekf_P"], strict=True)])
     assert np.allclose(t, a["t"]) and np.allclose(nees.ravel(), expected, rtol=1e-9)
-    _, lo = read_time_series(rec, "consistency/nees_band_low", SCALARS)
-    _, hi = read_time_series(rec, "consistency/nees_band_high", SCALARS)
+    _, lo = read_time_series(rec, "consistency/bauv/ekf_nees_band_low", SCALARS)
+    _, hi = read_time_series(rec, "consistency/bauv/ekf_nees_band_high", SCALARS)
     # chi-square, 3 degrees of freedom, 2.5 % and 97.5 % quantiles
     assert lo.ravel()[0] == pytest.approx(0.2158, abs=1e-4)
     assert hi.ravel()[0] == pytest.approx(9.3484, abs=1e-4)
-    _, nis = read_time_series(rec, "consistency/nis_usbl", SCALARS)
+    _, nis = read_time_series(rec, "consistency/bauv/nis_usbl", SCALARS)
     fx = a.fixes["usbl"]
     assert np.allclose(nis.ravel(), fx["nis"].values[np.isfinite(fx["nis"].values)])
 
@@ -63,23 +63,23 @@ def test_survey_recording_has_the_position_nees_and_its_band(survey):
 def test_survey_recording_has_the_accepted_flag_of_every_fix(survey):
     rec, a = survey
     fx = a.fixes["usbl"]
-    t, flag = read_time_series(rec, "fixes/usbl_accepted", SCALARS)
+    t, flag = read_time_series(rec, "fixes/bauv/usbl_accepted", SCALARS)
     order = np.argsort(fx["t_arrival"].values, kind="stable")
     assert len(t) == len(fx["t_arrival"].values) > 100
     assert np.array_equal(flag.ravel(), fx["accepted"].values[order].astype(float))
-    _, acc = read_time_series(rec, "world/usbl/accepted/latest", "Points3D:positions")
+    _, acc = read_time_series(rec, "world/bauv/usbl/accepted/latest", "Points3D:positions")
     assert len(acc) == int(fx["accepted"].values.sum())
     # innovation: the accepted fix minus the EKF's estimate at its time of validity
-    _, inn = read_time_series(rec, "innovation/usbl_east", SCALARS)
+    _, inn = read_time_series(rec, "innovation/bauv/usbl_east", SCALARS)
     exp = fx["position"].values[:, 0] - np.interp(fx["t_valid"].values, a["t"], a["ekf_pos"][:, 0])
     assert np.allclose(inn.ravel(), exp[order])
 
 
 def test_survey_recording_has_the_event_log(survey):
     rec, a = survey
-    events = read_text_log(rec, "events")
+    events = read_text_log(rec, "events/bauv")
     texts = [e[2] for e in events]
-    assert texts[0].startswith("start") and texts[-1].startswith("end")
+    assert texts[0].startswith("bauv: start") and texts[-1].startswith("bauv: end")
     reached = [e for e in events if "reached" in e[2]]
     wp = a["guidance_waypoint"]
     changes = np.flatnonzero(np.diff(wp) != 0) + 1
@@ -100,10 +100,10 @@ def test_gate_rejections_are_events_and_rejected_fixes(tmp_path):
     rec, a = _record("mission/short", tmp_path, 3, *bad)
     ok = a.fixes["usbl"]["accepted"].values
     assert (~ok).sum() >= 5
-    events = read_text_log(rec, "events")
+    events = read_text_log(rec, "events/bauv")
     rej = [e for e in events if "rejected" in e[2]]
     assert len(rej) == (~ok).sum() and all(e[1] == "WARN" for e in rej)
-    _, pos = read_time_series(rec, "world/usbl/rejected/latest", "Points3D:positions")
+    _, pos = read_time_series(rec, "world/bauv/usbl/rejected/latest", "Points3D:positions")
     assert len(pos) == (~ok).sum()
 
 
@@ -111,9 +111,9 @@ def test_gate_rejections_are_events_and_rejected_fixes(tmp_path):
 def test_fins_and_tail_move_with_their_true_joint_angles(tmp_path):
     rec, a = _record("mission/short", tmp_path)
     for entity, col, j, axis in [
-        ("world/vehicle/fin_port", "truth_fin_angles", 0, (0, -1, 0)),
-        ("world/vehicle/peduncle", "truth_tail_angles", 0, (0, 0, 1)),
-        ("world/vehicle/peduncle/caudal_fin", "truth_tail_angles", 1, (0, 0, 1)),
+        ("world/bauv/body/fin_port", "truth_fin_angles", 0, (0, -1, 0)),
+        ("world/bauv/body/peduncle", "truth_tail_angles", 0, (0, 0, 1)),
+        ("world/bauv/body/peduncle/caudal_fin", "truth_tail_angles", 1, (0, 0, 1)),
     ]:
         _, q = read_time_series(rec, entity, "Transform3D:quaternion")
         angle = a[col][:, j]
@@ -126,7 +126,7 @@ def test_fins_and_tail_move_with_their_true_joint_angles(tmp_path):
 @pytest.mark.slow
 def test_heading_is_recorded_unwrapped(tmp_path):
     rec, a = _record("mission/short", tmp_path)
-    _, h = read_time_series(rec, "heading/true", SCALARS)
+    _, h = read_time_series(rec, "heading/bauv/true", SCALARS)
     step = np.abs(np.diff(h.ravel()))
     assert step.max() < 30.0  # no 360 deg jump
     assert np.allclose(np.mod(h.ravel(), 360.0), np.mod(np.degrees(a["truth_rph"][:, 2]), 360.0))

@@ -92,8 +92,8 @@ def test_parquet_equals_the_recording(batch):
     out, _ = batch
     table = pq.read_table(file(out, "ticks", 0))
     rec = out / "recording.rrd"
-    t, truth = read_time_series(rec, "world/truth/position", "Points3D:positions")
-    _, ekf = read_time_series(rec, "world/ekf/position", "Points3D:positions")
+    t, truth = read_time_series(rec, "world/bauv/truth/position", "Points3D:positions")
+    _, ekf = read_time_series(rec, "world/bauv/ekf/position", "Points3D:positions")
     assert np.allclose(t, table["t"].to_numpy())
     for name, got in (("truth_pos", truth), ("ekf_pos", ekf)):
         want = np.column_stack([table[f"{name}_{a}"].to_numpy() for a in ("east", "north", "up")])

@@ -226,16 +226,17 @@ def test_report_recording_and_warning_of_a_batch(tmp_path):
     rec = out / "recording.rrd"
     data = json.loads(json.dumps(m["runs"][0]["metrics"]["ga2"]))
     assert data["f1"]["fixes_accepted"] == 2  # at 5 and 10 s, then the outage
-    for v in ("leader", "f1", "f2"):
-        t, truth = read_time_series(rec, f"world/{v}/truth/position", "Points3D:positions")
-        _, est = read_time_series(rec, f"world/{v}/estimate/position", "Points3D:positions")
+    for v, m in (("leader", "ekf"), ("f1", "ga2"), ("f2", "ga2")):
+        root = f"world/ga2/{v}"
+        t, truth = read_time_series(rec, f"{root}/truth/position", "Points3D:positions")
+        _, est = read_time_series(rec, f"{root}/{m}/position", "Points3D:positions")
         assert len(t) == 201 and truth.shape == est.shape == (201, 3)
-    t, circles = read_time_series(rec, "world/f1/range_circle", "LineStrips3D:strips")
+    t, circles = read_time_series(rec, "world/ga2/f1/modem/range", "LineStrips3D:strips")
     assert len(t) == 2  # one circle at each of the two fixes, at its arrival
     for c in np.asarray(circles, dtype=float):
         r = np.hypot(*(c[:, :2] - c[:-1, :2].mean(axis=0)).T)
         assert np.allclose(r, r[0], atol=1e-3) and 7.0 < r[0] < 14.0  # about 10 m abeam
-    th, hdop = read_time_series(rec, "hdop/f1", "Scalars:scalars")
+    th, hdop = read_time_series(rec, "mission/ga2/f1/hdop", "Scalars:scalars")
     assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
     assert (out / "data" / "modem" / "run-000000-ga2-f1.parquet").is_file()
     # the batch's ticks as one table: every method and vehicle, the followers' own columns

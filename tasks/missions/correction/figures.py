@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tasks.closed_loop.report import circle, record_mission
+from tasks.closed_loop.report import circle
 from tasks.closed_loop.result import MissionRun
 from tasks.missions.correction.run import CorrectionRunResult
 from tasks.missions.correction.scenario import CorrectionScenario
@@ -115,49 +115,14 @@ def _draw_current(scn: CorrectionScenario, rec: CorrectionRunResult, out, style)
     return style.save(fig, out / "current-along-track.png")
 
 
-def record_correction(name: str, scn: CorrectionScenario, flight: MissionRun, out) -> list[str]:
-    """The recordings of the recorded run's compensated flight: the mission recording, and a
-    second one with the DR tracks and the estimated current beside the true one."""
+def record_correction(
+    name: str, scn: CorrectionScenario, flights: dict[str, MissionRun], out
+) -> list[str]:
+    """The recording of the recorded run: both flights (leg 3 on the compensated and on the
+    direct course) in one file, each under its own subtree (:func:`tasks.closed_loop.recording.
+    record_flights`): the DRNS tracks without and after the correction, the baseline's, the
+    EKF's, the GPS fixes, the correction's current estimate beside the true current."""
+    from tasks.closed_loop.recording import mission_scene, record_flights
 
-    from tasks.core import style
-    from tasks.core.recording import Recording
-
-    path = record_mission(name, scn, flight, out)
-    a = flight.lead
-    rec = Recording(
-        out / "recording-correction.rrd", name, f"{name}/seed{flight.seed}/run{flight.run}/dr"
-    )
-    t = a["t"]
-    z = a["truth_pos"][:, 2:3]
-    # the figure's looks (tasks.core.style): DR without CP, DR after the procedure, GPS
-    cp = style.rgb(scn.correction.procedure.upper())
-    rec.track("truth", t, a["truth_pos"], style.rgb("truth"))
-    rec.track("dr_uncorrected", t, np.column_stack([a["dr_uncorrected"], z]), style.rgb("DR"))
-    rec.track("dr_corrected", t, np.column_stack([a["dr_corrected"], z]), cp)
-    gps = a.fixes.get("gps")
-    if gps:
-        rec.fixes("gps", gps["t_valid"].values, gps["position"].values, style.rgb("GPS"))
-    every = max(1, round(1.0 / float(t[1] - t[0])))
-    origins = a["truth_pos"][::every] + [0.0, 0.0, 2.0]
-    # the current at the vehicle and the correction's estimate of it (x20 to be visible)
-    rec.arrows(
-        "current/true", t[::every], origins, 20.0 * a["truth_current"][::every], (0, 190, 220)
-    )
-    rec.arrows(
-        "current/estimated",
-        t[::every],
-        origins + [0.0, 0.0, 1.0],
-        20.0 * np.nan_to_num(a["cp_current"][::every]),
-        (31, 119, 180),
-    )
-    for key, color in [("uncorrected", style.rgb("DR")), ("corrected", cp)]:
-        rec.scalars(
-            f"errors/dr_{key}",
-            t,
-            np.linalg.norm(a[f"dr_{key}"] - a["truth_pos"][:, :2], axis=1),
-            color,
-            f"DR {key} horizontal error (m)",
-        )
-    rec.blueprint("errors")
-    rec.close()
-    return [path, "recording-correction.rrd"]
+    flown = {law: f for law, f in flights.items() if f.vehicles}
+    return [record_flights(out, name, mission_scene(scn), flown)]

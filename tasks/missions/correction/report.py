@@ -183,7 +183,7 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
             files += current_figure(exp.name, scn, rec, ctx.out_dir)
         if scn.report.recording and flight.vehicles:
             flown = run_scenario(scn, ctx.seed, rec.run)
-            files += record_correction(exp.name, flown, flight, ctx.out_dir)
+            files += record_correction(exp.name, flown, rec.flights, ctx.out_dir)
     text = "".join(t.to_text() + "\n" for t in tables[:2])
     text += tc.note + "\n" + ta.note + "\n" + f"wrote {len(files)} files to {ctx.out_dir}\n"
     return ReportSummary(text, tuple(files))

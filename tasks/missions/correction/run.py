@@ -27,7 +27,7 @@ from nav.surfacing import (
 )
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput, report_of
 from tasks.closed_loop.parts import MissionParts, WaypointSteering
-from tasks.closed_loop.result import MissionRun, VehicleRun
+from tasks.closed_loop.result import EstimateTrack, MissionRun, VehicleRun
 from tasks.closed_loop.world import (
     WaypointMission,
     fly,
@@ -227,6 +227,12 @@ class CorrectionMission(WaypointMission):
             self.course_law,
         )
         v.extra_columns = EXTRA_COLUMNS
+        v.estimates = (
+            EstimateTrack("ekf_pos", "EKF", "ekf_P"),
+            EstimateTrack("dr_uncorrected", "DR"),
+            EstimateTrack("dr_corrected", scenario.correction.procedure.upper()),
+            EstimateTrack("dr_baseline", "baseline"),
+        )
         return MissionParts([v], scenario_sea(scenario, seed, run))
 
 

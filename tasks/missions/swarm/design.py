@@ -16,6 +16,7 @@ from bauv_sim.frames import unit_vector_scalar
 from bauv_sim.sensors.online import Broadcast, lever_arm_from_site
 from bauv_sim.sensors.rig import SensorRig
 from tasks.closed_loop.parts import MissionParts, VehicleParts
+from tasks.closed_loop.result import EstimateTrack
 from tasks.closed_loop.scenario import StartConfig
 from tasks.closed_loop.world import place_vehicle, scenario_sea, standard_vehicle, streams
 from tasks.missions.swarm.coop import CoopFollowerNavigation
@@ -150,7 +151,16 @@ class SwarmMission:
                 scn.station, stations[i], tick, lambda g=leader_guidance: g.done
             )
             vehicles.append(
-                VehicleParts(name, rig, nav, guidance, fc.autopilot, table, FOLLOWER_COLUMNS)
+                VehicleParts(
+                    name,
+                    rig,
+                    nav,
+                    guidance,
+                    fc.autopilot,
+                    table,
+                    FOLLOWER_COLUMNS,
+                    follower_estimates(self.method),
+                )
             )
         return MissionParts(vehicles, scenario_sea(scn, seed, run))
 
@@ -198,3 +208,16 @@ def decentralised_navigation(
         REFUSAL_CODES,
         2 * net.period_s,
     )
+
+
+METHOD_LABELS = {"ga1": "GA1", "ga2": "GA2", "ekf": "EKF", "dr": "DR", "decentralised": "CI"}
+"""The followers' methods as the figures and recordings name them."""
+
+
+def follower_estimates(method: str) -> tuple[EstimateTrack, ...]:
+    """A follower's estimates: its method's position with its covariance (``ekf_pos``,
+    ``ekf_P``: the navigator's estimate, whatever the method) and, for a method that uses the
+    ranges, its own dead reckoning beside it."""
+    label = METHOD_LABELS.get(method, method)
+    own = EstimateTrack("ekf_pos", label, "ekf_P")
+    return (own,) if method == "dr" else (own, EstimateTrack("dr_pos", "DR"))

@@ -100,97 +100,12 @@ def _draw_swarm(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out
     return style.save(fig, out / "swarm.png")
 
 
-def record_swarm(name: str, scn: SwarmScenario, run: MissionRun, method: str, out) -> str:
-    """``recording.rrd`` of a flight: every vehicle (hull, truth, estimate), each follower's
-    range circle at each fix (the leader position it used, the horizontal range), its HDOP, its
-    station and navigation errors."""
-    import rerun as rr
+def record_swarm(name: str, scn: SwarmScenario, flights: dict[str, MissionRun], out) -> str:
+    """``recording.rrd`` of a run: every method's flight in one file, each under its own subtree
+    and 3-D view (:func:`tasks.closed_loop.recording.record_flights`): every vehicle's hull,
+    truth and estimate labelled with the vehicle and the method, the followers' range circles,
+    the leader's way-points, the transceiver and the seabed."""
+    from tasks.closed_loop.recording import mission_scene, record_flights
 
-    from bauv_sim.frames import quat_wxyz_to_xyzw
-    from bauv_sim.hull import MODEL_DIR
-    from tasks.closed_loop.report import circle
-    from tasks.core.recording import TIMELINE, Recording
-
-    rec = Recording(out / "recording.rrd", name, f"{name}/seed{run.seed}/run{run.run}/{method}")
-    r = rec.rec
-    tick = scn.timing.control_tick_s
-    lead = run.vehicles[LEADER]
-    course = leader_course_true(lead, max(1, round(scn.leader.velocity_window_s / tick)))
-    tx = np.array([scn.transceiver_east_m, scn.transceiver_north_m, -20.0])
-    rec.point("transceiver", tx, (0, 0, 0), "USBL transceiver")
-    stations = dict(zip(FOLLOWERS, station_offsets(scn), strict=False))
-    plots = []
-    for (vn, v), color in zip(run.vehicles.items(), itertools.cycle(COLORS_V)):
-        t = v["t"]
-        r.send_columns(
-            f"world/{vn}/vehicle",
-            indexes=[rr.TimeColumn(TIMELINE, duration=t)],
-            columns=rr.Transform3D.columns(
-                translation=v["truth_pos"], quaternion=quat_wxyz_to_xyzw(v["truth_quat_wxyz"])
-            ),
-        )
-        r.log(
-            f"world/{vn}/vehicle/hull",
-            rr.Asset3D(path=MODEL_DIR / "assets" / "hull.obj"),
-            static=True,
-        )
-        rec.track(f"{vn}/truth", t, v["truth_pos"], color)
-        light = tuple(int(c + (255 - c) * 0.5) for c in color)
-        rec.track(f"{vn}/estimate", t, v["ekf_pos"], light, radius_m=0.4)
-        if vn == LEADER:
-            continue
-        fx = v.fixes.get("modem")
-        if fx:
-            z = -scn.station.depth_m
-            for ta, rng_h, ce, cn, ok in zip(
-                fx["t_arrival"].values,
-                fx["horizontal_range"].values,
-                fx["centre_east"].values,
-                fx["centre_north"].values,
-                fx["accepted"].values,
-                strict=True,
-            ):
-                r.set_time(TIMELINE, duration=float(ta))
-                if rng_h > 0:
-                    r.log(
-                        f"world/{vn}/range_circle",
-                        rr.LineStrips3D(
-                            [circle(float(ce), float(cn), float(rng_h), z)],
-                            colors=color if ok else (150, 150, 150),
-                            radii=0.08,
-                        ),
-                    )
-            r.reset_time()
-        rec.scalars(f"hdop/{vn}", t, v["hdop"], color, f"{vn} HDOP")
-        st = stations[vn]
-        n = min(len(t), len(lead["t"]))
-        b = math.radians(st.relative_bearing_deg)
-        sp = lead["truth_pos"][:n, :2] + st.distance_m * np.column_stack(
-            [np.sin(course[:n] + b), np.cos(course[:n] + b)]
-        )
-        rec.track(
-            f"{vn}/station",
-            t[:n],
-            np.column_stack([sp, np.full(n, -scn.station.depth_m)]),
-            (255, 127, 14),
-            radius_m=0.3,
-            strip=False,
-        )
-        rec.scalars(
-            f"station_error/{vn}",
-            t[:n],
-            np.hypot(*(v["truth_pos"][:n, :2] - sp).T),
-            color,
-            f"{vn} true distance to station (m)",
-        )
-        rec.scalars(
-            f"errors/{vn}",
-            t,
-            np.hypot(*(v["ekf_pos"] - v["truth_pos"])[:, :2].T),
-            color,
-            f"{vn} {method.upper()} position error (m)",
-        )
-        plots = ["hdop", "station_error", "errors"]
-    rec.blueprint(*plots)
-    rec.close()
-    return "recording.rrd"
+    scene = mission_scene(scn, guidance=scn.leader.guidance, transceiver=True)
+    return record_flights(out, name, scene, {m: f for m, f in flights.items() if f.vehicles})

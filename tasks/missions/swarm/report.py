@@ -293,7 +293,7 @@ def report_swarm(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
             if scn.report.figures:
                 files += swarm_figure(exp.name, scn, rec, methods, ctx.out_dir)
             if scn.report.recording:
-                files.append(record_swarm(exp.name, scn, flight, methods[0], ctx.out_dir))
+                files.append(record_swarm(exp.name, scn, rec.flights, ctx.out_dir))
     text = "".join(t.to_text() + "\n" for t in tables)
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"
     return ReportSummary(text, tuple(files), tuple(failures), tuple(diverged))

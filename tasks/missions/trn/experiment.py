@@ -26,7 +26,6 @@ class TrnExperiment(MissionExperiment):
 
     scenario_type = TrnScenario
     metrics_type = TrnMetrics
-    report_seabed = False  # its report records no seabed mesh
 
     def flight(self, scenario: TrnScenario, seed: int, run: int):
         return TrnMission(), scenario

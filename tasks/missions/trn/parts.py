@@ -28,6 +28,7 @@ from nav.trn import (
 )
 from tasks.closed_loop import parts as P
 from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance
+from tasks.closed_loop.result import EstimateTrack
 from tasks.closed_loop.world import (
     place_vehicle,
     scenario_sea,
@@ -35,7 +36,7 @@ from tasks.closed_loop.world import (
     streams,
     waypoint_guidance,
 )
-from tasks.missions.trn.scenario import METHODS, TrnScenario
+from tasks.missions.trn.scenario import LABELS, METHODS, TrnScenario
 from tasks.missions.trn.terrain import navigator_map
 
 Array = NDArray[np.float64]
@@ -289,6 +290,13 @@ EXTRA_COLUMNS: dict[str, tuple[str, str, str, tuple[str, ...], bool]] = {
 }
 """Per-tick columns the mission adds (:class:`TrnReport`)."""
 
+ESTIMATES = (
+    EstimateTrack("ekf_pos", "EKF", "ekf_P"),
+    *(EstimateTrack(m, LABELS[m], "trn_pf_P" if m == "trn_pf" else None) for m in METHODS),
+)
+"""The estimates the recording draws: the vehicle's EKF (USBL until the dive, the log EKF after
+it) with its covariance, and every method (the particle TRN with its horizontal covariance)."""
+
 
 @dataclass(frozen=True)
 class TrnMission:
@@ -331,4 +339,5 @@ class TrnMission:
         guidance = P.WaypointSteering(waypoint_guidance(scn, rig), "ekf")
         v = P.VehicleParts("bauv", rig, nav, guidance, scn.autopilot, table)
         v.extra_columns = EXTRA_COLUMNS
+        v.estimates = ESTIMATES
         return P.MissionParts([v], scenario_sea(scn, seed, run))

@@ -248,6 +248,11 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
         rec = next((r for r in results if r.track and len(r.track["truth"]) > 1), None)
         if rec is not None:
             files += plan_figure(exp.name, scn, rec, ctx.seed, ctx.out_dir)
+    flown = next((r.flight for r in results if r.flight is not None and r.flight.vehicles), None)
+    if scn.report.recording and flown is not None and len(flown.lead["t"]) > 1:
+        from tasks.closed_loop.recording import mission_scene, record_flights
+
+        files.append(record_flights(ctx.out_dir, exp.name, mission_scene(scn), {"": flown}))
     text = "\n".join(t.to_text() for t in (t1, t2, t3)) + "\n"
     text += f"check 2: {check2.verdict}\n"
     text += "".join(f"check 4: {v.verdict}\n" for v in trn.values())

@@ -199,7 +199,6 @@ PRESET = {
     "guidance": {"waypoints": SURVEY_WAYPOINTS, "speed_m_s": 1.0},
     "sensors": {"use_gps": False},
     "timing": {"max_duration_s": 720.0},
-    "report": {"recording": False},
 }
 """``mission/trn``'s preset (package docstring)."""
 
