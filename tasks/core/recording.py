@@ -101,7 +101,8 @@ class Recording:
         strip: bool = True,
         label: str | None = None,
     ) -> None:
-        """A moving point over time (one row per time) and, if ``strip``, its whole path once.
+        """A moving point over time (one row per time) and, if ``strip``, its whole path once;
+        rows with a non-finite position are left out.
 
         Args:
             entity: entity path under ``world/``.
@@ -111,6 +112,8 @@ class Recording:
             label: the moving point's label in the 3-D view (e.g. ``"f1 GA1"``), or None.
         """
         pos = np.asarray(pos_world_m, dtype=float)
+        keep = np.isfinite(pos).all(axis=1)  # an estimate not yet started (NaN) is left out
+        pos, t_s = pos[keep], np.asarray(t_s, dtype=float)[keep]
         self.rec.send_columns(
             f"world/{entity}/position",
             indexes=self._time(t_s),
@@ -161,18 +164,22 @@ class Recording:
         k_sigma: float = 1.0,
     ) -> None:
         """Covariance ellipsoids over time: half sizes ``k_sigma * sqrt(eigenvalues)`` along the
-        eigenvectors.
+        eigenvectors; rows with a non-finite centre or covariance are left out.
 
         Args:
             centers_world_m: shape (T, 3).
             cov_world_m2: shape (T, 3, 3).
         """
-        half, quat_xyzw = covariance_ellipsoids(cov_world_m2, k_sigma)
+        centers = np.asarray(centers_world_m, dtype=float)
+        cov = np.asarray(cov_world_m2, dtype=float)
+        keep = np.isfinite(centers).all(axis=1) & np.isfinite(cov).all(axis=(1, 2))
+        centers, cov, t_s = centers[keep], cov[keep], np.asarray(t_s, dtype=float)[keep]
+        half, quat_xyzw = covariance_ellipsoids(cov, k_sigma)
         self.rec.send_columns(
             f"world/{entity}/covariance",
             indexes=self._time(t_s),
             columns=rr.Ellipsoids3D.columns(
-                centers=np.asarray(centers_world_m, dtype=float),
+                centers=centers,
                 half_sizes=half,
                 quaternions=quat_xyzw,
             ),
