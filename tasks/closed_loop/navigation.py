@@ -59,14 +59,17 @@ class FixRecord:
     """A position fix as the navigator received it.
 
     Attributes:
-        device: ``"usbl"`` or ``"gps"``.
+        device: ``"usbl"`` or ``"gps"`` (missions add theirs: ``"modem"``, ``"doa"``; the
+            columns of each: :data:`tasks.closed_loop.result.FIX_COLUMNS`).
         t_valid_s: time of validity, s.
         t_arrival_s: time it reached the vehicle, s.
         z: the measurement, shape (m,): USBL (range m, azimuth rad, elevation rad), GPS antenna
-            (east m, north m).
+            (east m, north m), DOA (beacon, azimuth rad, elevation rad, tan phi, tan lambda,
+            tangent ok, beacon east/north/up m).
         accepted: whether the navigator applied it (not rejected by the gate or refused).
         position_m: the fix's own position of the vehicle's reference point, shape (3,), m,
-            world (USBL inverted; GPS: the antenna's fix, up = 0).
+            world (USBL inverted; GPS: the antenna's fix, up = 0; a bearing has none: DOA
+            gives the filter's estimate at its arrival, not written to the run data).
         nis: the update's normalised innovation squared ``y^T S^-1 y`` (what the gate tests),
             NaN when the navigator refused the fix before computing it (or did not apply GPS).
         reference_m: a horizontal fix of the vehicle's reference point (east, north), shape

@@ -114,8 +114,28 @@ FIX_COLUMNS: Mapping[str, Mapping[str, tuple]] = {
         "accepted": ("bool", "the range corrected the estimate", ()),
         "position": ("m", "the estimate after the range, world ENU (up = -depth)", ENU),
     },
+    "doa": {
+        "t_valid": ("s", "time of validity (the bearing set)", ()),
+        "t_arrival": ("s", "time the bearing reached the navigator", ()),
+        "beacon": ("index", "the beacon seen: i of the scene's site beacon_<i>", ()),
+        "azimuth": ("rad", "measured azimuth of the beacon, clockwise from north", ()),
+        "elevation": ("rad", "measured elevation of the beacon, positive up", ()),
+        "tan_phi": (
+            "1",
+            "measured tan(phi), phi counter-clockwise from east (seed 004 eq. 17); 0 where the "
+            "tangent is not ok",
+            (),
+        ),
+        "tan_lambda": ("1", "measured tan(lambda) (seed 004 eq. 17); 0 where not ok", ()),
+        "tangent_ok": ("bool", "the tangent pair is within doa.max_tangent", ()),
+        "accepted": ("bool", "the filter's update at a filter step took the bearing", ()),
+        "beacon_east": ("m", "east of the beacon (the scene's site)", ()),
+        "beacon_north": ("m", "north of the beacon", ()),
+        "beacon_up": ("m", "up of the beacon", ()),
+    },
 }
-"""Columns of the fix tables, by device."""
+"""Columns of the fix tables, by device (``doa``: one row per bearing of a set, ``mission/seed004``;
+its fix record's measurement vector is the columns after ``t_arrival`` but ``accepted``)."""
 
 REFUSAL_LABELS = (
     "ok",
@@ -280,6 +300,10 @@ def fix_columns(fixes) -> dict[str, dict[str, Column]]:
             values[name] = z[:, j]
         for k in spec:
             if k in ENUM_LABELS:  # codes carried as floats in the fix's measurement vector
+                values[k] = values[k].astype(np.int64)
+            elif spec[k][0] == "bool":  # flags carried as floats there too
+                values[k] = values[k].astype(bool)
+            elif spec[k][0] == "index":
                 values[k] = values[k].astype(np.int64)
         # spec[k] is (unit, description, components[, nullable]): never as far as labels
         out[device] = {

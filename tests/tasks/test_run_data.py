@@ -118,17 +118,18 @@ def test_every_columns_unit_is_the_one_docs_run_data_states(batch):
     ticks = doc["`data/ticks/`"]
     fixes = doc["`data/usbl/` and `data/gps/`"]
     modem = doc["`data/modem/` (`mission/swarm`'s followers)"]
+    doa = doc["`data/doa/` (`mission/seed004`)"]
     assert ticks["meas_heading_deg"] == "deg" and fixes["azimuth_deg"] == "deg"  # parse found them
     for name, (unit, _, _) in TICK_COLUMNS.items():
         name, unit = as_written(name, unit)
         assert ticks.get(name) == unit, (name, unit, ticks.get(name))
     assert ticks["ekf_current"] == CURRENT_COLUMN[0]
-    for device, table in (("usbl", fixes), ("gps", fixes), ("modem", modem)):
+    for device, table in (("usbl", fixes), ("gps", fixes), ("modem", modem), ("doa", doa)):
         for name, spec in FIX_COLUMNS[device].items():
             name, unit = as_written(name, spec[0])
             assert table.get(name) == unit, (device, name, unit, table.get(name))
     for key in ("run", "vehicle", "variant"):
-        assert key in ticks and key in fixes and key in modem, key
+        assert key in ticks and key in fixes and key in modem and key in doa, key
     out, _ = batch
     for path in sorted((out / "data").glob("*/run-000000-bauv.parquet")):
         table = ticks if path.parent.name == "ticks" else fixes
@@ -212,14 +213,16 @@ def test_attitude_components_are_the_quaternions_roll_pitch_heading(batch):
 
 
 def test_missions_own_columns_have_the_units_docs_run_data_states():
-    """The per-tick columns mission/correction and mission/swarm's followers add carry the units
-    ``docs/run-data.md`` gives them in its paragraphs on those missions."""
+    """The per-tick columns mission/correction, mission/swarm's followers and mission/seed004 add
+    carry the units ``docs/run-data.md`` gives them in its paragraphs on those missions."""
     from tasks.missions.correction import EXTRA_COLUMNS
+    from tasks.missions.seed004.parts import EXTRA_COLUMNS as SEED004_COLUMNS
     from tasks.missions.swarm import FOLLOWER_COLUMNS
 
     for lead, columns in (
         ("`mission/correction` adds", EXTRA_COLUMNS),
         ("`mission/swarm`'s followers", FOLLOWER_COLUMNS),
+        ("`mission/seed004` flies one filter", SEED004_COLUMNS),
     ):
         doc = prose_units(lead)
         assert len(doc) == len(columns), (lead, sorted(doc))

@@ -12,11 +12,13 @@ import math
 import re
 
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
 
 from bauv_sim.build import build_physics
 from nav.bearings import velocity
 from tasks.core import registry
+from tasks.core.export import open_dataset
 from tasks.core.runner import plan_batch, run
 from tasks.missions.seed004 import (
     Seed004Mission,
@@ -77,6 +79,73 @@ def test_short_run_completes_without_nan_and_stays_on_the_path(short_runs):
 def test_same_seed_same_numbers(short_runs):
     a, b = ((o / "metrics.json").read_text() for o in short_runs)
     assert a == b
+    files = sorted(p.relative_to(short_runs[0]) for p in short_runs[0].rglob("*.parquet"))
+    assert len(files) == 6  # ticks and doa of each filter's flight
+    for rel in files:
+        ta, tb = (pq.read_table(o / rel) for o in short_runs)
+        assert ta.equals(tb), rel
+
+
+def test_every_filters_flight_is_run_data_with_its_own_estimate(short_runs):
+    """Each filter's flight is in the Parquet run data as its variant: the truth, that filter's
+    estimate and covariance, DR and the commands per tick. Truth: the three flights start from
+    the same state (same seed and run); the estimate moves only at the filter's 1 s steps (the
+    standard EKF's would move every tick); its error at the filter steps equals the metrics'
+    RMSE (computed from the flight in the worker, not from the files); each filter's estimates
+    are its own."""
+    t = open_dataset(short_runs[0], "ticks").to_pandas()
+    m = _metrics(short_runs[0])
+    assert sorted(t["variant"].unique()) == ["cmnf", "ekf", "upmf"]
+    est, starts = {}, []
+    for f, g in t.groupby("variant", observed=True):
+        assert len(g) == 101 and g["t"].iloc[-1] == pytest.approx(20.0)  # 20 s at 0.2 s
+        for c in ("truth_pos_east", "ekf_pos_east", "ekf_P_east_east", "dr_pos_east"):
+            assert g[c].notna().all(), (f, c)
+        assert (g["ekf_P_east_east"] > 0).all()
+        assert g["cmd_tail_beat_frequency"].max() > 0
+        # the filter's estimate moves at its steps only (the standard EKF beside it moves
+        # every tick with the dead reckoning)
+        x = g[["ekf_pos_east", "ekf_pos_north", "ekf_pos_up", "ekf_P_east_east"]].to_numpy()
+        moved = np.any(np.diff(x, axis=0) != 0, axis=1)
+        assert moved.any() and (g["filter_step"].to_numpy()[1:][moved] >= 1).all(), f
+        steps = g[g["filter_step"] >= 1]
+        e = np.linalg.norm(
+            [steps[f"ekf_pos_{c}"] - steps[f"truth_pos_{c}"] for c in ("east", "north", "up")],
+            axis=0,
+        )
+        assert np.sqrt(np.mean(e**2)) == pytest.approx(m["filters"][f]["est_rmse_m"], rel=1e-12)
+        est[f] = steps[["ekf_pos_east", "ekf_pos_north"]].to_numpy()
+        starts.append(g.iloc[0][["truth_pos_east", "truth_pos_north", "truth_pos_up"]])
+    for s in starts[1:]:
+        np.testing.assert_array_equal(s.to_numpy(float), starts[0].to_numpy(float))
+    assert not np.array_equal(est["ekf"], est["cmnf"])
+
+
+def test_bearings_are_the_geometry_to_the_beacons_within_their_noise(short_runs):
+    """The ``doa`` table: per filter flight, one row per bearing of each set (4 beacons, one set
+    a second), accepted when the filter took it. Truth: the azimuth (clockwise from north) and
+    elevation of each beacon seen from the true position at the bearing's time, by hand; the
+    seed's 0.5 deg tangent noise leaves them within 3 deg."""
+    d = open_dataset(short_runs[0], "doa").to_pandas()
+    t = open_dataset(short_runs[0], "ticks").to_pandas()
+    scn = plan_batch(NAME, overrides=FAST).scenario
+    b = beacons_world(scn)
+    for f, g in d.groupby("variant", observed=True):
+        assert len(g) == 4 * 20 and g["accepted"].all() and g["tangent_ok"].all(), f
+        tt = t[t["variant"] == f].set_index("t")
+        pos = tt.loc[g["t_valid"], ["truth_pos_east", "truth_pos_north", "truth_pos_up"]]
+        bb = b[g["beacon"].to_numpy()]
+        np.testing.assert_allclose(
+            g[["beacon_east", "beacon_north", "beacon_up"]].to_numpy(), bb, atol=5e-3
+        )
+        de, dn, du = (bb - pos.to_numpy()).T
+        az = np.degrees(np.arctan2(de, dn)) % 360
+        el = np.degrees(np.arctan2(du, np.hypot(de, dn)))
+        err_az = (g["azimuth_deg"].to_numpy() - az + 180) % 360 - 180
+        assert np.abs(err_az).max() < 3.0, (f, np.abs(err_az).max())
+        assert np.abs(g["elevation_deg"].to_numpy() - el).max() < 3.0
+        phi = np.radians(90.0 - g["azimuth_deg"].to_numpy())
+        np.testing.assert_allclose(g["tan_phi"], np.tan(phi), rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.slow

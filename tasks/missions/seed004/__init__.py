@@ -47,6 +47,12 @@ trained on a surrogate that images the same heightfield
 refuses a seabed beyond the multibeam's range along the path. A filter whose estimate leaves the
 nominal point by more than ``seed004.diverge_m`` stops its flight with a named divergence
 (``failures``); the report gives the shift's own error on the physics and on the surrogate.
+
+**Run data.** A run keeps each filter's flight (:class:`Seed004RunResult`'s ``flights``, plain
+:class:`~tasks.closed_loop.result.MissionRun` data: the truth, that filter's estimate and
+covariance, DR, the commands and the control per tick, the bearings as the ``doa`` fix table)
+and the report exports every run's as Parquet with the filter as the variant
+(``data/ticks/run-NNNNNN-<filter>-bauv.parquet``, ``data/doa/...``; ``docs/run-data.md``).
 """
 
 from tasks.missions.seed004 import experiment

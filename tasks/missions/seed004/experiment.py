@@ -3,6 +3,7 @@ registration (package docstring)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -12,6 +13,7 @@ from numpy.typing import NDArray
 
 from bauv_sim import seabed
 from bauv_sim.errors import ConfigError, GeometryError
+from tasks.closed_loop.experiment import BYTES_PER_TICK as MISSION_BYTES_PER_TICK
 from tasks.closed_loop.experiment import MissionExperiment
 from tasks.closed_loop.world import fly
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
@@ -98,6 +100,13 @@ IMAGE_BYTES_PER_PATH_BEAM = 470.0
 the two images, eq. 15; tracemalloc: 468-472 B for 8 x 8 to 32 x 32 beams)."""
 
 
+BYTES_PER_TICK = 600.0
+"""A flight's memory per control tick, bytes: its per-tick columns, the mission's own included
+(the control, the filter step, the shift), measured 507 B per tick, and its bearings (the ``doa``
+fix table: 4 beacons every second), 65 B per tick at the 0.2 s tick (numpy's bytes of a 20 s
+flight's columns)."""
+
+
 @dataclass(frozen=True)
 class Seed004Experiment(MissionExperiment):
     """Seed 004's filters steering the physical BAUV (one flight per filter and run)."""
@@ -115,15 +124,27 @@ class Seed004Experiment(MissionExperiment):
         f = self.filters(scenario)[0]
         return Seed004Mission(f, gains_for(scenario, seed) if f == "cmnf" else None), scenario
 
+    def _flight_terms(self, terms: list[MemoryTerm], scn: Seed004Scenario) -> list[MemoryTerm]:
+        """The per-tick terms of :meth:`MissionExperiment.memory` (its first two: a run in the
+        worker, every run in the report) for every filter a run flies, at
+        :data:`BYTES_PER_TICK` instead of the mission's."""
+        k = len(self.filters(scn)) * BYTES_PER_TICK / MISSION_BYTES_PER_TICK
+        what = f" x {len(self.filters(scn))} filters (navigation.filter), bearings included"
+        scaled = [
+            dataclasses.replace(t, bytes=k * t.bytes, fields=t.fields + what) for t in terms[:2]
+        ]
+        return scaled + terms[2:]
+
     def memory(self, scenario: Seed004Scenario, n_runs: int) -> list[MemoryTerm]:
-        """The mission's terms (:meth:`MissionExperiment.memory`), and with the seabed
+        """The mission's terms (:meth:`MissionExperiment.memory`; its per-tick terms for each
+        filter flown, :meth:`_flight_terms`, since a run keeps every flight), and with the seabed
         prediction and the CMNF the surrogate's (:func:`surrogate`): its heightfield, kept in the
         process while the scene's own grid is generated (:data:`HEIGHTFIELD_KEPT_BYTES_PER_POINT`),
         and the multibeam images of ``seed004.train_paths`` training paths at once
         (:data:`IMAGE_BYTES_PER_PATH_BEAM`), in the worker; in the report too, which trains the
         gains again where the worker's are not at hand and flies
         ``seed004.surrogate_test_paths`` paths."""
-        terms = super().memory(scenario, n_runs)
+        terms = self._flight_terms(super().memory(scenario, n_runs), scenario)
         if scenario.navigation.prediction != "seabed" or "cmnf" not in self.filters(scenario):
             return terms
         bed, mb, c = scenario.seabed, scenario.multibeam, scenario.seed004
@@ -196,6 +217,7 @@ class Seed004Experiment(MissionExperiment):
                 flight = fly(design, scenario, seed, r)
                 res.failed[f] = flight.failed
                 res.metrics[f] = flight_metrics(flight, nominal, dt, seabed)
+                res.flights[f] = flight
             out.append(res)
         return out
 

@@ -14,6 +14,7 @@ from nav.bearings import velocity
 from nav.bearings.cmnf import CmnfGains
 from tasks.closed_loop.result import MissionRun
 from tasks.core import store
+from tasks.missions.seed004.parts import control_of
 from tasks.missions.seed004.scenario import SURROGATE_RUN_OFFSET, Seed004Scenario, surrogate
 
 if TYPE_CHECKING:
@@ -70,7 +71,7 @@ def flight_metrics(
     x = np.asarray(c["truth_pos"].values, float)
     xh = np.asarray(c["ekf_pos"].values, float)
     k = np.asarray(c["filter_step"].values, float)
-    u = np.asarray(c["control"].values, float)
+    u = control_of(c)
     sel = np.flatnonzero(k >= 0)
     ks = k[sel].astype(int)
     if len(x) < 2 or len(sel) < 2:
@@ -115,17 +116,21 @@ def _shift_errors(c, sel: NDArray[np.int_], xk: Array) -> dict[str, Any]:
 @store.plain_data("missions.seed004.Seed004RunResult")
 @dataclass
 class Seed004RunResult:
-    """One run: per filter, the flight's metrics (plain data).
+    """One run: per filter, the flight and its metrics (plain data).
 
     Attributes:
         run: run index.
         failed: per filter, the failure or ``None``.
         metrics: per filter, :func:`flight_metrics`.
+        flights: per filter, the flight (its ticks: the truth, that filter's estimate and
+            covariance as ``ekf_pos`` / ``ekf_P``, DR, the commands, the control; its ``doa``
+            fix table: the bearings), exported as the run data with the filter as the variant.
     """
 
     run: int
     failed: dict[str, str | None]
     metrics: dict[str, dict[str, Any]] = field(default_factory=dict)
+    flights: dict[str, MissionRun] = field(default_factory=dict)
 
 
 class FilterSummary(BaseModel):

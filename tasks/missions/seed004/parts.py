@@ -24,7 +24,13 @@ from nav.bearings.cmnf import CmnfGains
 from nav.guidance import GuidanceCommand
 from nav.navigator import Estimate
 from tasks.closed_loop import parts as P
-from tasks.closed_loop.navigation import EkfNavigation, NavOutput, initial_covariance, report_of
+from tasks.closed_loop.navigation import (
+    EkfNavigation,
+    FixRecord,
+    NavOutput,
+    initial_covariance,
+    report_of,
+)
 from tasks.closed_loop.world import place_vehicle, scenario_sea, single_vehicle_scene, streams
 from tasks.missions.seed004.scenario import Seed004Scenario, beacon_specs, surrogate
 
@@ -161,6 +167,21 @@ class BearingReport:
     shift: Array
     shift_beams: float
 
+    @property
+    def control_gamma(self) -> float:
+        """The control's gamma (climb angle, up +), rad."""
+        return float(self.control[0])
+
+    @property
+    def control_theta(self) -> float:
+        """The control's theta (counter-clockwise from east), rad."""
+        return float(self.control[1])
+
+    @property
+    def control_speed(self) -> float:
+        """The control's V (speed through water), m/s."""
+        return float(self.control[2])
+
 
 class BearingNavigation:
     """A seed-004 filter on the DOA bearings beside the standard part (heading, depth, speed and
@@ -173,7 +194,9 @@ class BearingNavigation:
     ``diverge_m`` from the nominal point, stops the flight with a named divergence
     (:class:`nav.errors.NavError`). ``report`` holds ``control`` (gamma, theta, V), ``depth_cmd``
     (m), ``filter_step`` (j, -1 between steps), ``shift`` (the predicted displacement, m) and
-    ``shift_beams`` (beams the seabed shift used; 0: none).
+    ``shift_beams`` (beams the seabed shift used; 0: none). The bearings that arrive are its
+    fixes (``device = "doa"``, one per produced bearing, accepted when a filter step took it:
+    the run data's ``doa`` table).
 
     Args:
         base: the standard part.
@@ -235,9 +258,11 @@ class BearingNavigation:
         at_step = abs(tick.t_s - j * self.dt) < 1e-6
         if self.sonar is not None:
             self.sonar.take(tick)
+        updated = False
         if initial:
             self.depth_cmd = depth_setpoint(out.depth_m, self.u[0], self.ap)
         elif at_step and self.j < j <= self.n_steps:
+            updated = True
             y, present = self._bearings(tick)
             self.absent_total += int((~present).sum())
             self.missing_sets += int(not present.any())
@@ -273,18 +298,66 @@ class BearingNavigation:
             shift_beams=float(self.sonar.last_beams if self.sonar is not None else 0),
         )
         est = Estimate(tick.t_s, self.x_hat[0].copy(), self.P[0].copy())
-        return dataclasses.replace(out, estimate=est, report=report)
+        fixes = out.fixes + self._bearing_fixes(tick, updated)
+        return dataclasses.replace(out, estimate=est, report=report, fixes=fixes)
+
+    def _bearing_fixes(self, tick: RigTick, updated: bool) -> tuple[FixRecord, ...]:
+        """The bearings that arrived at this tick as fix records (``device = "doa"``, one per
+        produced bearing of a set): accepted when the filter's update of this tick took it
+        (a filter step, its tangent pair ok). The azimuth is written clockwise from north
+        (``pi/2 - phi``), the tangents as eq. 17 has them."""
+        out = []
+        for m in tick.arrived:
+            if m.device != "doa":
+                continue
+            d: DoaSet = m.payload
+            for b in np.flatnonzero(d.produced):
+                phi, lam = (float(a) for a in d.angles_rad[b])
+                ok = bool(d.tangent_ok[b])
+                z = [
+                    float(b),
+                    (math.pi / 2 - phi) % (2 * math.pi),
+                    lam,
+                    *(float(a) for a in d.tangents[b]),
+                    float(ok),
+                    *(float(a) for a in d.beacons_world_m[b]),
+                ]
+                out.append(
+                    FixRecord(
+                        "doa",
+                        m.t_valid_s,
+                        m.t_arrival_s,
+                        np.array(z),
+                        updated and ok,
+                        self.x_hat[0].copy(),
+                    )
+                )
+        return tuple(out)
 
     def outcome(self) -> dict[str, Any]:
         return {"absent_pairs": self.absent_total, "missing_sets": self.missing_sets}
 
 
 EXTRA_COLUMNS = {
-    "control": (
-        "control",
-        "rad, rad, m/s",
-        "locally optimal control (gamma, theta, V)",
-        ("gamma", "theta", "speed"),
+    "control_gamma": (
+        "control_gamma",
+        "rad",
+        "locally optimal control: gamma, the climb angle (up +)",
+        (),
+        False,
+    ),
+    "control_theta": (
+        "control_theta",
+        "rad",
+        "locally optimal control: theta, the horizontal direction counter-clockwise from east",
+        (),
+        False,
+    ),
+    "control_speed": (
+        "control_speed",
+        "m/s",
+        "locally optimal control: V, the speed through water",
+        (),
         False,
     ),
     "filter_step": ("filter_step", "1", "filter step j at this tick (-1: none)", (), False),
@@ -303,7 +376,19 @@ EXTRA_COLUMNS = {
         False,
     ),
 }
-"""Per-tick columns the mission adds."""
+"""Per-tick columns the mission adds (the control in three columns: one unit each)."""
+
+
+def control_of(ticks) -> Array:
+    """The control ``(gamma rad, theta rad, V m/s)`` per tick of a flight's tick columns,
+    shape (T, 3)."""
+    return np.stack(
+        [
+            np.asarray(ticks[k].values, float)
+            for k in ("control_gamma", "control_theta", "control_speed")
+        ],
+        axis=1,
+    )
 
 
 @dataclass

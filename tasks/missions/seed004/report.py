@@ -39,6 +39,7 @@ class ReportedExperiment(Protocol):
 
 def report_seed004(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
     """The per-filter table, the CMNF's surrogate-vs-physics gap, the gains and a figure."""
+    from tasks.closed_loop.report import export_runs
     from tasks.core.report import Table, write_metrics, write_tables
 
     scn: Seed004Scenario = ctx.scenario  # type: ignore[assignment]
@@ -96,6 +97,10 @@ def report_seed004(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary
         warnings=warnings,
     )
     files.append(write_metrics(ctx.out_dir, metrics))
+    beacons = [(f"beacon_{i}", float(b[0]), float(b[1])) for i, b in enumerate(beacons_world(scn))]
+    for f in names:
+        flights = [r.flights[f] for r in results if f in r.flights]
+        files += export_runs(ctx.out_dir, exp.name, flights, f, scn.frame(), beacons)
     c = scn.seed004
     t = Table(
         f"Path following and estimation per filter ({ctx.n_runs} runs, {c.duration_s:g} s, "
