@@ -299,6 +299,11 @@ def record_blueprint(rec, views: Sequence[tuple[str, MissionRun]], multi: bool) 
     )
 
 
+MESH_MAX_SIDE = 200
+"""The most grid points the recording's seabed mesh has along a side (40,000 vertices, about
+2.6 MB in the file): mission/seed004's 1 m cells over its 1 km area were 19 MB at full
+resolution, 6 times the rest of its recording."""
+
 SEABED_SHALLOW_RGB = (0.86, 0.79, 0.56)
 """The recording's seabed colour at the shallowest point of the mission area (sand)."""
 SEABED_DEEP_RGB = (0.18, 0.33, 0.45)
@@ -311,6 +316,9 @@ def seabed_mesh(
     """The scene's seabed over a box as the recording's mesh: the heightfield's grid points and
     the triangles MuJoCo collides with (each cell split from its lower-left to its upper-right
     corner), shaded by the surface's normals and coloured by depth, so that the relief shows.
+    A box more than :data:`MESH_MAX_SIDE` grid points across is drawn on every k-th grid point
+    (k the smallest that fits), so that a fine seabed does not outweigh the mission's data: its
+    vertices are still the heightfield's points, its cells k times wider.
 
     Args:
         bed: the scene's :class:`~bauv_sim.seabed.Seabed`.
@@ -327,6 +335,8 @@ def seabed_mesh(
     iy = np.flatnonzero((grid >= lo[1]) & (grid <= hi[1]))
     if len(ix) < 2 or len(iy) < 2:
         return None
+    step = max(1, -(-max(len(ix), len(iy)) // MESH_MAX_SIDE))  # every step-th grid point
+    ix, iy = ix[::step], iy[::step]
     X, Y = np.meshgrid(grid[ix], grid[iy])
     Z = -bed.depth_m[np.ix_(iy, ix)]
     verts = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
@@ -334,7 +344,7 @@ def seabed_mesh(
     q0, q1 = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
     q2, q3 = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
     tris = np.concatenate([np.column_stack([q0, q1, q2]), np.column_stack([q0, q2, q3])])
-    dz_dy, dz_dx = np.gradient(Z, c.cell_m)
+    dz_dy, dz_dx = np.gradient(Z, step * c.cell_m)
     normals = np.column_stack([-dz_dx.ravel(), -dz_dy.ravel(), np.ones(Z.size)])
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     span = float(Z.max() - Z.min())

@@ -288,6 +288,8 @@ def record_fixes(rec, tag: str, label: str, v: VehicleRun) -> None:
             )
         if {"horizontal_range", "centre_east", "centre_north"} <= set(fx):
             record_ranges(rec, f"world/{tag}/{device}/range", fx, v, c)
+        if {"beacon_east", "beacon_north", "beacon_up", "t_valid"} <= set(fx):
+            record_bearings(rec, f"world/{tag}/{device}", fx, v, c)
 
 
 def record_ranges(rec, entity: str, fx, v: VehicleRun, color: Color) -> None:
@@ -320,6 +322,34 @@ def record_ranges(rec, entity: str, fx, v: VehicleRun, color: Color) -> None:
             ),
         )
     r.reset_time()
+
+
+def record_bearings(rec, entity: str, fx, v: VehicleRun, color: Color) -> None:
+    """Each bearing as a ray from the vehicle's true position at its time of validity to the
+    beacon it saw, at its arrival time (``<entity>/accepted`` in the device's colour,
+    ``<entity>/rejected`` in red): every set of one time as one row."""
+    import rerun as rr
+
+    from tasks.core.recording import TIMELINE
+
+    r = rec.rec
+    t = v["t"]
+    tv = fx["t_valid"].values
+    ta = fx["t_arrival"].values
+    ok = fx["accepted"].values.astype(bool)
+    beacon = np.column_stack([fx[k].values for k in ("beacon_east", "beacon_north", "beacon_up")])
+    at = np.column_stack([np.interp(tv, t, v["truth_pos"][:, j]) for j in range(3)])
+    for which, flag, c in (("accepted", ok, color), ("rejected", ~ok, (230, 0, 0))):
+        times = np.unique(ta[flag])
+        for tk in times:
+            k = np.flatnonzero(flag & (ta == tk))
+            r.set_time(TIMELINE, duration=float(tk))
+            r.log(
+                f"{entity}/{which}",
+                rr.LineStrips3D(np.stack([at[k], beacon[k]], axis=1), colors=c, radii=-1.0),
+            )
+        if len(times):
+            r.reset_time()
 
 
 def record_current(rec, tag: str, label: str, v: VehicleRun, every: int) -> None:

@@ -113,7 +113,6 @@ class Seed004Experiment(MissionExperiment):
 
     scenario_type = Seed004Scenario
     metrics_type = Seed004Metrics
-    report_seabed = False  # its report records no seabed mesh
 
     def filters(self, scn: Seed004Scenario) -> tuple[str, ...]:
         return flown_filters(scn)

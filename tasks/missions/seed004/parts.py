@@ -31,6 +31,7 @@ from tasks.closed_loop.navigation import (
     initial_covariance,
     report_of,
 )
+from tasks.closed_loop.result import EstimateTrack
 from tasks.closed_loop.world import place_vehicle, scenario_sea, single_vehicle_scene, streams
 from tasks.missions.seed004.scenario import Seed004Scenario, beacon_specs, surrogate
 
@@ -470,4 +471,9 @@ class Seed004Mission:
         )
         v = P.VehicleParts("bauv", rig, nav, ControlGuidance(), scn.autopilot, table)
         v.extra_columns = EXTRA_COLUMNS
+        # ekf_pos / ekf_P hold this flight's filter (the bank's estimate and covariance)
+        v.estimates = (
+            EstimateTrack("ekf_pos", self.filter.upper(), "ekf_P"),
+            EstimateTrack("dr_pos", "DR"),
+        )
         return P.MissionParts([v], scenario_sea(scn, seed, run))

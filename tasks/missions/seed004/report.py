@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from tasks.closed_loop.recording import RecordingScene, record_flights
 from tasks.core.files import atomic_write_bytes
 from tasks.core.registry import ReportContext, ReportSummary
 from tasks.missions.seed004.metrics import (
@@ -190,14 +191,26 @@ def report_seed004(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary
     if failures:
         tables.append(Table("Failed flights", ["Failure"], [[f] for f in failures], slug="failed"))
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
-    if scn.report.figures:
-        rec = next((r for r in results if r.run == scn.report.record_run), None)
-        if rec is not None:
-            files += seed004_figure(exp.name, scn, rec, ctx.out_dir)
+    rec = next((r for r in results if r.run == scn.report.record_run), None)
+    if scn.report.figures and rec is not None:
+        files += seed004_figure(exp.name, scn, rec, ctx.out_dir)
+    if scn.report.recording and rec is not None:
+        flown = {f: fl for f, fl in rec.flights.items() if fl.vehicles and len(fl.lead["t"]) > 1}
+        if flown:
+            files.append(record_flights(ctx.out_dir, exp.name, recording_scene(scn), flown))
     text = t.to_text() + "\n"
     text += "".join(f"warning: {w}\n" for w in warnings)
     text += f"wrote {len(files)} files to {ctx.out_dir}\n"
     return ReportSummary(text, tuple(files))
+
+
+def recording_scene(scn: Seed004Scenario) -> RecordingScene:
+    """What the recording draws of the scene: the seabed, the four beacons and the nominal
+    path (:func:`tasks.closed_loop.recording.record_flights`)."""
+    from bauv_sim.seabed import generate
+
+    beacons = [(f"beacon {i}", b, (0, 0, 0)) for i, b in enumerate(beacons_world(scn))]
+    return RecordingScene(generate(scn.seabed, scn.frame()), beacons, path=path_config(scn).path())
 
 
 def _fmt(v: float | None) -> str:
