@@ -23,7 +23,7 @@ kinematic replica (``paper-001/replica``) uses the paper's course-dependent rho.
 Modules: :mod:`~tasks.missions.correction.scenario` (the experiment's options, the legs of a run),
 :mod:`~tasks.missions.correction.run` (the DRNS beside the EKF, the leg guidance, a run's two
 flights and their metrics), :mod:`~tasks.missions.correction.report` (``metrics.json`` and the
-tables) and :mod:`~tasks.missions.correction.figures` (the figure and the recordings).
+tables) and :mod:`~tasks.missions.correction.figures` (figures, the recording).
 """
 
 from __future__ import annotations

@@ -194,7 +194,6 @@ class SwarmExperiment(MissionExperiment):
 
     scenario_type = SwarmScenario
     metrics_type = SwarmMetrics
-    report_seabed = False  # its recording draws no seabed mesh
 
     def flight(self, scenario: SwarmScenario, seed: int, run: int):
         """The flight of a run with the first method."""

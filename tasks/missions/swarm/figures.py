@@ -24,19 +24,6 @@ VEHICLE_COLORS = (
     "grey",
 )
 """The figure style's colours of the leader, f1, f2 ... (repeated beyond ten vehicles)."""
-COLORS_V = [
-    (0, 0, 0),
-    (0, 114, 178),
-    (213, 94, 0),
-    (0, 158, 115),
-    (230, 159, 0),
-    (86, 180, 233),
-    (204, 121, 167),
-    (153, 153, 51),
-    (136, 34, 85),
-    (127, 127, 127),
-]
-"""Recording colours of the leader, f1, f2 ... (:data:`VEHICLE_COLORS` as RGB)."""
 
 
 def swarm_figure(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out) -> list[str]:
