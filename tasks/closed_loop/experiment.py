@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -11,6 +12,7 @@ from bauv_sim import seabed
 from bauv_sim.build import VEHICLE_CLEARANCE_M
 from bauv_sim.errors import ConfigError, GeometryError
 from tasks.closed_loop.parts import MissionDesign
+from tasks.closed_loop.recording import MESH_MAX_SIDE
 from tasks.closed_loop.report import MissionMetrics, report_mission
 from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario
@@ -171,7 +173,8 @@ def current_memory_terms(scenario: MissionScenario) -> list[MemoryTerm]:
 def _mesh_bytes(scenario: MissionScenario) -> float:
     """Memory of the recording's seabed mesh, bytes: the grid cells of the mission area (the
     way-points, the start and the transceiver, :data:`MESH_MARGIN_M` around them, within the
-    grid); 0 without a recording or way-points."""
+    grid, at most :data:`~tasks.closed_loop.recording.MESH_MAX_SIDE` a side); 0 without a
+    recording or way-points."""
     report, guidance = getattr(scenario, "report", None), getattr(scenario, "guidance", None)
     if not getattr(report, "recording", False) or guidance is None:
         return 0.0
@@ -184,7 +187,9 @@ def _mesh_bytes(scenario: MissionScenario) -> float:
         lo = max(min(p[axis] for p in pts) - MESH_MARGIN_M, -c.half_extent_m)
         hi = min(max(p[axis] for p in pts) + MESH_MARGIN_M, c.half_extent_m)
         sides.append(max(hi - lo, 0.0) / c.cell_m + 1)
-    return MESH_BYTES_PER_CELL * sides[0] * sides[1]
+    # the mesh is drawn on every k-th grid point beyond MESH_MAX_SIDE points a side
+    step = max(1, math.ceil(max(sides) / MESH_MAX_SIDE))
+    return MESH_BYTES_PER_CELL * (sides[0] / step) * (sides[1] / step)
 
 
 @dataclass(frozen=True)
