@@ -281,7 +281,7 @@ def record_blueprint(rec, views: Sequence[tuple[str, MissionRun]], multi: bool) 
         worlds.append(
             rrb.Spatial3DView(
                 origin="/world",
-                contents=["/world/seabed", "/world/scene/**", sub],
+                contents=["/world", "/world/seabed", "/world/scene/**", sub],
                 name=f"{flight}: {names}" if multi else f"world: {names}",
             )
         )
