@@ -40,6 +40,8 @@ class TrnRunResult:
             footprints of the TRN updates), ``duration_s``, ``reached`` (way-points reached).
         track: the recorded run's true track and every method's, (east, north) at the sample
             times, float32, by name (``truth`` and the methods); empty for other runs.
+        flight: the flight (every method's estimate and covariance per tick), exported as the
+            run data; ``None`` in blocks written before it was kept.
     """
 
     run: int
@@ -50,6 +52,7 @@ class TrnRunResult:
     counts: dict[str, int]
     stats: dict[str, float]
     track: dict[str, Array] = field(default_factory=dict)
+    flight: MissionRun | None = None
 
 
 def _col(v, name: str) -> Array:
@@ -126,6 +129,7 @@ def reduce_flight(
         counts,
         stats,
         track,
+        flight,
     )
 
 
