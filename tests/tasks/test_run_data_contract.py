@@ -7,7 +7,8 @@ covariance where it has one).
 Truth: what a mission flies is read from its scenario here, not from the files: the variants
 (``mission/swarm``'s ``navigation.methods``, ``mission/correction``'s two course laws,
 ``mission/seed004``'s filters), the vehicles (the swarm's leader and ``followers.count``
-followers) and the estimates (``mission/trn``'s methods). A mission registered without an entry
+followers) and the estimates (``mission/trn``'s methods, the swarm's team methods on the
+acoustic network). A mission registered without an entry
 in :data:`EXPECTED` fails :func:`test_every_registered_mission_has_a_contract`: its author adds
 what it must write."""
 
@@ -62,8 +63,13 @@ def _correction(scn) -> dict[str | None, dict[str, Estimates]]:
 
 
 def _swarm(scn) -> dict[str | None, dict[str, Estimates]]:
+    from tasks.missions.swarm.team import TEAM_METHODS, track_column
+
     vehicles = ["leader", *(f"f{i + 1}" for i in range(scn.followers.count))]
-    return {m: {v: STANDARD for v in vehicles} for m in scn.methods()}
+    team: Estimates = ()
+    if scn.followers.network.enabled:  # the team methods' estimates of every vehicle
+        team = tuple((track_column(m), track_column(m)[: -len("pos")] + "P") for m in TEAM_METHODS)
+    return {m: {v: STANDARD + team for v in vehicles} for m in scn.methods()}
 
 
 def _trn(scn) -> dict[str | None, dict[str, Estimates]]:
@@ -86,7 +92,13 @@ EXPECTED: dict[str, Contract] = {
     # cut at 20 s, before leg 3: the run data is whole, the leg-3 metrics are left out (no NaN)
     "mission/correction": Contract(tuple(SHORT), _correction),
     "mission/swarm": Contract(
-        (*SHORT, "followers.count=2", 'navigation.methods=["ekf","ga1","ga2","dr"]'), _swarm
+        (
+            *SHORT,
+            "followers.count=2",
+            'navigation.methods=["ekf","ga1","ga2","dr"]',
+            "followers.network.enabled=true",
+        ),
+        _swarm,
     ),
     "mission/trn": Contract(tuple(SHORT), _trn),
     "mission/seed004": Contract(
