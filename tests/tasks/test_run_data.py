@@ -213,16 +213,19 @@ def test_attitude_components_are_the_quaternions_roll_pitch_heading(batch):
 
 
 def test_missions_own_columns_have_the_units_docs_run_data_states():
-    """The per-tick columns mission/correction, mission/swarm's followers and mission/seed004 add
-    carry the units ``docs/run-data.md`` gives them in its paragraphs on those missions."""
+    """The per-tick columns mission/correction, mission/swarm's followers, mission/seed004 and
+    mission/trn add carry the units ``docs/run-data.md`` gives them in its paragraphs on those
+    missions."""
     from tasks.missions.correction import EXTRA_COLUMNS
     from tasks.missions.seed004.parts import EXTRA_COLUMNS as SEED004_COLUMNS
     from tasks.missions.swarm import FOLLOWER_COLUMNS
+    from tasks.missions.trn.parts import EXTRA_COLUMNS as TRN_COLUMNS
 
     for lead, columns in (
         ("`mission/correction` adds", EXTRA_COLUMNS),
         ("`mission/swarm`'s followers", FOLLOWER_COLUMNS),
         ("`mission/seed004` flies one filter", SEED004_COLUMNS),
+        ("`mission/trn` flies every navigator", TRN_COLUMNS),
     ):
         doc = prose_units(lead)
         assert len(doc) == len(columns), (lead, sorted(doc))

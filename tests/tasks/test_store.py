@@ -633,6 +633,7 @@ def test_seed004_mission_block():
         "navigation.filter=cmnf",
     )
     assert block[0].metrics["cmnf"]["j_k"] and block[0].failed == {"cmnf": None}
+    assert block[0].flights["cmnf"].lead.fixes["doa"]["accepted"].values.any()
     same(roundtrip(block).value, block)
 
 
@@ -641,6 +642,7 @@ def test_trn_mission_block():
     block = _block("mission/trn", (0,), "timing.max_duration_s=70", "report.figures=false")
     r = block[0]
     assert r.failed is None and len(r.t_s) > 5 and r.track and set(r.errors_m) >= {"trn_pf"}
+    assert r.flight is not None and r.flight.lead.ticks["trn_pmf_P"].values.shape[1:] == (2, 2)
     same(roundtrip(block).value, block)
 
 

@@ -164,6 +164,29 @@ def test_every_vehicle_hears_every_other_with_its_clock_bias(networked):
         assert np.all(tab["t_arrival"].values - tab["t_valid"].values == pytest.approx(0.5))
 
 
+def test_every_team_methods_estimate_is_in_the_vehicles_ticks(networked):
+    """Each team method's estimate of every vehicle is kept in its per-tick columns (the run
+    data: ``team_<method>_pos``, ``team_<method>_P``). Truth: the team metrics, computed from the
+    method's tracks before they were stored, give the same mean and final horizontal errors
+    against the true track (from the second sample, as :func:`nav.cooperative.team_metrics`)."""
+    from tasks.missions.swarm.team import TEAM_METHODS, track_column
+
+    _, res = networked
+    flight = res.flights["ekf"]
+    for method in TEAM_METHODS:
+        for name in ("leader", "f1", "f2", "f3"):
+            v = flight.vehicles[name]
+            col = track_column(method)
+            pos, cov = v[col], v[col[: -len("pos")] + "P"]
+            k = int(np.isfinite(pos[:, 0]).sum())
+            assert k > 100 and np.isfinite(pos[:k]).all() and np.isfinite(cov[:k]).all()
+            np.testing.assert_array_equal(cov[:k], np.swapaxes(cov[:k], 1, 2))
+            e = np.hypot(*(pos[1:k] - v["truth_pos"][1:k, :2]).T)
+            m = res.team["ekf"][method][name]
+            assert e.mean() == pytest.approx(m["mean_error_m"], rel=1e-12), (method, name)
+            assert e[-1] == pytest.approx(m["final_error_m"], rel=1e-12), (method, name)
+
+
 def test_the_team_record_is_the_flights_measurements(networked):
     """The record built after the flight holds every range each vehicle received (sender,
     receiver, stamps, range), the leader's USBL fixes, and the dead-reckoned steps the

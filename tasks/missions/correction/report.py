@@ -36,11 +36,18 @@ class CorrectionMetrics(BaseModel):
     n_failed: int
     procedure: str
     current_kind: str
-    means: dict[str, float] = Field(description="means over successful runs")
-    improvement_factor: float = Field(
-        description="uncorrected / corrected mean DR error on leg 3 (compensated flights)"
+    means: dict[str, float] = Field(
+        description="means over successful runs (a quantity no run has is left out)"
+    )
+    improvement_factor: float | None = Field(
+        description="uncorrected / corrected mean DR error on leg 3 (compensated flights); "
+        "null without a successful run"
     )
     runs: list[CorrectionRunMetrics]
+
+
+def _fmt(v: float | None, digits: int) -> str:
+    return "-" if v is None else f"{v:.{digits}f}"
 
 
 def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSummary:
@@ -51,18 +58,21 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
     runs: list[CorrectionRunResult] = [r for b in ctx.blocks for r in b]
     ok = [r for r in runs if r.failed is None and r.metrics["compensated"] and r.metrics["direct"]]
 
-    def mean(law: str, key: str) -> float:
+    def mean(law: str, key: str) -> float | None:
+        """The mean over the successful runs that have it; ``None`` (a dash) for none."""
         vals = [r.metrics[law][key] for r in ok if key in r.metrics[law]]
-        return float(np.nanmean(vals)) if vals else math.nan
+        vals = [v for v in vals if math.isfinite(v)]
+        return float(np.mean(vals)) if vals else None
 
     means = {
-        f"{law}.{k}": mean(law, k)
+        f"{law}.{k}": v
         for law in ("compensated", "direct")
         for k in (ok[0].metrics[law] if ok else {})
+        if (v := mean(law, k)) is not None
     }
-    factor = mean("compensated", "uncorrected_mean_error_m") / mean(
-        "compensated", "corrected_mean_error_m"
-    )
+    before = mean("compensated", "uncorrected_mean_error_m")
+    after = mean("compensated", "corrected_mean_error_m")
+    factor = before / after if before is not None and after else None
     metrics = CorrectionMetrics(
         experiment=exp.name,
         seed=ctx.seed,
@@ -108,7 +118,7 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
         ],
         digits=2,
         slug="leg3-errors",
-        note=f"Improvement of the mean error by the correction: {factor:.1f}x.",
+        note=f"Improvement of the mean error by the correction: {_fmt(factor, 1)}x.",
     )
     t3 = Table(
         "Leg 3 deviation from the desired course (seed 001 Table 3 analogue)",
@@ -157,8 +167,8 @@ def report_correction(exp: MissionExperiment, ctx: ReportContext) -> ReportSumma
         digits=3,
         slug="current",
         note=(
-            f"{p}'s current estimate is {mean('compensated', 'current_error_m_s'):.3f} m/s off "
-            "the true current at the vehicle averaged over legs 1-2 (Error: the size of the "
+            f"{p}'s current estimate is {_fmt(mean('compensated', 'current_error_m_s'), 3)} m/s "
+            "off the true current at the vehicle averaged over legs 1-2 (Error: the size of the "
             "difference; its mean over the runs)."
         ),
     )
@@ -220,12 +230,14 @@ def along_track_table(procedure: str, ok: list[CorrectionRunResult]):
                 for k, _ in ALONG_TRACK_COLUMNS
             ]
         )
-    whole = [math.nan if x is None else x for x in rows[-1][1:]]
+    whole = rows[-1][1:]
     note = (
         "Error: the estimate minus the true current at the vehicle (mean, RMS, max: of its "
         f"size). Along the track (legs 1-3, every tick) the estimate is {whole[0]:.3f} m/s off "
         f"on average (RMS {whole[1]:.3f}, max {whole[2]:.3f} m/s); the true current varied by "
         f"{whole[6]:.3f} m/s RMS about its mean."
+        if all(isinstance(x, float) for x in whole)
+        else "No successful run with a current estimate."
     )
     return Table(
         f"Current estimated by {procedure} against the true current at the vehicle, tick by tick "

@@ -269,7 +269,8 @@ def leg3_metrics(v: VehicleRun, wp3: NDArray[np.float64]) -> dict[str, float]:
     nu = course_of(wp3 - truth)
     dev = np.degrees(diff_course(cog, nu))
     far = np.linalg.norm(wp3 - truth, axis=1) > 10.0  # the course to a point is ill-defined near it
-    out["course_deviation_deg"] = float(dev[far].mean()) if far.any() else math.nan
+    if far.any():  # else undefined: left out (never NaN)
+        out["course_deviation_deg"] = float(dev[far].mean())
     p0 = truth[0]
     d = (wp3 - p0) / max(np.linalg.norm(wp3 - p0), 1e-9)
     rel = truth - p0

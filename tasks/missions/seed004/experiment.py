@@ -100,11 +100,11 @@ IMAGE_BYTES_PER_PATH_BEAM = 470.0
 the two images, eq. 15; tracemalloc: 468-472 B for 8 x 8 to 32 x 32 beams)."""
 
 
-BYTES_PER_TICK = 600.0
+BYTES_PER_TICK = 650.0
 """A flight's memory per control tick, bytes: its per-tick columns, the mission's own included
 (the control, the filter step, the shift), measured 507 B per tick, and its bearings (the ``doa``
 fix table: 4 beacons every second), 65 B per tick at the 0.2 s tick (numpy's bytes of a 20 s
-flight's columns)."""
+flight's columns); a run's result with its metrics pickles to 626 B per tick and flight."""
 
 
 @dataclass(frozen=True)

@@ -101,7 +101,7 @@ from dataclasses import dataclass
 
 from bauv_sim import seabed
 from bauv_sim.errors import ConfigError
-from tasks.closed_loop.experiment import MissionExperiment, check_gridded_current
+from tasks.closed_loop.experiment import BYTES_PER_TICK, MissionExperiment, check_gridded_current
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 from tasks.missions.swarm.design import SwarmMission
 from tasks.missions.swarm.figures import record_swarm, swarm_figure
@@ -188,6 +188,12 @@ __all__ = [
 ]
 
 
+TEAM_BYTES_PER_TICK = 192.0
+"""A vehicle's team estimates per control tick on the acoustic network, bytes: the four
+methods' positions (east, north) and 2 x 2 covariances in float64
+(:func:`tasks.missions.swarm.team.add_track_columns`)."""
+
+
 @dataclass(frozen=True)
 class SwarmExperiment(MissionExperiment):
     """Seed 003 on the physical BAUVs (one flight per method per run)."""
@@ -224,10 +230,15 @@ class SwarmExperiment(MissionExperiment):
         """The mission's estimate (:meth:`MissionExperiment.memory`, one vehicle's per-tick
         columns) with the per-tick terms for every vehicle of every flight of a run: (1 +
         ``followers.count``) vehicles x the methods flown (measured: 2.4 kB per tick for a
-        leader and 4 followers, 480 B per vehicle, against 500 B for one)."""
+        leader and 4 followers, 480 B per vehicle, against 500 B for one); on the acoustic
+        network each vehicle also keeps the team methods' estimates and covariances
+        (:data:`TEAM_BYTES_PER_TICK` more)."""
         k = (1 + scenario.followers.count) * len(scenario.methods())
-        terms = super().memory(scenario, n_runs)
         what = f" x {k} vehicles x methods (followers.count, navigation.methods)"
+        if scenario.followers.network.enabled:
+            k *= 1.0 + TEAM_BYTES_PER_TICK / BYTES_PER_TICK
+            what += ", with the team estimates (followers.network.enabled)"
+        terms = super().memory(scenario, n_runs)
         scaled = [
             dataclasses.replace(t, bytes=k * t.bytes, fields=t.fields + what) for t in terms[:2]
         ]

@@ -47,7 +47,8 @@ from bauv_sim.acoustics.clock import draw_clocks
 from nav.cooperative import TeamRecord, team_metrics, team_tracks
 from nav.models import UsblMeasurement
 from nav.relative import dr_increment, dr_increment_covariance
-from tasks.closed_loop.result import MissionRun, VehicleRun
+from tasks.closed_loop.result import EstimateTrack, MissionRun, VehicleRun
+from tasks.core.export import Column
 from tasks.missions.swarm.network import NETWORK
 from tasks.missions.swarm.options import coop_options, current_covariance
 from tasks.missions.swarm.scenario import FOLLOWERS, LEADER, SwarmScenario
@@ -187,9 +188,38 @@ def true_clock_offsets(scn: SwarmScenario, seed: int, run: int, t_s: Array) -> A
     return np.stack(rows)[None]
 
 
+def track_column(method: str) -> str:
+    """The per-tick column of a team method's position estimate (``team_<method>_pos``, the
+    method's ``-`` as ``_``); its covariance is ``team_<method>_P``."""
+    return f"team_{method.replace('-', '_')}_pos"
+
+
+def add_track_columns(v: VehicleRun, method: str, tracks, i: int) -> None:
+    """Add vehicle ``i``'s estimate of a team method to its per-tick columns (the run data):
+    ``team_<method>_pos`` (east, north, m) and ``team_<method>_P`` (2 x 2, m^2, symmetrised:
+    ``(P + P^T) / 2``), null on the ticks after the team's common samples; and declare it as
+    one of the vehicle's estimates (``team <method>``, :attr:`VehicleRun.estimates`)."""
+    n = len(v["t"])
+    k = tracks.position_m.shape[2]
+    pos = np.full((n, 2), np.nan)
+    cov = np.full((n, 2, 2), np.nan)
+    pos[:k] = tracks.position_m[0, i]
+    c = tracks.cov_m2[0, i]
+    cov[:k] = 0.5 * (c + np.swapaxes(c, 1, 2))
+    col = track_column(method)
+    what = f"{method} team estimate (acoustic network, tasks.missions.swarm.team)"
+    v.ticks[col] = Column(pos, "m", f"{what}, world", ("east", "north"), k < n)
+    v.ticks[col[: -len("pos")] + "P"] = Column(
+        cov, "m^2", f"{what}: its stated covariance", ("east", "north"), k < n
+    )
+    # declared for the recording beside the vehicle's own estimates
+    v.estimates = (*v.estimates, EstimateTrack(col, f"team {method}", col[: -len("pos")] + "P"))
+
+
 def team_comparison(scn: SwarmScenario, flight: MissionRun) -> dict[str, dict[str, Any]]:
     """Every method of :data:`TEAM_METHODS` on the flight's record (:func:`team_record`),
-    against the truth (:func:`nav.cooperative.team_metrics`, from the second sample).
+    against the truth (:func:`nav.cooperative.team_metrics`, from the second sample); each
+    method's estimates are added to the vehicles' per-tick columns (:func:`add_track_columns`).
 
     Returns:
         Per method, per vehicle: ``mean_error_m``, ``final_error_m``, ``max_error_m``
@@ -207,6 +237,8 @@ def team_comparison(scn: SwarmScenario, flight: MissionRun) -> dict[str, dict[st
     out: dict[str, dict[str, Any]] = {}
     for method in TEAM_METHODS:
         tracks = team_tracks(record, method, options)
+        for i, name in enumerate(team):
+            add_track_columns(flight.vehicles[name], method, tracks, i)
         rows = {}
         for name, m in zip(team, team_metrics(tracks, truth, offsets), strict=True):
             row = {

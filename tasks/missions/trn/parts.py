@@ -49,7 +49,8 @@ MODES = {0: "none", 1: "bottom", 2: "water"}
 class TrnReport:
     """What :class:`TrnNavigation` reports at a tick (the per-tick columns of
     :data:`EXTRA_COLUMNS`): each method's position (east, north, up), m, world; the particle
-    filter's horizontal covariance, m^2; the DVL's mode (0 none, 1 bottom lock, 2 water track);
+    filter's horizontal covariance, m^2 (and the other methods', ``<method>_P``, but the log DR's);
+    the DVL's mode (0 none, 1 bottom lock, 2 water track);
     whether a TRN update was made at this tick, the beams it used (particle filter), and the
     prediction covariance accumulated since the previous update (2 x 2, m^2)."""
 
@@ -64,6 +65,10 @@ class TrnReport:
     trn_update: float
     trn_beams: float
     trn_q: Array
+    trn_pmf_P: Array
+    dr_dvl_P: Array
+    ekf_log_P: Array
+    usbl_ekf_P: Array
 
 
 class TrnNavigation:
@@ -265,6 +270,10 @@ class TrnNavigation:
             trn_update=float(updated),
             trn_beams=float(beams),
             trn_q=q,
+            trn_pmf_P=np.asarray(pmf_P, float).copy(),
+            dr_dvl_P=np.asarray(covs["dr_dvl"], float).copy(),
+            ekf_log_P=out.estimate.P[:2, :2].copy(),
+            usbl_ekf_P=np.asarray(covs["usbl_ekf"], float).copy(),
         )
         return dataclasses.replace(out, estimate=Estimate(t, est[steer], P3), report=report)
 
@@ -277,25 +286,40 @@ class TrnNavigation:
         return out
 
 
+EN = ("east", "north")
+
 EXTRA_COLUMNS: dict[str, tuple[str, str, str, tuple[str, ...], bool]] = {
     **{
         m: (m, "m", f"{m} position estimate (world)", ("east", "north", "up"), False)
         for m in METHODS
     },
-    "trn_pf_P": ("trn_pf_P", "m^2", "particle TRN horizontal covariance", (), False),
+    **{
+        f"{m}_P": (f"{m}_P", "m^2", f"{what} horizontal position covariance, world", EN, False)
+        for m, what in (
+            ("trn_pf", "particle TRN's"),
+            ("trn_pmf", "point-mass TRN's"),
+            ("dr_dvl", "DVL dead reckoning's"),
+            ("ekf_log", "log EKF's"),
+            ("usbl_ekf", "reference USBL EKF's"),
+        )
+    },
     "dvl_mode": ("dvl_mode", "1", "DVL mode: 0 none, 1 bottom lock, 2 water track", (), False),
     "trn_update": ("trn_update", "1", "a TRN update at this tick (1) or not (0)", (), False),
     "trn_beams": ("trn_beams", "1", "beams the particle TRN update used", (), False),
-    "trn_q": ("trn_q", "m^2", "TRN prediction covariance since the last update", (), False),
+    "trn_q": ("trn_q", "m^2", "TRN prediction covariance since the last update", EN, False),
 }
-"""Per-tick columns the mission adds (:class:`TrnReport`)."""
+"""Per-tick columns the mission adds (:class:`TrnReport`): every method's position, and the
+horizontal covariance of each but ``dr_log`` (before the dive the EKF's)."""
 
 ESTIMATES = (
     EstimateTrack("ekf_pos", "EKF", "ekf_P"),
-    *(EstimateTrack(m, LABELS[m], "trn_pf_P" if m == "trn_pf" else None) for m in METHODS),
+    *(
+        EstimateTrack(m, LABELS[m], f"{m}_P" if f"{m}_P" in EXTRA_COLUMNS else None)
+        for m in METHODS
+    ),
 )
 """The estimates the recording draws: the vehicle's EKF (USBL until the dive, the log EKF after
-it) with its covariance, and every method (the particle TRN with its horizontal covariance)."""
+it) with its covariance, and every method with its horizontal covariance (the log DR has none)."""
 
 
 @dataclass(frozen=True)

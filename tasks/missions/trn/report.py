@@ -1,12 +1,15 @@
 """``mission/trn``'s report: metrics.json, the tables (errors per method, check 2, check 4, the
-DVL's pings and the TRN's updates) and the figures (package docstring)."""
+DVL's pings and the TRN's updates), every run's data (Parquet) and the figures (package
+docstring)."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Protocol
 
 import numpy as np
 
+from tasks.closed_loop.result import MissionRun
 from tasks.core.registry import ReportContext, ReportSummary
 from tasks.missions.trn.figures import error_figure, plan_figure
 from tasks.missions.trn.metrics import (
@@ -18,6 +21,7 @@ from tasks.missions.trn.metrics import (
     summarise_method,
     trn_verdict,
 )
+from tasks.missions.trn.parts import EXTRA_COLUMNS
 from tasks.missions.trn.run import TrnRunResult, summary_of
 from tasks.missions.trn.scenario import LABELS, METHODS, TRN_METHODS, TrnScenario, seabed_text
 from tasks.missions.trn.terrain import map_nan_fraction
@@ -65,8 +69,26 @@ def _warnings(scn: TrnScenario, counts: dict[str, int], nan_fraction: float) -> 
     return out
 
 
+def symmetrised(flight: MissionRun) -> MissionRun:
+    """The flight with its mission's matrix columns (``<method>_P``, ``trn_q``, shape (T, 2, 2))
+    made symmetric bit for bit, ``(P + P^T) / 2`` (rounding only), as the run data requires; the
+    metrics read the flight as it was flown."""
+    vehicles = {}
+    for name, v in flight.vehicles.items():
+        ticks = dict(v.ticks)
+        for k in EXTRA_COLUMNS:
+            c = ticks.get(k)
+            if c is not None and c.values.ndim == 3:
+                sym = 0.5 * (c.values + np.swapaxes(c.values, 1, 2))
+                ticks[k] = dataclasses.replace(c, values=sym)
+        vehicles[name] = dataclasses.replace(v, ticks=ticks)
+    return dataclasses.replace(flight, vehicles=vehicles)
+
+
 def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
-    """metrics.json, tables.md (+ CSV) and the figures of a finished batch."""
+    """metrics.json, tables.md (+ CSV), the run data of every run (Parquet, ``data/``) and the
+    figures of a finished batch."""
+    from tasks.closed_loop.report import export_runs
     from tasks.core.report import Table, write_metrics, write_tables
 
     scn: TrnScenario = ctx.scenario  # type: ignore[assignment]
@@ -108,6 +130,9 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
         warnings=warnings,
     )
     files = [write_metrics(ctx.out_dir, metrics)]
+    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
+    flights = [symmetrised(r.flight) for r in results if r.flight is not None]
+    files += export_runs(ctx.out_dir, exp.name, flights, frame=scn.frame(), points=tx)
     dur = results[0].t_s[-1] if results and len(results[0].t_s) else 0.0
     t1 = Table(
         f"Horizontal error after the dive per method ({ctx.n_runs} runs, {dur:.0f} s without "
@@ -248,7 +273,8 @@ def report_trn(exp: ReportedExperiment, ctx: ReportContext) -> ReportSummary:
         rec = next((r for r in results if r.track and len(r.track["truth"]) > 1), None)
         if rec is not None:
             files += plan_figure(exp.name, scn, rec, ctx.seed, ctx.out_dir)
-    flown = next((r.flight for r in results if r.flight is not None and r.flight.vehicles), None)
+    flown = next((r.flight for r in results if r.run == scn.report.record_run), None)
+    flown = flown if flown is not None and flown.vehicles else None
     if scn.report.recording and flown is not None and len(flown.lead["t"]) > 1:
         from tasks.closed_loop.recording import mission_scene, record_flights
 

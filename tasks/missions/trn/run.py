@@ -40,8 +40,8 @@ class TrnRunResult:
             footprints of the TRN updates), ``duration_s``, ``reached`` (way-points reached).
         track: the recorded run's true track and every method's, (east, north) at the sample
             times, float32, by name (``truth`` and the methods); empty for other runs.
-        flight: the recorded run's flight as flown (every tick, for its recording, when the
-            report writes one); ``None`` for other runs.
+        flight: the flight (every method's estimate and covariance per tick), exported as the
+            run data; ``None`` in blocks written before it was kept.
     """
 
     run: int
@@ -129,7 +129,7 @@ def reduce_flight(
         counts,
         stats,
         track,
-        flight if keep_track and scn.report.recording else None,
+        flight,
     )
 
 
