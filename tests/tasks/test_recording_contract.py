@@ -32,11 +32,18 @@ DEFAULT_SHORT = ("timing.max_duration_s=30",)
 
 SHORT = {
     "mission/correction": ("correction.leg_length_m=15",),
-    "mission/seed004": ("seed004.duration_s=20", "timing.max_duration_s=20"),
+    "mission/seed004": (
+        "seed004.duration_s=20",
+        "timing.max_duration_s=20",
+        "seed004.train_paths=200",
+        "seed004.surrogate_test_paths=100",
+    ),
+    # on the acoustic network: the team methods' estimates of every vehicle are declared too
     "mission/swarm": (
         "timing.max_duration_s=20",
         "followers.count=2",
         'navigation.methods=["ga1","ekf"]',
+        "followers.network.enabled=true",
     ),
     "mission/trn": ("timing.max_duration_s=70", "trn.t_dive_s=40"),
 }
