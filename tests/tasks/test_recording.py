@@ -192,3 +192,49 @@ def test_paper003_recording_draws_each_method_in_its_figure_colour(tmp_path):
         k = method.lower()
         assert _static_colour(rec, f"world/{k}/path", "LineStrips3D:colors") == want, method
         assert _static_colour(rec, f"distance/{k}", "SeriesLines:colors") == want, method
+
+
+def _vehicle(pos, cov, truth):
+    from tasks.closed_loop.result import EstimateTrack, VehicleRun
+    from tasks.core.export import Column
+
+    t = np.arange(len(truth), dtype=float)
+    ticks = {
+        "t": Column(t, "s", "time"),
+        "truth_pos": Column(np.asarray(truth, float), "m", "truth", ("east", "north", "up")),
+        "est": Column(np.asarray(pos, float), "m", "estimate", ("east", "north")),
+        "est_P": Column(np.asarray(cov, float), "m^2", "covariance", ("east", "north")),
+    }
+    return VehicleRun("v", ticks, estimates=(EstimateTrack("est", "TRN-PF", "est_P"),))
+
+
+def test_nees_of_a_horizontal_estimate_is_its_quadratic_form_and_singular_is_left_out():
+    from tasks.closed_loop.recording_vehicle import estimate_covariance, estimate_positions, nees
+
+    truth = [[0.0, 0.0, -5.0], [1.0, 1.0, -6.0], [0.0, 0.0, -7.0]]
+    pos = [[1.0, 2.0], [1.0, 1.0], [3.0, 0.0]]
+    cov = [np.diag([1.0, 4.0]), np.diag([2.0, 2.0]), np.zeros((2, 2))]
+    v = _vehicle(pos, cov, truth)
+    e = v.estimates[0]
+    values, dof = nees(v, e)
+    # e = (1, 2) with P = diag(1, 4): 1/1 + 4/4 = 2; e = 0: 0; singular P: left out (NaN)
+    assert dof == 2 and values[0] == pytest.approx(2.0) and values[1] == 0.0
+    assert np.isnan(values[2])
+    # a horizontal estimate is drawn at the true depth, its covariance as a flat ellipse
+    assert np.array_equal(estimate_positions(v, e)[:, 2], [-5.0, -6.0, -7.0])
+    P3 = estimate_covariance(v, e)
+    assert P3.shape == (3, 3, 3) and np.all(P3[:, 2, :] == 0) and np.all(P3[:, :2, :2] == cov)
+    # a covariance stored flat, (T, 4), is the same matrices
+    flat = _vehicle(pos, np.reshape(cov, (3, 4)), truth)
+    assert np.array_equal(estimate_covariance(flat, flat.estimates[0]), P3)
+
+
+def test_method_names_become_entity_path_parts():
+    from tasks.closed_loop.recording_vehicle import slug
+
+    assert [slug(m) for m in ("EKF", "TRN-PF", "team leader-ekf", "DR-log")] == [
+        "ekf",
+        "trn_pf",
+        "team_leader_ekf",
+        "dr_log",
+    ]
