@@ -437,6 +437,26 @@ def water(d: mujoco.MjData, v: NativeVehicle) -> tuple[NDArray[np.float64], NDAr
     return st[:3] + st[3:6] * (float(d.time) - st[6]), np.array(st[3:6])
 
 
+def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """a x b of 3-vectors, or row by row of (n, 3) arrays (one may be a 3-vector): ``np.cross``
+    without its axis handling, which dominates the callback's cost."""
+    return np.stack(
+        (
+            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
+        ),
+        axis=-1,
+    )
+
+
+def _coriolis(A: NDArray[np.float64], nu: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Kirchhoff's ``-C_A(nu) nu`` (:func:`bauv_sim.hydro.coriolis_added_mass`)."""
+    pv = A[:3] @ nu
+    L = A[3:] @ nu
+    return np.concatenate((_cross(pv, nu[3:]), _cross(pv, nu[:3]) + _cross(L, nu[3:])))
+
+
 def vehicle_force(m: mujoco.MjModel, d: mujoco.MjData, v: NativeVehicle) -> NDArray[np.float64]:
     """The callback's generalized force for one vehicle (kinematics and velocities computed;
     ``d.qacc`` holds the lagged acceleration).
@@ -450,15 +470,15 @@ def vehicle_force(m: mujoco.MjModel, d: mujoco.MjData, v: NativeVehicle) -> NDAr
     accelerating = bool(np.any(a_w != 0.0))
     R = d.xmat[v.free_body].reshape(3, 3)
     qv = d.qvel[v.dof : v.dof + 6]
-    nu = np.r_[R.T @ (qv[:3] - w), qv[3:]]
+    nu = np.concatenate((R.T @ (qv[:3] - w), qv[3:]))
     # Kirchhoff: -C_B(nu) nu + M_A (w x nu_1 + R^T a_water), and the residual added mass
     # -dA T qacc with the previous step's acceleration (-M_A d(nu)/dt = -M_A T qacc
     # + M_A (w x nu_1 + R^T a_water): the armature holds -M_nat T qacc, M_A = M_nat + dA)
-    tau = hydro.coriolis_added_mass(v.M_B, nu)
-    ext = np.cross(nu[3:], nu[:3]) + (R.T @ a_w if accelerating else 0.0)
+    tau = _coriolis(v.M_B, nu)
+    ext = _cross(nu[3:], nu[:3]) + (R.T @ a_w if accelerating else 0.0)
     tau += v.M_A[:, :3] @ ext
     qa = d.qacc[v.dof : v.dof + 6]
-    tau -= v.dA @ np.r_[R.T @ qa[:3], qa[3:]]
+    tau -= v.dA @ np.concatenate((R.T @ qa[:3], qa[3:]))
     u, p, q, r = nu[0], nu[3], nu[4], nu[5]
     # crossflow strips -1/2 rho C a |c| c
     if len(v.cross):
@@ -496,14 +516,14 @@ def vehicle_force(m: mujoco.MjModel, d: mujoco.MjData, v: NativeVehicle) -> NDAr
         ub = vel[3:] - Rb.T @ w
         s = v.seg_strips[i]
         pos = s[:, :3]
-        wr = np.cross(vel[:3], pos)
+        wr = _cross(vel[:3], pos)
         cy = ub[1] + wr[:, 1]
         cz = ub[2] + wr[:, 2]
         c = np.hypot(cy, cz)
         f = np.zeros_like(pos)
         f[:, 1] = -0.5 * rho * s[:, 3] * s[:, 5] * c * cy
         f[:, 2] = -0.5 * rho * s[:, 4] * s[:, 6] * c * cz
-        ts = np.cross(pos, f).sum(axis=0)
+        ts = _cross(pos, f).sum(axis=0)
         ts[0] -= v.seg_roll[i] * vel[0] * abs(vel[0])
         mujoco.mj_applyFT(m, d, Rb @ f.sum(axis=0), Rb @ ts, d.xpos[b], b, qfrc)
     for fo in v.foils:
@@ -527,12 +547,12 @@ def vehicle_force(m: mujoco.MjModel, d: mujoco.MjData, v: NativeVehicle) -> NDAr
             tp = np.zeros(3)
             if c_n:
                 pos = fo.panels[:, :3]
-                unp = un + np.cross(vel[:3], pos)[:, n]
+                unp = un + _cross(vel[:3], pos)[:, n]
                 fn = -c_n * fo.panels[:, 3] * np.abs(unp) * unp
                 fv = np.zeros_like(pos)
                 fv[:, n] = fn
                 fp[n] += fn.sum()
-                tp = np.cross(pos, fv).sum(axis=0)
+                tp = _cross(pos, fv).sum(axis=0)
             mujoco.mj_applyFT(m, d, Rg @ fp, Rg @ tp, d.geom_xpos[g], fo.body, qfrc)
         if sp <= 0:
             continue
