@@ -31,12 +31,14 @@ import copy
 import math
 import sys
 import time
+from pathlib import Path
 
 import mujoco
 import numpy as np
 from harness import machine, measure, table
 
-from bauv_sim import hydro_native, manoeuvres
+from bauv_sim import build, hydro_native, manoeuvres
+from bauv_sim.seabed import SeabedConfig
 
 TIMESTEP_S = 0.004
 """The missions' preset, s."""
@@ -122,22 +124,76 @@ def throughput(n_vehicles: int, seconds: float, repeats: int) -> str:
     return "\n".join(lines)
 
 
+def export(folder: Path, seconds: float) -> None:
+    """Write what the MuJoCo Warp run needs (``gpu_hydro_warp.py FOLDER``, in an environment
+    without bauv_sim): the scene (``scene.xml`` and assets, with the plugin element, which the run
+    strips), and ``native.npz``: the native parameters (armature, ``geom_fluid``), the kernel's
+    tables, the start state with the tail beating at the cruise frequency and a 10 deg bias, and
+    the hull's track each second flown on the CPU with the plugin and with the native callback.
+
+    Args:
+        folder: output folder (created).
+        seconds: length of the CPU tracks, s.
+    """
+    import gpu_hydro_warp  # needs warp-lang
+
+    bed = SeabedConfig(
+        depth_at_origin_m=200.0, slope=0.0, relief_std_m=0.0, min_depth_m=200.0,
+        half_extent_m=2000.0, cell_m=500.0,
+    )  # fmt: skip
+    cfg = build.SceneConfig(
+        vehicles=(build.VehicleSpec(depth_m=20.0, speed_m_s=1.0),), seabed=bed, beacons=()
+    )
+    folder.mkdir(parents=True, exist_ok=True)
+    build.export_scene(cfg, folder)
+    out: dict[str, np.ndarray] = {}
+    for kind in ("plugin", "native"):
+        p = build.build_physics(cfg, timestep_s=TIMESTEP_S, hydrodynamics=kind)
+        p.set_tail_beat_frequency_hz(CRUISE_FREQUENCY_HZ)
+        p.set_tail_bias_rad(math.radians(10.0))
+        m, d = p.model.ptr, p.data.ptr
+        if kind == "native":
+            v = hydro_native.native_of(m).vehicles[0]
+            for k, x in gpu_hydro_warp.table_arrays(m, v).items():
+                out["t_" + k] = np.asarray(x)
+            out |= {
+                "dof_armature": np.array(m.dof_armature),
+                "geom_fluid": np.array(m.geom_fluid),
+                "timestep": np.array(TIMESTEP_S),
+                "wind": np.array(m.opt.wind),
+            }
+            for name in ("qpos", "qvel", "act", "ctrl", "userdata"):
+                out[name] = np.array(getattr(d, name))
+        fb = int(m.jnt_bodyid[np.flatnonzero(m.jnt_type == mujoco.mjtJoint.mjJNT_FREE)[0]])
+        track = np.zeros((int(seconds), 3))
+        for k in range(int(seconds)):
+            mujoco.mj_step(m, d, round(1.0 / TIMESTEP_S))
+            track[k] = d.xpos[fb]
+        out[f"{kind}_track"] = track
+    np.savez(folder / "native.npz", **out)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--smoke", action="store_true", help="CPU smoke test (CI): short and small")
     ap.add_argument("--device", choices=("cpu", "gpu"), default="cpu")
     ap.add_argument("--vehicles", type=int, default=None, help="vehicles (default 8; smoke 2)")
     ap.add_argument("--seconds", type=float, default=None, help="swim, s (default 60; smoke 9)")
+    ap.add_argument("--export", type=Path, help="write the MuJoCo Warp run's input here and stop")
     a = ap.parse_args(argv)
     n = a.vehicles if a.vehicles is not None else (2 if a.smoke else 8)
     seconds = a.seconds if a.seconds is not None else (9.0 if a.smoke else 60.0)
     if n < 1 or not (seconds > 0 and math.isfinite(seconds)):
         print(f"gpu_hydro: vehicles = {n}, seconds = {seconds}: need >= 1 and > 0", file=sys.stderr)
         return 2
+    if a.export is not None:
+        export(a.export, seconds)
+        print(f"wrote {a.export}; run: python benchmarks/gpu_hydro_warp.py {a.export}")
+        return 0
     if a.device == "gpu":
         print(
-            "gpu_hydro: --device gpu needs the MuJoCo Warp port of the passive callback "
-            "(docs/gpu.md, 'Running on MuJoCo Warp'), which is not written yet",
+            "gpu_hydro: the GPU run is two steps (docs/gpu.md, 'Running on MuJoCo Warp'): "
+            "gpu_hydro.py --export DIR here, then gpu_hydro_warp.py DIR where MuJoCo Warp is",
             file=sys.stderr,
         )
         return 2

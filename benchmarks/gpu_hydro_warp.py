@@ -13,14 +13,22 @@ the kernel on Warp's CPU device on arrays copied from CPU MuJoCo data and compar
 
 from __future__ import annotations
 
+import argparse
 import inspect
-from typing import Any
+import math
+import re
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 import warp as wp
 
-from bauv_sim import hydro_native
+if TYPE_CHECKING:  # not imported at run time: the GPU side runs without bauv_sim
+    from bauv_sim.hydro_native import NativeVehicle
+
 
 vec3 = wp.vec3
 mat33 = wp.mat33
@@ -290,49 +298,71 @@ def hydro_kernel(
                       body_dofadr, body_dofnum, body_rootid, subtree_com, cdof, qfrc)  # fmt: skip
 
 
-def vehicle_tables(m: mujoco.MjModel, v: hydro_native.NativeVehicle, device: str) -> dict[str, Any]:
-    """The kernel's model and vehicle arguments (Warp arrays on ``device``), by parameter name."""
+_INT_ARRAYS = (
+    "body_parentid", "body_dofadr", "body_dofnum", "body_rootid", "geom_bodyid", "seg_body",
+    "foil_geom", "foil_normal", "fk_body", "drag_geom",
+)  # fmt: skip
+_INT_SCALARS = ("free_body", "dof", "has_slender")
+_FLOAT_SCALARS = ("rho", "beta", "roll_k")
 
-    def arr(x, dtype=float):
-        return wp.array(np.ascontiguousarray(x), dtype=dtype, device=device)
 
+def table_arrays(m: mujoco.MjModel, v: NativeVehicle) -> dict[str, np.ndarray]:
+    """The kernel's model and vehicle arguments as numpy arrays (scalars 0-d), by parameter name:
+    what :func:`to_warp` uploads and what ``gpu_hydro.py --export`` saves."""
     strips = [np.c_[np.full(len(s), i), s] for i, s in enumerate(v.seg_strips)]
     panels = np.stack([f.panels for f in v.foils]) if v.foils else np.zeros((0, 0, 4))
     par = [[f.half_chord, f.k_lift, *f.drag] for f in v.foils]
     return {
-        "rho": float(m.opt.density),
-        "beta": float(m.opt.viscosity),
-        "body_parentid": arr(m.body_parentid, int),
-        "body_dofadr": arr(m.body_dofadr, int),
-        "body_dofnum": arr(m.body_dofnum, int),
-        "body_rootid": arr(m.body_rootid, int),
-        "geom_bodyid": arr(m.geom_bodyid, int),
-        "free_body": int(v.free_body),
-        "dof": int(v.dof),
-        "MA": arr(v.M_A),
-        "MB": arr(v.M_B),
-        "dA": arr(v.dA),
-        "cross_el": arr(v.cross.reshape(-1, 7)),
-        "roll_k": float(v.roll_k),
-        "has_slender": int(v.slender is not None),
-        "slender": arr(np.zeros(6) if v.slender is None else v.slender),
-        "seg_body": arr(v.seg_bodies, int),
-        "seg_strip": arr(np.concatenate(strips) if strips else np.zeros((0, 8))),
-        "seg_roll": arr(v.seg_roll),
-        "foil_geom": arr([f.geom for f in v.foils], int),
-        "foil_normal": arr([f.normal for f in v.foils], int),
-        "foil_par": arr(np.array(par).reshape(-1, 5)),
-        "panels": arr(panels),
-        "fk_body": arr(v.fk_bodies, int),
-        "fk_mass": arr(v.fk_mass),
-        "drag_geom": arr(v.drag_geoms, int),
-        "drag_semi": arr(v.drag_semi, vec3),
-        "drag_coef": arr(v.drag_coef),
+        "rho": np.array(m.opt.density),
+        "beta": np.array(m.opt.viscosity),
+        "body_parentid": np.array(m.body_parentid),
+        "body_dofadr": np.array(m.body_dofadr),
+        "body_dofnum": np.array(m.body_dofnum),
+        "body_rootid": np.array(m.body_rootid),
+        "geom_bodyid": np.array(m.geom_bodyid),
+        "free_body": np.array(v.free_body),
+        "dof": np.array(v.dof),
+        "MA": v.M_A,
+        "MB": v.M_B,
+        "dA": v.dA,
+        "cross_el": v.cross.reshape(-1, 7),
+        "roll_k": np.array(v.roll_k),
+        "has_slender": np.array(int(v.slender is not None)),
+        "slender": np.zeros(6) if v.slender is None else v.slender,
+        "seg_body": np.array(v.seg_bodies),
+        "seg_strip": np.concatenate(strips) if strips else np.zeros((0, 8)),
+        "seg_roll": v.seg_roll,
+        "foil_geom": np.array([f.geom for f in v.foils]),
+        "foil_normal": np.array([f.normal for f in v.foils]),
+        "foil_par": np.array(par).reshape(-1, 5),
+        "panels": panels,
+        "fk_body": v.fk_bodies,
+        "fk_mass": v.fk_mass,
+        "drag_geom": v.drag_geoms,
+        "drag_semi": v.drag_semi,
+        "drag_coef": v.drag_coef,
     }
 
 
+def to_warp(tables: dict[str, np.ndarray], device: str) -> dict[str, Any]:
+    """:func:`table_arrays` as the kernel's arguments on a Warp device."""
+    out: dict[str, Any] = {}
+    for k, x in tables.items():
+        if k in _INT_SCALARS:
+            out[k] = int(x)
+        elif k in _FLOAT_SCALARS:
+            out[k] = float(x)
+        elif k in _INT_ARRAYS:
+            out[k] = wp.array(np.ascontiguousarray(x, dtype=np.int32), dtype=int, device=device)
+        elif k == "drag_semi":
+            out[k] = wp.array(np.ascontiguousarray(x, dtype=np.float32), dtype=vec3, device=device)
+        else:
+            out[k] = wp.array(np.ascontiguousarray(x, dtype=np.float32), dtype=float, device=device)
+    return out
+
+
 def state_from_cpu(
-    m: mujoco.MjModel, datas: list[mujoco.MjData], v: hydro_native.NativeVehicle, device: str
+    m: mujoco.MjModel, datas: list[mujoco.MjData], v: NativeVehicle, device: str
 ) -> dict[str, Any]:
     """The kernel's per-world arguments from CPU MuJoCo data (one world per data), by name."""
 
@@ -363,16 +393,139 @@ def state_from_cpu(
 def forces(
     m: mujoco.MjModel,
     datas: list[mujoco.MjData],
-    v: hydro_native.NativeVehicle,
+    v: NativeVehicle,
     device: str = "cpu",
 ) -> np.ndarray:
     """The kernel's generalized forces for CPU data (kinematics, ``cvel`` and ``cdof`` computed),
     shape (len(datas), nv)."""
     qfrc = wp.zeros((len(datas), m.nv), dtype=float, device=device)
-    args = {**state_from_cpu(m, datas, v, device), **vehicle_tables(m, v, device), "qfrc": qfrc}
+    args = {
+        **state_from_cpu(m, datas, v, device),
+        **to_warp(table_arrays(m, v), device),
+        "qfrc": qfrc,
+    }
     wp.launch(hydro_kernel, dim=len(datas), inputs=[args[k] for k in _PARAMS], device=device)
     return qfrc.numpy().astype(np.float64)
 
 
 _PARAMS = list(inspect.signature(hydro_kernel.func).parameters)
 """The kernel's parameter names, in order."""
+
+
+# ------------------------------------------------------------------------------------------------
+# the GPU run: MuJoCo Warp with the kernel as its passive callback
+
+
+def run(folder: Path, worlds: int, seconds: float, device: str | None = None) -> dict[str, float]:
+    """Step ``worlds`` copies of the native model exported by ``gpu_hydro.py --export`` in MuJoCo
+    Warp with :data:`hydro_kernel` as the passive callback.
+
+    Args:
+        folder: the export (``scene.xml`` and its assets, ``native.npz``).
+        worlds: number of worlds (one vehicle each).
+        seconds: simulated time, s (whole seconds of the export's track are compared).
+        device: Warp device (default: Warp's default, a GPU where there is one).
+
+    Returns:
+        ``vehicles_x_real_time`` (worlds x simulated s per wall s, the first step's compilation
+        excluded), ``max_error_vs_plugin_m`` and ``max_error_vs_cpu_native_m`` (world 0's hull
+        position against the CPU tracks, sampled each second), ``wall_s``, ``device``.
+    """
+    import mujoco_warp as mjw
+
+    z = np.load(folder / "native.npz")
+    xml = (folder / "scene.xml").read_text()
+    xml = re.sub(r"<extension>.*?</extension>", "", xml, flags=re.S)  # the plugin, as
+    xml = re.sub(r"(<mujoco[^>]*>)", r'\1<size nuserdata="7"/>', xml, count=1)  # strip_plugin_xml
+    path = folder / "native.xml"
+    path.write_text(xml)
+    mjm = mujoco.MjModel.from_xml_path(str(path))
+    if mjm.nv != z["qvel"].size or mjm.ngeom != z["geom_fluid"].shape[0]:
+        raise SystemExit(f"{path}: nv {mjm.nv}, ngeom {mjm.ngeom} differ from the export's")
+    mjm.dof_armature[:] = z["dof_armature"]
+    mjm.geom_fluid[:] = z["geom_fluid"]
+    mjm.opt.timestep = float(z["timestep"])
+    mjm.opt.wind[:] = z["wind"]
+    # MuJoCo Warp has no automatic reset (the project disables it: a divergence must not restart
+    # silently); the run checks that world 0's track is finite instead
+    mjm.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    mjd = mujoco.MjData(mjm)
+    for name in ("qpos", "qvel", "act", "ctrl", "userdata"):
+        getattr(mjd, name)[:] = z[name]
+    mujoco.mj_forward(mjm, mjd)
+    tables = {k[2:]: z[k] for k in z.files if k.startswith("t_")}
+    fb = int(tables["free_body"])
+    with wp.ScopedDevice(device):
+        dev = wp.get_device()
+        m = mjw.put_model(mjm)
+        d = mjw.put_data(mjm, mjd, nworld=worlds)
+        args = to_warp(tables, str(dev))
+        wind = vec3(*np.asarray(z["wind"], dtype=np.float32))
+
+        def passive(m: Any, d: Any) -> None:
+            a = {
+                **args,
+                "qvel": d.qvel, "qacc": d.qacc, "xmat": d.xmat, "xpos": d.xpos,
+                "xipos": d.xipos, "geom_xmat": d.geom_xmat, "geom_xpos": d.geom_xpos,
+                "cvel": d.cvel, "cdof": d.cdof, "subtree_com": d.subtree_com,
+                "water": d.userdata, "time": d.time, "wind": wind, "qfrc": d.qfrc_passive,
+            }  # fmt: skip
+            wp.launch(hydro_kernel, dim=d.nworld, inputs=[a[k] for k in _PARAMS])
+
+        m.callback.passive = passive
+        per_second = round(1.0 / float(z["timestep"]))
+        n_sec = max(1, int(seconds))
+        track = np.zeros((n_sec, 3))
+        graph = None
+        if dev.is_cuda:  # one second of steps as one CUDA graph (as mujoco_warp's testspeed)
+            with wp.ScopedCapture() as capture:
+                for _ in range(per_second):
+                    mjw.step(m, d)
+            graph = capture.graph  # recorded, not run: d is still at the start
+        else:
+            warm = mjw.put_data(mjm, mjd, nworld=worlds)
+            mjw.step(m, warm)  # compiles the kernels
+        t0 = time.perf_counter()
+        for k in range(n_sec):
+            if graph is not None:
+                wp.capture_launch(graph)
+            else:
+                for _ in range(per_second):
+                    mjw.step(m, d)
+            track[k] = d.xpos.numpy()[0, fb]
+        wp.synchronize()
+        wall = time.perf_counter() - t0
+    if not np.all(np.isfinite(track)):
+        raise SystemExit("gpu_hydro_warp: world 0's track is not finite")
+    return {
+        "device": str(dev),
+        "worlds": worlds,
+        "seconds": n_sec,
+        "wall_s": wall,
+        "vehicles_x_real_time": worlds * n_sec / wall,
+        "max_error_vs_plugin_m": float(np.abs(track - z["plugin_track"][:n_sec]).max()),
+        "max_error_vs_cpu_native_m": float(np.abs(track - z["native_track"][:n_sec]).max()),
+        "distance_flown_m": float(np.linalg.norm(z["plugin_track"][n_sec - 1] - z["qpos"][:3])),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description="MuJoCo Warp run of the native hydrodynamics")
+    ap.add_argument("folder", type=Path, help="the export of gpu_hydro.py --export")
+    ap.add_argument("--worlds", type=int, default=4096)
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--device", default=None, help="Warp device (default: Warp's)")
+    a = ap.parse_args(argv)
+    if a.worlds < 1 or not (a.seconds >= 1 and math.isfinite(a.seconds)):
+        print(f"worlds = {a.worlds}, seconds = {a.seconds}: need >= 1 each", file=sys.stderr)
+        return 2
+    if not (a.folder / "native.npz").exists():
+        print(f"folder = {a.folder}: no native.npz (run gpu_hydro.py --export)", file=sys.stderr)
+        return 2
+    for k, v in run(a.folder, a.worlds, a.seconds, a.device).items():
+        print(f"{k}: {v:.4g}" if isinstance(v, float) else f"{k}: {v}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
