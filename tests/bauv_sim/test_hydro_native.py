@@ -9,8 +9,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from bauv_sim import build, hydro, hydro_native
-from bauv_sim.errors import ConfigError
+from bauv_sim import build, hydro, hydro_native, manoeuvres
+from bauv_sim.errors import ConfigError, PhysicsError
 
 from .test_hydrodynamics import _randomise
 
@@ -108,3 +108,25 @@ def test_lagged_added_mass_is_stable_and_the_armature_holds_the_rest():
 def test_an_unknown_formulation_is_named():
     with pytest.raises(ConfigError, match="hydrodynamics = 'gpu'"):
         build.build_physics(build.SceneConfig(), hydrodynamics="gpu")
+
+
+@pytest.mark.parametrize(("m_iso_kg", "stable"), [(20.0, True), (10.0, False)])
+def test_the_ratio_predicts_whether_the_swim_diverges(m_iso_kg, stable):
+    """Less isotropic mass in the armature, more lagged: ratio 0.82 swims, 1.13 diverges (the
+    facade raises at the first bad step)."""
+    with hydro_native.formulation("native"):
+        phys = manoeuvres.open_water_scene(speed_m_s=1.0)
+    phys.set_timestep(0.004)
+    m, d = phys.model.ptr, phys.data.ptr
+    v = hydro_native.native_of(m).vehicles[0]
+    hydro_native._set_armature(m, v, np.zeros(6), m_iso_kg)
+    mujoco.mj_forward(m, d)
+    ratio = hydro_native.stability_ratio(m, d, v)
+    assert (ratio < 1.0) == stable
+    phys.set_tail_beat_frequency_hz(1.2)
+    if stable:
+        phys.advance(2.0)
+        assert np.all(np.isfinite(d.qvel)) and np.abs(d.qvel).max() < 20.0
+    else:
+        with pytest.raises(PhysicsError):
+            phys.advance(2.0)
