@@ -401,16 +401,33 @@ def prepare(m: mujoco.MjModel, d: mujoco.MjData) -> NativeHydro:
         raise ConfigError(f"native hydrodynamics: lagged added-mass ratio {ratio:.3f} >= 1")
     out = NativeHydro(vehicles, ratio)
     _MODELS[m._address] = (weakref.ref(m), out)
-    weakref.finalize(m, _MODELS.pop, m._address, None)
+    weakref.finalize(m, _forget, m._address)
     mujoco.set_mjcb_passive(passive)
     return out
+
+
+def _forget(address: int) -> None:
+    """A native model was freed: drop it, and the callback with the last one (an installed Python
+    passive callback makes every compilation of the process fail, :func:`compiling`)."""
+    _MODELS.pop(address, None)
+    if not _MODELS:
+        mujoco.set_mjcb_passive(None)
+
+
+def uninstall() -> None:
+    """Remove the passive callback and forget every native model (their forces stop)."""
+    _MODELS.clear()
+    mujoco.set_mjcb_passive(None)
 
 
 @contextlib.contextmanager
 def compiling() -> Iterator[None]:
     """Compile models inside this block: MuJoCo's Python bindings fail a compilation while a
     passive callback is installed (the compiler evaluates the model before a Python object wraps
-    it), so the callback is removed for the block and put back if a native model is alive."""
+    it), so the callback is removed for the block and put back if a native model is alive. The
+    callback is installed while a native model lives (:func:`prepare`) and removed with the last
+    one or by :func:`uninstall`; code that compiles models outside ``build_physics`` while a
+    native model lives compiles them inside this block."""
     mujoco.set_mjcb_passive(None)
     try:
         yield

@@ -22,6 +22,14 @@ TWO = build.SceneConfig(
 )
 
 
+@pytest.fixture(autouse=True)
+def _no_callback_left():
+    """The callback of a native model makes every later compilation of the process fail
+    (hydro_native.compiling): none is left installed for the next test."""
+    yield
+    hydro_native.uninstall()
+
+
 def _pair(config: build.SceneConfig):
     return (
         build.build_physics(config, hydrodynamics="plugin"),

@@ -20,6 +20,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import gpu_hydro_warp
 
 
+@pytest.fixture(autouse=True)
+def _no_callback_left():
+    """The callback of a native model makes every later compilation of the process fail
+    (hydro_native.compiling): none is left installed for the next test."""
+    yield
+    hydro_native.uninstall()
+
+
 def test_warp_kernel_equals_the_callback_at_random_states_in_accelerating_water():
     phys = build.build_physics(build.SceneConfig(), hydrodynamics="native")
     m = phys.model.ptr
