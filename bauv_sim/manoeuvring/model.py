@@ -41,8 +41,9 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -198,6 +199,10 @@ class ManoeuvringCoefficients:
         straight_speed_m_s: the steady speed through water there, m/s, shape (k,).
         thrust_speed_slope: k of the thrust's change with surge off the steady swim,
             -k f (u - u_ss(f)), N / (Hz m/s).
+        tail_bias_grid_rad: tail biases of the bias table, rad, shape (k_b,), increasing.
+        tail_bias_per_uu: the bias's share of the tail's mean force and moment over u abs(u)
+            at those biases (measured at the cruise frequency), shape (k_b, 6), N / (m/s)^2;
+            interpolated linearly in the bias and added to the :data:`TAIL_TERMS` regression.
         hull_box_low, hull_box_high: the box of relative velocities the hull's force was fitted
             in, shape (6,) each; outside it the regressors are evaluated at the nearest point of
             the box (the polynomial is not extrapolated).
@@ -227,6 +232,8 @@ class ManoeuvringCoefficients:
     thrust_speed_slope: float
     hull_box_low: NDArray[np.float64]
     hull_box_high: NDArray[np.float64]
+    tail_bias_grid_rad: NDArray[np.float64]
+    tail_bias_per_uu: NDArray[np.float64]
     power_w: NDArray[np.float64]
     yaw_amplitude_rad: NDArray[np.float64]
     roll_amplitude_rad: NDArray[np.float64]
@@ -245,10 +252,10 @@ class ManoeuvringCoefficients:
     @classmethod
     def from_json(cls, data: dict) -> ManoeuvringCoefficients:
         """Inverse of :meth:`to_json` (extra keys, such as the provenance, are ignored)."""
-        kw = {}
+        kw: dict[str, Any] = {}
         for k, f in cls.__dataclass_fields__.items():
             if k not in data:
-                if f.default is not f.default_factory:  # has a default
+                if f.default is not MISSING:
                     continue
                 raise ConfigError(f"manoeuvring data: field {k!r} missing")
             v = data[k]
@@ -427,6 +434,12 @@ class ManoeuvringWorld:
         out += fin_regressors(u, fins[:, 0]) @ c.fin_port
         out += fin_regressors(u, fins[:, 1]) @ c.fin_starboard
         out += tail_regressors(self.frequency_hz, bias, u) @ c.tail
+        gb = c.tail_bias_grid_rad
+        xb = np.interp(bias, gb, np.arange(gb.size, dtype=float))
+        ib = np.minimum(xb.astype(int), gb.size - 2)
+        ab = (xb - ib)[:, None]
+        tb = (1 - ab) * c.tail_bias_per_uu[ib] + ab * c.tail_bias_per_uu[ib + 1]
+        out += (u * np.abs(u))[:, None] * tb
         tab, u_ss = tail_table if tail_table is not None else self.tail_table(self.frequency_hz)
         out += tab
         out[:, 0] -= c.thrust_speed_slope * self.frequency_hz * (u - u_ss)
