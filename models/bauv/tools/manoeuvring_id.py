@@ -55,6 +55,8 @@ from bauv_sim.physics import BauvPhysics
 ROOT = Path(__file__).resolve().parents[3]
 README = ROOT / "models" / "bauv" / "README.md"
 TIMESTEP_S = 0.004
+MIRROR = True
+"""Fit the hull on every captive state and its mirror image."""
 """The full model's step for identification and validation, s (the missions' preset)."""
 
 HULL_BOX = {"u": (-0.2, 1.8), "v": (-0.25, 0.25), "w": (-0.25, 0.25), "p": (-0.3, 0.3),
@@ -154,6 +156,16 @@ def fit_hull(ph: BauvPhysics, rng: np.random.Generator, n_fit: int = 3000, n_che
     c_line, *_ = np.linalg.lstsq(mm.hull_regressors(line)[:, :k], F_line, rcond=None)
     X = sample_box(rng, n_fit + n_check)
     F = np.array([tow_nu(ph, x) for x in X])
+    if MIRROR:
+        # the port-starboard mirror image of every state: v, p, r and Y, K, N change sign; the
+        # fit then sees both and its errors are symmetric (the tail's even terms keep the
+        # linkage's difference)
+        flip = np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
+        Xm = X[:n_fit] * flip
+        Fm = np.array([tow_nu(ph, x) for x in Xm])
+        X = np.vstack([X[:n_fit], Xm, X[n_fit:]])
+        F = np.vstack([F[:n_fit], Fm, F[n_fit:]])
+        n_fit *= 2
     A = mm.hull_regressors(X)
     rest = F - A[:, :k] @ c_line
     c_rest, *_ = np.linalg.lstsq(A[:n_fit, k:], rest[:n_fit], rcond=None)
