@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
+from bauv_sim import hydro_native
 from bauv_sim import seabed as sb
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError, GeometryError
@@ -210,6 +211,7 @@ def build_physics(
     config: SceneConfig | None = None,
     control_tick_s: float = DEFAULT_CONTROL_TICK_S,
     timestep_s: float | None = None,
+    hydrodynamics: str | None = None,
 ) -> BauvPhysics:
     """Assemble, compile and initialise a scene.
 
@@ -218,13 +220,24 @@ def build_physics(
         control_tick_s: control tick, s (an integer multiple of the timestep).
         timestep_s: physics timestep, s; None keeps the model file's 2 ms
             (:meth:`BauvPhysics.set_timestep`).
+        hydrodynamics: ``"plugin"`` (the engine plugin ``bauv.hydro``) or ``"native"`` (MuJoCo's
+            own parameters plus one passive callback, :mod:`bauv_sim.hydro_native`); None: the
+            current :func:`bauv_sim.hydro_native.formulation` (``"plugin"`` by default).
 
     Returns:
         The physics with every vehicle at its initial pose and speed, all commands zero.
     """
     cfg = config or SceneConfig()
     root, _ = build_scene(cfg)
-    phys = BauvPhysics.from_mjcf_model(root)
+    kind = hydro_native.check_formulation(hydrodynamics or hydro_native.current_formulation())
+    with hydro_native.compiling():
+        if kind == "native":
+            xml = hydro_native.strip_plugin_xml(root.to_xml_string(), len(cfg.vehicles))
+            phys = BauvPhysics.from_xml_string(xml, assets=root.get_assets())
+        else:
+            phys = BauvPhysics.from_mjcf_model(root)
+    if kind == "native":
+        hydro_native.prepare(phys.model.ptr, phys.data.ptr)
     if timestep_s is not None:
         phys.set_timestep(timestep_s, control_tick_s)
     else:

@@ -223,13 +223,41 @@ def load_model(path: str | Path) -> mujoco.MjModel:
 
 
 def plugin_instances(model: mujoco.MjModel) -> dict[str, int]:
-    """The model's ``bauv.hydro`` instances by vehicle prefix (``""`` or ``"leader/"``)."""
+    """The model's ``bauv.hydro`` instances by vehicle prefix (``""`` or ``"leader/"``).
+
+    A model without the plugin (the native formulation, :mod:`bauv_sim.hydro_native`) gives its
+    vehicles negative numbers ``-1 - k`` (k-th vehicle in model order): their water is block k of
+    ``MjData.userdata`` (:func:`set_water`, :func:`water`).
+    """
     out = {}
     for i in range(model.nplugin):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PLUGIN, i) or ""
         if name.endswith("hydro"):
             out[name[: -len("hydro")]] = i
+    if not out and model.nuserdata:
+        out = {p: -1 - k for k, p in enumerate(native_prefixes(model))}
     return out
+
+
+def native_prefixes(model: mujoco.MjModel) -> list[str]:
+    """The vehicles' prefixes of a model, in model order: the names of its numerics
+    ``<prefix>hydro_added_mass``."""
+    out = []
+    for i in range(model.nnumeric):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_NUMERIC, i) or ""
+        if name.endswith("hydro_added_mass"):
+            out.append(name[: -len("hydro_added_mass")])
+    return out
+
+
+def _water_slice(model: mujoco.MjModel, data: mujoco.MjData, instance: int) -> NDArray[np.float64]:
+    """The 7 numbers of a vehicle's water: the plugin's state, or (negative instance, native
+    model) its block of ``userdata``; a view."""
+    if instance < 0:
+        a = WATER_STATE_SIZE * (-1 - instance)
+        return data.userdata[a : a + WATER_STATE_SIZE]
+    a = int(model.plugin_stateadr[instance])
+    return data.plugin_state[a : a + WATER_STATE_SIZE]
 
 
 def set_water(
@@ -255,11 +283,10 @@ def set_water(
         accel_world_m_s2: ``a``, shape (3,), m/s^2, world.
         t0_s: time of ``w0``, s (default: the data's time).
     """
-    a = int(model.plugin_stateadr[instance])
-    st = data.plugin_state
-    st[a : a + 3] = velocity_world_m_s
-    st[a + 3 : a + 6] = accel_world_m_s2
-    st[a + 6] = float(data.time) if t0_s is None else float(t0_s)
+    st = _water_slice(model, data, instance)
+    st[0:3] = velocity_world_m_s
+    st[3:6] = accel_world_m_s2
+    st[6] = float(data.time) if t0_s is None else float(t0_s)
 
 
 def water(
@@ -267,8 +294,7 @@ def water(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The water at a vehicle now (:func:`set_water`): velocity (m/s) and its rate (m/s^2), world,
     shape (3,) each."""
-    a = int(model.plugin_stateadr[instance])
-    st = data.plugin_state[a : a + WATER_STATE_SIZE]
+    st = _water_slice(model, data, instance)
     return st[:3] + st[3:6] * (float(data.time) - st[6]), np.array(st[3:6])
 
 
