@@ -236,6 +236,11 @@ def test_report_recording_and_warning_of_a_batch(tmp_path):
     for c in np.asarray(circles, dtype=float):
         r = np.hypot(*(c[:, :2] - c[:-1, :2].mean(axis=0)).T)
         assert np.allclose(r, r[0], atol=1e-3) and 7.0 < r[0] < 14.0  # about 10 m abeam
+    # the followers' true distance to the station: its mean and max are the metrics' (run.py)
+    for v in ("f1", "f2"):
+        _, st = read_time_series(rec, f"mission/ga2/{v}/station_error", "Scalars:scalars")
+        assert st.mean() == pytest.approx(data[v]["station_mean_error_m"], rel=1e-9)
+        assert st.max() == pytest.approx(data[v]["station_max_error_m"], rel=1e-9)
     th, hdop = read_time_series(rec, "mission/ga2/f1/hdop", "Scalars:scalars")
     assert len(th) == 201 and np.all((hdop >= 1.0) & (hdop <= 100.0))
     assert (out / "data" / "modem" / "run-000000-ga2-f1.parquet").is_file()

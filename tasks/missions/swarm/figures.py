@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -90,9 +91,41 @@ def _draw_swarm(name: str, scn: SwarmScenario, rec: SwarmRunResult, methods, out
 def record_swarm(name: str, scn: SwarmScenario, flights: dict[str, MissionRun], out) -> str:
     """``recording.rrd`` of a run: every method's flight in one file, each under its own subtree
     and 3-D view (:func:`tasks.closed_loop.recording.record_flights`): every vehicle's hull,
-    truth and estimate labelled with the vehicle and the method, the followers' range circles,
-    the leader's way-points, the transceiver and the seabed."""
+    truth and estimate labelled with the vehicle and the method, the followers' range circles
+    and their true distance to the station (:func:`with_station_error`), the leader's
+    way-points, the transceiver and the seabed."""
     from tasks.closed_loop.recording import mission_scene, record_flights
 
     scene = mission_scene(scn, guidance=scn.leader.guidance, transceiver=True)
-    return record_flights(out, name, scene, {m: f for m, f in flights.items() if f.vehicles})
+    flown = {m: with_station_error(scn, f) for m, f in flights.items() if f.vehicles}
+    return record_flights(out, name, scene, flown)
+
+
+def with_station_error(scn: SwarmScenario, flight: MissionRun) -> MissionRun:
+    """The flight with each follower's true distance to its station as a per-tick column,
+    ``station_error`` (m): from the station point of the leader's true position and true course
+    (:func:`~tasks.missions.swarm.run.leader_course_true`), as the figure draws it; the recording
+    shows it among the mission's columns. A copy: the run data is not changed."""
+    from tasks.core.export import Column
+
+    if LEADER not in flight.vehicles:
+        return flight
+    lead = flight.vehicles[LEADER]
+    tick = scn.timing.control_tick_s
+    course = leader_course_true(lead, max(1, round(scn.leader.velocity_window_s / tick)))
+    vehicles = dict(flight.vehicles)
+    for vn, st in zip(FOLLOWERS, station_offsets(scn), strict=False):
+        v = vehicles.get(vn)
+        if v is None:
+            continue
+        n = min(len(v["t"]), len(lead["t"]))
+        b = math.radians(st.relative_bearing_deg)
+        sp = lead["truth_pos"][:n, :2] + st.distance_m * np.column_stack(
+            [np.sin(course[:n] + b), np.cos(course[:n] + b)]
+        )
+        err = np.full(len(v["t"]), np.nan)
+        err[:n] = np.hypot(*(v["truth_pos"][:n, :2] - sp).T)
+        what = "true distance to the station (the leader's true position and course)"
+        col = Column(err, "m", what, (), n < len(err))
+        vehicles[vn] = dataclasses.replace(v, ticks={**v.ticks, "station_error": col})
+    return dataclasses.replace(flight, vehicles=vehicles)
