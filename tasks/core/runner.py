@@ -32,6 +32,8 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import importlib
+import threading
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -269,6 +271,7 @@ class _Computation:
                 for i in self.todo
             }
             self.bar = self._progress_bar()
+            prefetch_report_modules()
             if not isinstance(ex, InlineExecutor):
                 self.overlapped = OverlappedReport(plan, self.out_dir, self.progress, self.arrivals)
             try:
@@ -313,6 +316,44 @@ class _Computation:
             self.close_bar()
         if self.overlapped is not None:
             self.overlapped.abandon()
+
+
+REPORT_MODULES: tuple[str, ...] = (
+    "matplotlib.pyplot",
+    "matplotlib.backends.backend_agg",
+    "matplotlib.backends.backend_pdf",
+    "fontTools.subset",
+    "rerun",
+    "pyarrow.parquet",
+    "tasks.core.export",
+    "tasks.core.recording",
+)
+"""The libraries a report imports on first use (figures, their PDF fonts, the recording, the run
+data): :func:`prefetch_report_modules` imports them while the blocks are computed."""
+
+
+def prefetch_report_modules() -> threading.Thread:
+    """Import :data:`REPORT_MODULES` in a daemon thread, while the blocks are computed.
+
+    A flight spends most of its time in ``mj_step``, which releases the GIL, so the imports run
+    on the second core instead of after the flight (2-3 s of ``bauv run mission/survey`` on 2
+    cores, ``benchmarks/README.md``, "Where a step goes"). Nothing is computed: a module that
+    cannot be imported is skipped here and fails where the report imports it, as before.
+
+    Returns:
+        The started thread.
+    """
+
+    def run() -> None:
+        for name in REPORT_MODULES:
+            try:
+                importlib.import_module(name)
+            except Exception:  # the report's own import reports it
+                pass
+
+    t = threading.Thread(target=run, name="prefetch-report-modules", daemon=True)
+    t.start()
+    return t
 
 
 def _write_report(
