@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 # trimesh and scipy.integrate are imported by the functions that build meshes or integrate: a
 # mission imports this module for MODEL_DIR only, and the two took 1.7 s of its start-up.
 
-MODEL_DIR = PROJECT_ROOT / "models" / "bauv"
+MODEL_DIR: Path = PROJECT_ROOT / "models" / "bauv"
 """Folder of the vehicle model (``bauv.xml``, ``scene.xml``, ``assets/``)."""
 
 SEAWATER_DENSITY_KG_M3 = 1025.0
