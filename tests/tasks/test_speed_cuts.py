@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from tasks.core import runner, style
 
@@ -83,3 +84,33 @@ def test_the_vector_file_has_the_layout_of_the_png(tmp_path, monkeypatch):
     png_layout, pdf_layout = positions
     # constrained layout ran once, for the PNG; the PDF was drawn with the same axes positions
     assert np.array_equal(png_layout, pdf_layout)
+
+
+def _figure(i: int):
+    fig, ax = style.subplots("column")
+    ax.plot(np.arange(20) ** (1 + i), label=f"curve {i}")
+    ax.set_title(f"figure {i}")
+    style.figure_legend(fig, (ax,))
+    return fig
+
+
+def test_parallel_saves_write_the_same_bytes_as_saves_here(tmp_path):
+    (tmp_path / "here").mkdir()
+    (tmp_path / "forked").mkdir()
+    with style.context():
+        here = [style.save(_figure(i), tmp_path / "here" / f"f{i}.png") for i in range(3)]
+        with style.parallel_saves():
+            forked = [style.save(_figure(i), tmp_path / "forked" / f"f{i}.png") for i in range(3)]
+    assert forked == here
+    for names in here:
+        for n in names:
+            assert (tmp_path / "forked" / n).read_bytes() == (tmp_path / "here" / n).read_bytes()
+
+
+def test_a_failed_forked_save_raises_naming_the_figure(tmp_path):
+    (tmp_path / "f1.png").mkdir()  # the child cannot write its PNG over a folder
+    with style.context(), pytest.raises(OSError, match=r"f1\.png: .*Error"):
+        with style.parallel_saves():
+            style.save(_figure(0), tmp_path / "f0.png")
+            style.save(_figure(1), tmp_path / "f1.png")
+    assert (tmp_path / "f0.png").exists() and (tmp_path / "f0.pdf").exists()
