@@ -271,7 +271,7 @@ class _Computation:
                 for i in self.todo
             }
             self.bar = self._progress_bar()
-            prefetch_report_modules()
+            prefetch_report_modules(report_modules(plan.scenario))
             if not isinstance(ex, InlineExecutor):
                 self.overlapped = OverlappedReport(plan, self.out_dir, self.progress, self.arrivals)
             try:
@@ -318,34 +318,48 @@ class _Computation:
             self.overlapped.abandon()
 
 
-REPORT_MODULES: tuple[str, ...] = (
+FIGURE_MODULES: tuple[str, ...] = (
     "matplotlib.pyplot",
     "matplotlib.backends.backend_agg",
     "matplotlib.backends.backend_pdf",
     "fontTools.subset",
-    "rerun",
-    "pyarrow.parquet",
-    "tasks.core.export",
-    "tasks.core.recording",
 )
-"""The libraries a report imports on first use (figures, their PDF fonts, the recording, the run
-data): :func:`prefetch_report_modules` imports them while the blocks are computed."""
+"""The libraries a report's figures import on first use (the PDFs' fonts are subset by
+fontTools)."""
+
+RECORDING_MODULES: tuple[str, ...] = ("rerun", "tasks.core.recording")
+"""The libraries a report's recording imports on first use."""
 
 
-def prefetch_report_modules() -> threading.Thread:
-    """Import :data:`REPORT_MODULES` in a daemon thread, while the blocks are computed.
+def report_modules(scenario: Any) -> tuple[str, ...]:
+    """The libraries the report of a batch will import: :data:`FIGURE_MODULES` unless the
+    scenario's ``report.figures`` is false, :data:`RECORDING_MODULES` unless its
+    ``report.recording`` is false (a scenario without these fields draws and records)."""
+    rep = getattr(scenario, "report", None)
+    mods: tuple[str, ...] = ()
+    if getattr(rep, "figures", True) is not False:
+        mods += FIGURE_MODULES
+    if getattr(rep, "recording", True) is not False:
+        mods += RECORDING_MODULES
+    return mods
 
-    A flight spends most of its time in ``mj_step``, which releases the GIL, so the imports run
-    on the second core instead of after the flight (2-3 s of ``bauv run mission/survey`` on 2
-    cores, ``benchmarks/README.md``, "Where a step goes"). Nothing is computed: a module that
-    cannot be imported is skipped here and fails where the report imports it, as before.
+
+def prefetch_report_modules(modules: Sequence[str]) -> threading.Thread:
+    """Import ``modules`` (:func:`report_modules`) in a daemon thread, while the blocks are
+    computed.
+
+    A flight spends most of its time in ``mj_step``, which releases the GIL, so on a machine with
+    a free core the imports run there instead of after the flight (``benchmarks/README.md``,
+    "Where a step goes"). Nothing is computed: a module that cannot be imported is skipped here
+    and fails where the report imports it, as before. A run whose report draws no figures and
+    writes no recording imports nothing here (``tests/tasks/test_imports.py``).
 
     Returns:
         The started thread.
     """
 
     def run() -> None:
-        for name in REPORT_MODULES:
+        for name in modules:
             try:
                 importlib.import_module(name)
             except Exception:  # the report's own import reports it

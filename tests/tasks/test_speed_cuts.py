@@ -43,18 +43,28 @@ def test_hull_still_builds_meshes_and_integrates():
 def test_prefetch_imports_the_report_modules_in_a_thread():
     code = (
         "from tasks.core import runner\n"
-        "t = runner.prefetch_report_modules()\n"
+        "t = runner.prefetch_report_modules(runner.report_modules(None))\n"
         "assert t.daemon\n"
         "t.join(120)\n"
         "assert not t.is_alive()\n"
     )
     mods = _modules_after(code)
-    assert set(runner.REPORT_MODULES) <= mods
+    assert set(runner.FIGURE_MODULES) | set(runner.RECORDING_MODULES) <= mods
 
 
-def test_prefetch_skips_a_module_that_cannot_be_imported(monkeypatch):
-    monkeypatch.setattr(runner, "REPORT_MODULES", ("no_such_module_for_the_test", "json"))
-    t = runner.prefetch_report_modules()
+def test_the_report_modules_follow_the_scenario_report_switches():
+    from types import SimpleNamespace as NS
+
+    both = runner.FIGURE_MODULES + runner.RECORDING_MODULES
+    assert runner.report_modules(NS()) == both
+    assert runner.report_modules(NS(report=NS(figures=True, recording=True))) == both
+    assert runner.report_modules(NS(report=NS(figures=False))) == runner.RECORDING_MODULES
+    assert runner.report_modules(NS(report=NS(recording=False))) == runner.FIGURE_MODULES
+    assert runner.report_modules(NS(report=NS(figures=False, recording=False))) == ()
+
+
+def test_prefetch_skips_a_module_that_cannot_be_imported():
+    t = runner.prefetch_report_modules(("no_such_module_for_the_test", "json"))
     t.join(30)
     assert not t.is_alive()
     assert "json" in sys.modules
