@@ -277,8 +277,8 @@ def subplots(
 
 FREEZE_LAYOUT = True
 """Draw the vector file of :func:`save` with the layout computed for the PNG (constrained layout
-runs once per figure, not once per file): its axes are where the PNG's are, and the figures of
-``mission/survey`` take 10 % less CPU (``benchmarks/README.md``, "Where a step goes"). False
+runs once per figure, not once per file): its axes are where the PNG's are, and the default
+mission's figures take 10 % less CPU (``benchmarks/README.md``, "Where a step goes"). False
 lays the vector file out again at its own resolution (axes up to 0.5 % of the figure elsewhere)."""
 
 
@@ -363,9 +363,10 @@ def parallel_saves(enabled: bool = True):
     while the caller builds the next one; on leaving it, every child is waited for.
 
     The figures' files are the same bytes as when drawn in this process (the child has this
-    process's memory, the figure included). On a machine with 2 cores the three figures of a
-    mission take about half the wall time (``benchmarks/README.md``, "Where a step goes"). Where
-    ``os.fork`` is missing, or with ``enabled`` False, :func:`save` draws in this process.
+    process's memory, the figure included). On a machine with 2 cores the default mission's
+    three figures take a sixth to a third less wall time (``benchmarks/README.md``, "Where a
+    step goes"). Where ``os.fork`` is missing, or with ``enabled`` False, :func:`save` draws in
+    this process.
 
     Raises:
         OSError: on leaving, if a child failed (its error, with the PNG's name), after all
