@@ -179,7 +179,10 @@ def execute(
     with files.confined(out_dir):
         batch = _Computation(plan, out_dir, progress)
         try:
-            batch.compute(executor, workers, address, pool)
+            try:
+                batch.compute(executor, workers, address, pool)
+            finally:
+                batch.wait_prefetch()
         except KeyboardInterrupt:
             batch.stop(close_bar=True)
             raise BatchInterrupted(
@@ -220,6 +223,7 @@ class _Computation:
         self.todo = [i for i in range(len(plan.blocks)) if not run_folder.saved(out_dir, i)]
         self.failures: list[str] = []
         self.overlapped: OverlappedReport | None = None
+        self.prefetch: threading.Thread | None = None
         self.arrivals = Arrivals(set(range(len(plan.blocks))) - set(self.todo))
         self.bar: Any = None if self.todo else self._progress_bar()
 
@@ -271,8 +275,12 @@ class _Computation:
                 for i in self.todo
             }
             self.bar = self._progress_bar()
-            prefetch_report_modules(report_modules(plan.scenario))
+            self.prefetch = prefetch_report_modules(report_modules(plan.scenario))
             if not isinstance(ex, InlineExecutor):
+                # the report starts once the imports are complete: a module half imported by
+                # the prefetch thread must not be used by another (matplotlib.use reads
+                # sys.modules); the blocks are computed by the workers meanwhile
+                self.wait_prefetch()
                 self.overlapped = OverlappedReport(plan, self.out_dir, self.progress, self.arrivals)
             try:
                 self._save_as_finished(futures)
@@ -303,6 +311,13 @@ class _Computation:
                 raise _output_error(plan, self.out_dir, f"block {i}", exc) from None
             self.arrivals.saved(i)
             self.bar.update(len(plan.blocks[i]))
+
+    def wait_prefetch(self) -> None:
+        """Wait until the report's modules are imported (:func:`prefetch_report_modules`), so
+        that nothing uses a module while that thread is still importing it."""
+        if self.prefetch is not None:
+            self.prefetch.join()
+            self.prefetch = None
 
     def close_bar(self) -> None:
         """Close the progress bar, if one was opened."""
@@ -352,7 +367,10 @@ def prefetch_report_modules(modules: Sequence[str]) -> threading.Thread:
     a free core the imports run there instead of after the flight (``benchmarks/README.md``,
     "Where a step goes"). Nothing is computed: a module that cannot be imported is skipped here
     and fails where the report imports it, as before. A run whose report draws no figures and
-    writes no recording imports nothing here (``tests/tasks/test_imports.py``).
+    writes no recording imports nothing here (``tests/tasks/test_imports.py``). The runner
+    waits for the thread before the report starts (``_Computation.wait_prefetch``): a module
+    half imported here must not be used by another thread (``matplotlib.use`` reads
+    ``sys.modules``; ``tests/tasks/test_runner.py`` met that race before the wait).
 
     Returns:
         The started thread.
