@@ -105,7 +105,7 @@ def mission_figures(
     """Route, errors and vehicle state of the recorded run (PNG and PDF, project style)."""
     from tasks.core import style  # matplotlib only when figures are drawn
 
-    with style.context(), style.parallel_saves():
+    with style.context():
         return _draw_mission(name, scn, run, runs, out, style)
 
 

@@ -32,8 +32,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import importlib
-import threading
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -179,10 +177,7 @@ def execute(
     with files.confined(out_dir):
         batch = _Computation(plan, out_dir, progress)
         try:
-            try:
-                batch.compute(executor, workers, address, pool)
-            finally:
-                batch.wait_prefetch()
+            batch.compute(executor, workers, address, pool)
         except KeyboardInterrupt:
             batch.stop(close_bar=True)
             raise BatchInterrupted(
@@ -223,7 +218,6 @@ class _Computation:
         self.todo = [i for i in range(len(plan.blocks)) if not run_folder.saved(out_dir, i)]
         self.failures: list[str] = []
         self.overlapped: OverlappedReport | None = None
-        self.prefetch: threading.Thread | None = None
         self.arrivals = Arrivals(set(range(len(plan.blocks))) - set(self.todo))
         self.bar: Any = None if self.todo else self._progress_bar()
 
@@ -275,12 +269,7 @@ class _Computation:
                 for i in self.todo
             }
             self.bar = self._progress_bar()
-            self.prefetch = prefetch_report_modules(report_modules(plan.scenario))
             if not isinstance(ex, InlineExecutor):
-                # the report starts once the imports are complete: a module half imported by
-                # the prefetch thread must not be used by another (matplotlib.use reads
-                # sys.modules); the blocks are computed by the workers meanwhile
-                self.wait_prefetch()
                 self.overlapped = OverlappedReport(plan, self.out_dir, self.progress, self.arrivals)
             try:
                 self._save_as_finished(futures)
@@ -312,13 +301,6 @@ class _Computation:
             self.arrivals.saved(i)
             self.bar.update(len(plan.blocks[i]))
 
-    def wait_prefetch(self) -> None:
-        """Wait until the report's modules are imported (:func:`prefetch_report_modules`), so
-        that nothing uses a module while that thread is still importing it."""
-        if self.prefetch is not None:
-            self.prefetch.join()
-            self.prefetch = None
-
     def close_bar(self) -> None:
         """Close the progress bar, if one was opened."""
         if self.bar is not None:
@@ -331,61 +313,6 @@ class _Computation:
             self.close_bar()
         if self.overlapped is not None:
             self.overlapped.abandon()
-
-
-FIGURE_MODULES: tuple[str, ...] = (
-    "matplotlib.pyplot",
-    "matplotlib.backends.backend_agg",
-    "matplotlib.backends.backend_pdf",
-    "fontTools.subset",
-)
-"""The libraries a report's figures import on first use (the PDFs' fonts are subset by
-fontTools)."""
-
-RECORDING_MODULES: tuple[str, ...] = ("rerun", "tasks.core.recording")
-"""The libraries a report's recording imports on first use."""
-
-
-def report_modules(scenario: Any) -> tuple[str, ...]:
-    """The libraries the report of a batch will import: :data:`FIGURE_MODULES` unless the
-    scenario's ``report.figures`` is false, :data:`RECORDING_MODULES` unless its
-    ``report.recording`` is false (a scenario without these fields draws and records)."""
-    rep = getattr(scenario, "report", None)
-    mods: tuple[str, ...] = ()
-    if getattr(rep, "figures", True) is not False:
-        mods += FIGURE_MODULES
-    if getattr(rep, "recording", True) is not False:
-        mods += RECORDING_MODULES
-    return mods
-
-
-def prefetch_report_modules(modules: Sequence[str]) -> threading.Thread:
-    """Import ``modules`` (:func:`report_modules`) in a daemon thread, while the blocks are
-    computed.
-
-    A flight spends most of its time in ``mj_step``, which releases the GIL, so on a machine with
-    a free core the imports run there instead of after the flight (``benchmarks/README.md``,
-    "Where a step goes"). Nothing is computed: a module that cannot be imported is skipped here
-    and fails where the report imports it, as before. A run whose report draws no figures and
-    writes no recording imports nothing here (``tests/tasks/test_imports.py``). The runner
-    waits for the thread before the report starts (``_Computation.wait_prefetch``): a module
-    half imported here must not be used by another thread (``matplotlib.use`` reads
-    ``sys.modules``; ``tests/tasks/test_runner.py`` met that race before the wait).
-
-    Returns:
-        The started thread.
-    """
-
-    def run() -> None:
-        for name in modules:
-            try:
-                importlib.import_module(name)
-            except Exception:  # the report's own import reports it
-                pass
-
-    t = threading.Thread(target=run, name="prefetch-report-modules", daemon=True)
-    t.start()
-    return t
 
 
 def _write_report(

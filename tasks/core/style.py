@@ -34,10 +34,8 @@ the same method with the same look, a different look is refused (:class:`StyleCl
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import io
-import os
 import re
 import types
 from collections.abc import Callable, Mapping
@@ -303,8 +301,6 @@ def save(fig, path: Path, vector: Literal["pdf", "svg"] = "pdf") -> list[str]:
     """
     png = Path(path).with_suffix(".png")
     vec = png.with_suffix(f".{vector}")
-    if _FORKED is not None and _fork_save(fig, png, vec, vector):
-        return [png.name, vec.name]
     try:
         with matplotlib.rc_context(RC):
             drawn = []
@@ -324,72 +320,6 @@ def save(fig, path: Path, vector: Literal["pdf", "svg"] = "pdf") -> list[str]:
     finally:
         plt.close(fig)
     return [png.name, vec.name]
-
-
-_FORKED: list[tuple[int, int, Path]] | None = None
-"""The children of :func:`parallel_saves` still drawing (pid, read end of their error pipe, the
-PNG), or None outside it."""
-
-
-def _fork_save(fig, png: Path, vec: Path, vector: Literal["pdf", "svg"]) -> bool:
-    """Draw and write a figure's files in a forked child (:func:`parallel_saves`); False if this
-    process cannot fork (then :func:`save` draws it here)."""
-    global _FORKED
-    assert _FORKED is not None
-    if not hasattr(os, "fork"):
-        return False
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # the child: draw, write, report an error on the pipe, never return
-        os.close(r)
-        code = 0
-        try:
-            _FORKED = None
-            save(fig, png, vector)
-        except BaseException as exc:  # reported to the parent, which raises
-            os.write(w, f"{type(exc).__name__}: {exc}".encode(errors="replace")[:4000])
-            code = 1
-        finally:
-            os._exit(code)
-    os.close(w)
-    plt.close(fig)
-    _FORKED.append((pid, r, png))
-    return True
-
-
-@contextlib.contextmanager
-def parallel_saves(enabled: bool = True):
-    """Within this context :func:`save` draws and writes each figure in a forked child process
-    while the caller builds the next one; on leaving it, every child is waited for.
-
-    The figures' files are the same bytes as when drawn in this process (the child has this
-    process's memory, the figure included). On a machine with 2 cores the default mission's
-    three figures take a sixth to a third less wall time (``benchmarks/README.md``, "Where a
-    step goes"). Where ``os.fork`` is missing, or with ``enabled`` False, :func:`save` draws in
-    this process.
-
-    Raises:
-        OSError: on leaving, if a child failed (its error, with the PNG's name), after all
-            children have been waited for.
-    """
-    global _FORKED
-    if not enabled or _FORKED is not None:
-        yield
-        return
-    _FORKED = []
-    try:
-        yield
-    finally:
-        children, _FORKED = _FORKED, None
-        errors = []
-        for pid, r, png in children:
-            with os.fdopen(r, "rb") as fh:
-                message = fh.read().decode(errors="replace")
-            _, status = os.waitpid(pid, 0)
-            if status != 0:
-                errors.append(f"{png.name}: {message or f'drawing process exit status {status}'}")
-        if errors:
-            raise OSError("; ".join(errors))
 
 
 _UNKNOWN = MethodStyle(_P["grey"])

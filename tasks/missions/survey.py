@@ -2,8 +2,7 @@
 
 A lawn-mower survey of 100 m x 300 m around a seabed USBL transceiver (all of it within 200 m, well
 inside the 500 m USBL range) at 3 m depth, about 20 minutes at 1 m/s through a 0.25 m/s uniform
-current setting 60 deg, at a 10 ms physics step (``timing.physics_timestep_s``; the other missions
-keep 4 ms). Guidance steers on the EKF estimate (USBL every 5 s, depth, gated);
+current setting 60 deg. Guidance steers on the EKF estimate (USBL every 5 s, depth, gated);
 ``--set navigation.steer_on=dr`` flies the same mission on dead reckoning alone for comparison.
 """
 
@@ -27,10 +26,7 @@ register(
             [{**w, "depth_m": 3.0, "acceptance_radius_m": 10.0} for w in WAYPOINTS],
             start={"east_m": -150.0, "north_m": -100.0, "depth_m": 3.0, "heading_deg": 90.0},
             current={"kind": "uniform", "speed_m_s": 0.25, "direction_deg": 60.0},
-            # 10 ms: the largest step of the timestep table, which holds against 1 ms (motor power
-            # +2.1 %, the rest within 0.7 %); the survey's outcome moves by at most 3.5 % from
-            # 2 ms (4 ms: 2.5 %). models/bauv/README.md, Results 8; 2.5 times fewer MuJoCo steps.
-            timing={"max_duration_s": 2400.0, "physics_timestep_s": 0.01},
+            timing={"max_duration_s": 2400.0},
         ),
         default_runs=1,
     )

@@ -91,9 +91,8 @@ def test_mission_specs_before_reset_and_observations_match_them(name):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", MISSIONS)
 def test_mission_physics_runs_at_the_scenario_timestep(name):
-    # the preset, but the swarm's GA1 is not robust to it (tasks/missions/swarm.py), and the
-    # survey takes the table's largest step (tasks/missions/survey.py)
-    default = {"mission/swarm": 0.002, "mission/survey": 0.01}.get(name, 0.004)
+    # the preset, but the swarm's GA1 is not robust to it (tasks/missions/swarm.py)
+    default = 0.002 if name == "mission/swarm" else 0.004
     assert scenario(name).timing.physics_timestep_s == pytest.approx(default)
     for dt in (0.001, 0.002, 0.004):
         design, scn = flight(name, 0, 0, f"timing.physics_timestep_s={dt}")
