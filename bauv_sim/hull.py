@@ -20,16 +20,21 @@ import argparse
 import itertools
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
-from scipy import integrate
 
 from bauv_sim import PROJECT_ROOT
 from bauv_sim.errors import GeometryError
 
-MODEL_DIR = PROJECT_ROOT / "models" / "bauv"
+if TYPE_CHECKING:
+    import trimesh
+
+# trimesh and scipy.integrate are imported by the functions that build meshes or integrate: a
+# mission imports this module for MODEL_DIR only, and the two took 1.7 s of its start-up.
+
+MODEL_DIR: Path = PROJECT_ROOT / "models" / "bauv"
 """Folder of the vehicle model (``bauv.xml``, ``scene.xml``, ``assets/``)."""
 
 SEAWATER_DENSITY_KG_M3 = 1025.0
@@ -136,6 +141,8 @@ class HullProfile:
             s0: first station (fraction of the length from the nose).
             s1: last station; the tail hinge by default, so that the result is the rigid hull's.
         """
+        from scipy import integrate
+
         s1 = self.s_hinge if s1 is None else s1
         v, _ = integrate.quad(lambda s: float(self.section_area(s)), s0, s1, limit=200)
         return v * self.body_length_m
@@ -145,6 +152,8 @@ class HullProfile:
 
         The sections are symmetric about y = 0 and z = 0, so the centroid lies on the body axis.
         """
+        from scipy import integrate
+
         s1 = self.s_hinge if s1 is None else s1
         m1, _ = integrate.quad(
             lambda s: float(self.section_area(s) * self.x_of_s(s)), s0, s1, limit=200
@@ -233,6 +242,8 @@ def _loft(
     rl = rings[-1]
     for j in range(n_around):
         faces.append([centre, rl + j, rl + (j + 1) % n_around])
+    import trimesh
+
     return _outward(trimesh.Trimesh(vertices=V, faces=np.asarray(faces), process=True))
 
 
@@ -298,6 +309,8 @@ def _strip_plate(
         F += [[a + 1, a + 3, b + 3], [a + 1, b + 3, b + 1]]  # trailing-edge wall
     a = 4 * (n - 1)
     F += [[0, 2, 3], [0, 3, 1], [a, a + 3, a + 2], [a, a + 1, a + 3]]  # end caps
+    import trimesh
+
     return _outward(trimesh.Trimesh(vertices=V, faces=np.asarray(F), process=True))
 
 
@@ -332,6 +345,8 @@ def caudal_fin_edges(tail: TailGeometry, n: int = 41) -> tuple[NDArray[np.float6
 def _edges_area_centroid(
     r: NDArray[np.float64], x_le: NDArray[np.float64], x_te: NDArray[np.float64]
 ) -> tuple[float, NDArray[np.float64]]:
+    from scipy import integrate
+
     chord = x_le - x_te
     area = float(integrate.trapezoid(chord, r))
     cx = float(integrate.trapezoid(chord * 0.5 * (x_le + x_te), r)) / area
@@ -466,6 +481,8 @@ def write_assets(out_dir: str | Path = MODEL_DIR / "assets") -> dict[str, Path]:
     Returns:
         Mapping from mesh name to the written path.
     """
+    import trimesh
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     meshes = {

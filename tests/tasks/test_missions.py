@@ -107,7 +107,7 @@ def test_mission_physics_runs_at_the_scenario_timestep(name):
     ):
         scenario(name, "timing.control_tick_s=0.203")
     with pytest.raises(ConfigError, match=r"timing\.physics_timestep_s"):
-        scenario(name, "timing.physics_timestep_s=0.005")
+        scenario(name, "timing.physics_timestep_s=0.02")
 
 
 @pytest.mark.slow
