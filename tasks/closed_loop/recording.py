@@ -259,6 +259,15 @@ def record_blueprint(rec, views: Sequence[tuple[str, MissionRun]], multi: bool) 
     whole = rrb.VisibleTimeRange(
         TIMELINE, start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
     )
+    # the visible range says which data a view queries; the x axis's own view range says what it
+    # shows: without it the viewer opens the plots on the last seconds around the time cursor
+    ends = [float(v["t"][-1]) for _, run in views for v in run.vehicles.values() if len(v["t"])]
+    axis = rrb.TimeAxis(
+        view_range=rrb.TimeRange(
+            start=rrb.TimeRangeBoundary.absolute(seconds=0.0),
+            end=rrb.TimeRangeBoundary.absolute(seconds=max(ends, default=1.0)),
+        )
+    )
     worlds = []
     for flight, run in views:
         names = ", ".join(run.vehicles)
@@ -288,7 +297,9 @@ def record_blueprint(rec, views: Sequence[tuple[str, MissionRun]], multi: bool) 
     world = rrb.Tabs(*worlds) if len(worlds) > 1 else worlds[0]
     left = rrb.Vertical(world, rrb.TextLogView(origin="/events", name="events"), row_shares=[4, 1])
     groups = [
-        rrb.Tabs(*[rrb.TimeSeriesView(origin=f"/{p}", name=p, time_ranges=whole) for p in g])
+        rrb.Tabs(
+            *[rrb.TimeSeriesView(origin=f"/{p}", name=p, time_ranges=whole, axis_x=axis) for p in g]
+        )
         for g in PLOTS
     ]
     rec.rec.send_blueprint(
