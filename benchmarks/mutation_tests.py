@@ -208,6 +208,10 @@ GUARDS: dict[str, tuple[str, ...]] = {
         "tests/tasks/test_recording.py",
         "tests/tasks/test_missions.py",
     ),
+    "tasks/closed_loop/recording_vehicle.py": (
+        "tests/tasks/test_recording.py",
+        "tests/tasks/test_recording_contract.py",
+    ),
     "tasks/closed_loop/figures.py": (
         "tests/tasks/test_run_data.py",
         "tests/tasks/test_recording.py",
@@ -390,9 +394,9 @@ OWN: list[Mutation] = [
         "mission-nees-band-dof-2",
         "own",
         "dof",
-        "tasks/closed_loop/recording.py",
-        "(1 + probability) / 2]), 3)",
-        "(1 + probability) / 2]), 2)",
+        "tasks/closed_loop/recording_vehicle.py",
+        "    return out, d\n",
+        "    return out, 2\n",
         "the mission recording's NEES band of the 3-D position taken with 2 dof",
     ),
     # --- dropped correction terms ------------------------------------------------------------
