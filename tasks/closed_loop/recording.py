@@ -34,7 +34,6 @@ from tasks.closed_loop.recording_vehicle import (
     GUIDANCE_MODES,
     VEHICLE_PARTS,
     mission_events,
-    position_nees,
     record_vehicle,
 )
 from tasks.closed_loop.result import MissionRun
@@ -48,7 +47,6 @@ __all__ = [
     "RecordingScene",
     "mission_events",
     "mission_scene",
-    "position_nees",
     "record_flights",
     "record_mission",
     "seabed_mesh",

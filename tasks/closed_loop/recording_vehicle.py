@@ -126,12 +126,6 @@ def nees(v: VehicleRun, e: EstimateTrack) -> tuple[NDArray[np.float64], int] | N
     return out, d
 
 
-def position_nees(v: VehicleRun) -> NDArray[np.float64]:
-    """The EKF's position NEES at each tick, ``e^T P^-1 e`` with ``e`` the 3-D error, shape (T,)."""
-    e = v["ekf_pos"] - v["truth_pos"]
-    return np.einsum("ti,ti->t", e, np.linalg.solve(v["ekf_P"], e[..., None])[..., 0])
-
-
 def record_body(r, root: str, v: VehicleRun, t: NDArray[np.float64]) -> None:
     """The hull posed by the truth at ``<root>/body`` and the fins and tail at their true joint
     angles (``truth_fin_angles``, ``truth_tail_angles``) as its child transforms; the dorsal fin,
