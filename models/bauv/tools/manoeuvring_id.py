@@ -45,7 +45,7 @@ from pathlib import Path
 
 import hydro_body
 import numpy as np
-from timestep import THRESHOLDS, rise_time_s
+from timestep import THRESHOLDS, depth_step, depth_step_metrics
 
 from bauv_sim import manoeuvres
 from bauv_sim.manoeuvring import model as mm
@@ -466,8 +466,6 @@ def full_current_step(f: float, along: bool | None) -> tuple[float, float]:
 
 def full_results(f: float) -> dict[str, float]:
     """The validation quantities on the full model."""
-    from tasks.vehicle.autopilot import AutopilotTrialsScenario, beat_average, fly_trial
-
     out: dict[str, float] = {}
     s = manoeuvres.straight_swim(scene(), f)
     out["cruise_speed_m_s"] = s.speed_through_water_m_s
@@ -478,14 +476,8 @@ def full_results(f: float) -> dict[str, float]:
         out[f"turn_radius_{b:+.0f}_m"] = tr.turning_radius_m
     fin = manoeuvres.depth_change(scene(), f, 0.2)
     out["fin_step_depth_rate_m_s"] = fin.depth_rate_m_s
-    sc = AutopilotTrialsScenario().model_copy(update={"physics_timestep_s": TIMESTEP_S})
-    tr = fly_trial(
-        sc, 80.0, lambda t: 0.0,
-        lambda t: sc.depth_m if t < 10.0 else sc.depth_m + sc.depth_step_m,
-        lambda t: sc.speed_to_m_s,
-    )  # fmt: skip
-    n = max(1, round(1.0 / (f * sc.control_tick_s)))
-    out.update(_depth_step_metrics(tr["t"], beat_average(tr["depth"], n), sc))
+    rise, overshoot = depth_step(TIMESTEP_S, f)
+    out["depth_rise_time_s"], out["depth_overshoot_percent"] = rise, overshoot
     a0, c0 = full_current_step(f, None)
     for along in (True, False):
         a, c = full_current_step(f, along)
@@ -496,20 +488,9 @@ def full_results(f: float) -> dict[str, float]:
     return out
 
 
-def _depth_step_metrics(t, depth, sc) -> dict[str, float]:
-    after = t >= 10.0
-    y0, y1 = sc.depth_m, sc.depth_m + sc.depth_step_m
-    return {
-        "depth_rise_time_s": rise_time_s(t[after] - 10.0, depth[after], y0, y1),
-        "depth_overshoot_percent": max(0.0, float(np.max(depth[after] - y1)))
-        / sc.depth_step_m
-        * 100.0,
-    }
-
-
 def model_results(coef: mm.ManoeuvringCoefficients, f: float) -> dict[str, float]:
     """The same quantities on the manoeuvring model (its own trials, one run each)."""
-    from tasks.vehicle.autopilot import AutopilotTrialsScenario, beat_average
+    from tasks.vehicle.autopilot import AutopilotTrialsScenario
 
     out: dict[str, float] = {}
     sp, pw = trials.straight_swim(coef, f)
@@ -522,8 +503,8 @@ def model_results(coef: mm.ManoeuvringCoefficients, f: float) -> dict[str, float
     sc = AutopilotTrialsScenario()
     t, depth = trials.autopilot_depth_step(coef, sc.autopilot, sc.control_tick_s,
                                            sc.depth_m, sc.depth_step_m, sc.speed_to_m_s)  # fmt: skip  # noqa: E501
-    n = max(1, round(1.0 / (f * sc.control_tick_s)))
-    out.update(_depth_step_metrics(t, beat_average(depth, n), sc))
+    rise, overshoot = depth_step_metrics(t, depth, sc, f)
+    out["depth_rise_time_s"], out["depth_overshoot_percent"] = rise, overshoot
     for along in (True, False):
         a, c = trials.current_step(coef, f, along)
         key = "along" if along else "across"

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from timestep import README, THRESHOLDS, rewrite, rise_time_s
+from timestep import README, THRESHOLDS, depth_step, rewrite
 
 TIMESTEP_S = 0.004
 """The missions' preset, s."""
@@ -84,7 +84,6 @@ def fly(kind: str) -> dict[str, float]:
     from checks import cruise_frequency_hz
 
     from bauv_sim import hydro_native, manoeuvres
-    from tasks.vehicle.autopilot import AutopilotTrialsScenario, beat_average, fly_trial
 
     f = cruise_frequency_hz()
     out: dict[str, float] = {}
@@ -104,23 +103,8 @@ def fly(kind: str) -> dict[str, float]:
             out[f"turn_rate_deg_s_{tag}"] = math.degrees(turn.turn_rate_rad_s)
             out[f"turn_radius_m_{tag}"] = turn.turning_radius_m
         out["fin_step_depth_rate_m_s"] = manoeuvres.depth_change(scene(), f, 0.2).depth_rate_m_s
-        s = AutopilotTrialsScenario().model_copy(update={"physics_timestep_s": TIMESTEP_S})
-        t_step = 10.0
-        tr = fly_trial(
-            s,
-            80.0,
-            lambda t: 0.0,
-            lambda t: s.depth_m if t < t_step else s.depth_m + s.depth_step_m,
-            lambda t: s.speed_to_m_s,
-        )
-        n = max(1, round(1.0 / (f * s.control_tick_s)))
-        depth = beat_average(tr["depth"], n)
-        after = tr["t"] >= t_step
-        y0, y1 = s.depth_m, s.depth_m + s.depth_step_m
-        out["depth_rise_time_s"] = rise_time_s(tr["t"][after] - t_step, depth[after], y0, y1)
-        out["depth_overshoot_percent"] = (
-            max(0.0, float(np.max(depth[after] - y1))) / s.depth_step_m * 100.0
-        )
+        rise, overshoot = depth_step(TIMESTEP_S, f)
+        out["depth_rise_time_s"], out["depth_overshoot_percent"] = rise, overshoot
         for tag, across in (("along", False), ("across", True)):
             speed, offset = current_step(f, across)
             out[f"current_{tag}_ground_speed_m_s"] = speed

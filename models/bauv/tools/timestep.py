@@ -115,6 +115,66 @@ def rise_time_s(t_s: np.ndarray, y: np.ndarray, y0: float, y1: float) -> float:
     return crossing(0.9) - crossing(0.1)
 
 
+DEPTH_STEP_AT_S = 10.0
+"""When the autopilot's depth step is commanded in the validation trial, s."""
+
+
+def depth_step_metrics(
+    t_s: np.ndarray, depth_m: np.ndarray, sc, frequency_hz: float
+) -> tuple[float, float]:
+    """Rise time and overshoot of the autopilot's depth step from its depth record.
+
+    The depth is averaged over one tail beat at ``frequency_hz`` (``beat_average``) before the
+    10-90 % rise (:func:`rise_time_s`) and the overshoot past the new depth are read after
+    :data:`DEPTH_STEP_AT_S`.
+
+    Args:
+        t_s: sample times, s, shape (n,).
+        depth_m: depth, m, positive down, shape (n,).
+        sc: the trial's ``AutopilotTrialsScenario`` (depth, step, control tick).
+        frequency_hz: the cruise tail-beat frequency, Hz.
+
+    Returns:
+        The rise time, s, and the overshoot, % of the step.
+    """
+    from tasks.vehicle.autopilot import beat_average
+
+    n = max(1, round(1.0 / (frequency_hz * sc.control_tick_s)))  # one tail beat
+    depth = beat_average(np.asarray(depth_m, dtype=float), n)
+    t = np.asarray(t_s, dtype=float)
+    after = t >= DEPTH_STEP_AT_S
+    y0, y1 = sc.depth_m, sc.depth_m + sc.depth_step_m
+    rise = rise_time_s(t[after] - DEPTH_STEP_AT_S, depth[after], y0, y1)
+    overshoot = max(0.0, float(np.max(depth[after] - y1))) / sc.depth_step_m * 100.0
+    return rise, overshoot
+
+
+def depth_step(timestep_s: float, frequency_hz: float) -> tuple[float, float]:
+    """The autopilot's 5 m depth step on the full model (``fly_trial``, 80 s, the step at
+    :data:`DEPTH_STEP_AT_S`) with one physics timestep: :func:`depth_step_metrics`.
+
+    Args:
+        timestep_s: physics timestep, s.
+        frequency_hz: the cruise tail-beat frequency, Hz.
+
+    Returns:
+        The rise time, s, and the overshoot, % of the step.
+    """
+    from tasks.vehicle.autopilot import AutopilotTrialsScenario, fly_trial
+
+    # copied without validation: the scenario field accepts only up to the largest validated
+    # preset, and this script is what explores beyond it
+    s = AutopilotTrialsScenario().model_copy(update={"physics_timestep_s": timestep_s})
+    tr = fly_trial(
+        s,
+        80.0,
+        lambda t: 0.0,
+        lambda t: s.depth_m if t < DEPTH_STEP_AT_S else s.depth_m + s.depth_step_m,
+        lambda t: s.speed_to_m_s,
+    )
+    return depth_step_metrics(tr["t"], tr["depth"], s, frequency_hz)
+
+
 def fly(timestep_s: float, frequency_hz: float | None = None) -> TimestepResult:
     """Fly the validation manoeuvres with one timestep.
 
@@ -128,7 +188,6 @@ def fly(timestep_s: float, frequency_hz: float | None = None) -> TimestepResult:
     from checks import cruise_frequency_hz
 
     from bauv_sim import manoeuvres
-    from tasks.vehicle.autopilot import AutopilotTrialsScenario, beat_average, fly_trial
 
     f = frequency_hz or cruise_frequency_hz()
 
@@ -140,23 +199,7 @@ def fly(timestep_s: float, frequency_hz: float | None = None) -> TimestepResult:
     swim = manoeuvres.straight_swim(scene(), f)
     turn = manoeuvres.heading_change(scene(), f, math.radians(10.0))
     fin = manoeuvres.depth_change(scene(), f, 0.2)
-    # copied without validation: the scenario field accepts only up to the largest validated
-    # preset, and this script is what explores beyond it
-    s = AutopilotTrialsScenario().model_copy(update={"physics_timestep_s": timestep_s})
-    t_step = 10.0
-    tr = fly_trial(
-        s,
-        80.0,
-        lambda t: 0.0,
-        lambda t: s.depth_m if t < t_step else s.depth_m + s.depth_step_m,
-        lambda t: s.speed_to_m_s,
-    )
-    n = max(1, round(1.0 / (f * s.control_tick_s)))  # one tail beat at the cruise frequency
-    depth = beat_average(tr["depth"], n)
-    after = tr["t"] >= t_step
-    y0, y1 = s.depth_m, s.depth_m + s.depth_step_m
-    rise = rise_time_s(tr["t"][after] - t_step, depth[after], y0, y1)
-    overshoot = max(0.0, float(np.max(depth[after] - y1))) / s.depth_step_m * 100.0
+    rise, overshoot = depth_step(timestep_s, f)
     return TimestepResult(
         timestep_s=timestep_s,
         cruise_speed_m_s=swim.speed_through_water_m_s,
