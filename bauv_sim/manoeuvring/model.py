@@ -5,8 +5,8 @@ The equations of motion, in the body frame FLU about the hull origin (the facade
 point), with nu_r = (u, v, w, p, q, r) the velocity relative to the water (Fossen 2021, eq. 6.5
 and 10.46 for an irrotational current that is uniform around the vehicle)::
 
-    (M_RB + M_A) d(nu_r)/dt = -C_RB(nu_r) nu_r + F_hull(nu_r) + F_fins(delta, u)
-                              + F_tail(f, b, u) + g(eta)
+    (M_RB + M_A) d(nu_r)/dt = -C_RB(nu_r) nu_r + F_hull(nu_r) + F_fins(delta, nu_r)
+                              + F_tail(f, b, u, w) + g(eta)
 
 * ``M_RB``, ``M_A``: the full model's free-joint mass matrix with the tail straight (the plugin
   puts ``M_A`` there), split with the plugin's own ``M_A``;
@@ -14,10 +14,12 @@ and 10.46 for an irrotational current that is uniform around the vehicle)::
 * ``F_hull``: the quasi-steady fluid force on the whole vehicle (MuJoCo's ellipsoid drag, the
   plugin's crossflow, lift, Munk couple, plates, the added mass's velocity terms) as a polynomial
   in ``nu_r`` fitted to captive tests of the full model (tail straight, fins level);
-* ``F_fins``: each lateral fin's change of that force with its angle, fitted to captive tests;
-* ``F_tail``: the flapping tail's force averaged over a beat: thrust ``a f^2 - b f u`` fitted to
-  accelerations of the full model from rest, and the bias's force and moments fitted to its steady
-  turns;
+* ``F_fins``: each lateral fin's change of that force with its angle, in the local flow at the
+  fin's centre (the plugin's thin-plate terms as regressors), fitted to captive tests;
+* ``F_tail``: the flapping tail's force averaged over a beat: a straight-swim table in f, the
+  thrust's change ``-k f (u - u_ss(f))`` fitted to accelerations of the full model from rest, the
+  beat's share in heave fitted to its steady glides after fin steps, and the bias's force and
+  moments fitted to its steady turns;
 * ``g(eta)``: weight at the CG and buoyancy at the CB (neutral: the vehicle's BG of 48 mm).
 
 The vehicle moves with the water: a neutrally buoyant body in a uniform current feels no force
@@ -126,6 +128,62 @@ def fin_regressors(u: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np
     return np.stack([q * s * np.cos(d), q * s * s, q * s * np.abs(s)], axis=1)
 
 
+FIN_FLOW_TERMS: tuple[str, ...] = (
+    *("lift x", "lift z", "induced x", "induced z"),
+    *("normal x", "normal z", "profile x", "profile z"),
+)
+"""Regressors of one lateral fin's force in the local flow at its centre: the plate's terms of
+the ``bauv.hydro`` plugin in the chord-normal plane (lift ``uc un / |u| (un, -uc)``, induced drag
+``uc^2 un^2 / |u|^3 (uc, un)``, normal force ``(0, |un| un)``, profile drag ``(|uc| uc, 0)``, with
+``uc``, ``un`` the chord and normal components of the local velocity), each rotated into the
+body's x and z by the fin angle; the change from the level fin (:func:`fin_flow_regressors`)."""
+
+
+def _fin_plate_features(
+    u_l: NDArray[np.float64], w_l: NDArray[np.float64], d: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The plate's terms of :data:`FIN_FLOW_TERMS` at fin angle d, shape (n, 8)."""
+    c, s = np.cos(d), np.sin(d)
+    uc = c * u_l + s * w_l  # chord component (the fin frame is Ry(-d) of the body's)
+    un = -s * u_l + c * w_l  # chord-normal component
+    sp = np.sqrt(uc * uc + un * un)
+    inv = np.divide(1.0, sp, out=np.zeros_like(sp), where=sp > 0)
+    k = uc * un * inv
+    ki = (uc * un * inv) ** 2 * inv
+    fin = (
+        (k * un, -k * uc),  # lift
+        (ki * uc, ki * un),  # induced drag
+        (0.0 * un, np.abs(un) * un),  # normal force
+        (np.abs(uc) * uc, 0.0 * uc),  # profile drag (chordwise)
+    )
+    cols = []
+    for a_c, a_n in fin:
+        cols.append(c * a_c - s * a_n)  # body x
+        cols.append(s * a_c + c * a_n)  # body z
+    return np.stack(cols, axis=1)
+
+
+def fin_flow_regressors(
+    nu: NDArray[np.float64], d: NDArray[np.float64], position_body_m: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The regressors :data:`FIN_FLOW_TERMS` of one fin: its plate's terms at angle d minus at
+    the level fin, in the local flow at the fin's centre (the rigid velocity v + omega x r there,
+    its x and z components: heave, pitch and roll rates change the fin's angle of attack).
+
+    Args:
+        nu: (u, v, w, p, q, r) relative to the water, body FLU, m/s and rad/s, shape (n, 6).
+        d: fin angle, rad (leading edge up +), shape (n,).
+        position_body_m: the fin's centre, body FLU from the hull origin, shape (3,), m.
+
+    Returns:
+        Shape (n, 8).
+    """
+    x, y, z = position_body_m
+    u_l = nu[:, 0] + nu[:, 4] * z - nu[:, 5] * y
+    w_l = nu[:, 2] + nu[:, 3] * y - nu[:, 4] * x
+    return _fin_plate_features(u_l, w_l, d) - _fin_plate_features(u_l, w_l, np.zeros_like(d))
+
+
 TAIL_TERMS: tuple[str, ...] = (
     *("u|u| sin(b)", "u|u| sin(b)^2", "u|u| sin(b)^3"),
     *("f^2 sin(b)", "f^2 sin(b)^2", "f^2 sin(b)^3"),
@@ -153,6 +211,27 @@ def tail_regressors(
     ff = f * f
     s2 = s * s
     return np.stack([uu * s, uu * s2, uu * s2 * s, ff * s, ff * s2, ff * s2 * s], axis=1)
+
+
+TAIL_HEAVE_TERMS: tuple[str, ...] = ("f w", "f w|w|", "f w^2")
+"""Regressors of the beat's share of the force in heave at frequency f (Hz) and heave w (m/s,
+body z relative to the water): what the beating tail and the hull's oscillation add to the
+straight vehicle's heave force and pitch moment (X on the even term, Z and M on the odd ones),
+identified from the full model's steady glides after open-loop fin steps."""
+
+
+def tail_heave_regressors(f: NDArray[np.float64], w: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The regressors :data:`TAIL_HEAVE_TERMS`.
+
+    Args:
+        f: tail-beat frequency, Hz, shape (n,).
+        w: heave relative to the water, body FLU z, m/s, shape (n,).
+
+    Returns:
+        Shape (n, 3).
+    """
+    fw = f * w
+    return np.stack([fw, fw * np.abs(w), fw * w], axis=1)
 
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -212,6 +291,13 @@ class ManoeuvringCoefficients:
         roll_phase_rad: phase of the roll oscillation after the heading's, rad.
         bias_time_constant_s, fin_time_constant_s, battery_time_constant_s: the actuators'
             first-order filters, s.
+        fin_flow_port, fin_flow_starboard: coefficients of :data:`FIN_FLOW_TERMS` for each fin,
+            shape (8, 6); when present they replace ``fin_port`` and ``fin_starboard`` (which
+            see the fins at zero heave only). None in data identified before them.
+        fin_position_body_m: the fins' centres (port, starboard), body FLU from the hull origin,
+            shape (2, 3), m; with ``fin_flow_*``.
+        tail_heave: coefficients of :data:`TAIL_HEAVE_TERMS`, shape (3, 6); None (no term) in
+            data identified before it.
     """
 
     mass_matrix: NDArray[np.float64]
@@ -241,6 +327,10 @@ class ManoeuvringCoefficients:
     bias_time_constant_s: float = 0.2
     fin_time_constant_s: float = 0.05
     battery_time_constant_s: float = 1.0
+    fin_flow_port: NDArray[np.float64] | None = None
+    fin_flow_starboard: NDArray[np.float64] | None = None
+    fin_position_body_m: NDArray[np.float64] | None = None
+    tail_heave: NDArray[np.float64] | None = None
 
     def to_json(self) -> dict:
         """Plain JSON-able dict (arrays as nested lists)."""
@@ -259,6 +349,8 @@ class ManoeuvringCoefficients:
                     continue
                 raise ConfigError(f"manoeuvring data: field {k!r} missing")
             v = data[k]
+            if v is None and f.default is None:
+                continue
             kw[k] = np.asarray(v, dtype=float) if isinstance(v, list) else float(v)
         return cls(**kw)
 
@@ -431,9 +523,16 @@ class ManoeuvringWorld:
         out = -np.concatenate([f_c, m_c], axis=1)
         out += hull_regressors(np.clip(nu, c.hull_box_low, c.hull_box_high)) @ c.hull
         u = nu[:, 0]
-        out += fin_regressors(u, fins[:, 0]) @ c.fin_port
-        out += fin_regressors(u, fins[:, 1]) @ c.fin_starboard
+        rf = c.fin_position_body_m
+        if c.fin_flow_port is not None and c.fin_flow_starboard is not None and rf is not None:
+            out += fin_flow_regressors(nu, fins[:, 0], rf[0]) @ c.fin_flow_port
+            out += fin_flow_regressors(nu, fins[:, 1], rf[1]) @ c.fin_flow_starboard
+        else:
+            out += fin_regressors(u, fins[:, 0]) @ c.fin_port
+            out += fin_regressors(u, fins[:, 1]) @ c.fin_starboard
         out += tail_regressors(self.frequency_hz, bias, u) @ c.tail
+        if c.tail_heave is not None:
+            out += tail_heave_regressors(self.frequency_hz, nu[:, 2]) @ c.tail_heave
         gb = c.tail_bias_grid_rad
         xb = np.interp(bias, gb, np.arange(gb.size, dtype=float))
         ib = np.minimum(xb.astype(int), gb.size - 2)
