@@ -80,6 +80,45 @@ random states for the rest), so that straight flight, where the missions spend t
 not traded against the large coupling terms of a turn."""
 
 
+def _hull_index() -> tuple[NDArray[np.intp], ...]:
+    """Where each of :data:`HULL_TERMS` comes from: (columns, sources) for the components x_i,
+    the products x_i x_j, abs(x_i) x_j and the cubes (x_i x_j) x_k, in the order the terms are
+    written (each product computed as the same single multiplications, so the regressors are
+    those of writing every term out)."""
+    P = [(0, 1), (0, 2), (0, 3), (0, 4), (0, 5), (1, 2), (1, 3), (1, 4), (1, 5), (2, 3), (2, 4)]
+    P += [(2, 5), (3, 4), (3, 5), (4, 5)]
+    spec: list[tuple[str, tuple[int, ...]]] = [("x", (0,)), ("a", (0, 0)), ("c", (0, 0, 0))]
+    spec += [("x", (i,)) for i in range(1, 6)]
+    spec += [("a", (i, i)) for i in range(1, 6)]
+    spec += [("p", ij) for ij in P]
+    spec += [("a", ij) for ij in ((1, 5), (5, 1), (2, 4), (4, 2))]
+    spec += [("p", (i, i)) for i in range(1, 6)]
+    spec += [("a", (i, 0)) for i in range(1, 6)]  # u abs(x) = abs(x) u (exactly)
+    cubes = ((0, 1, 1), (0, 2, 2), (0, 5, 5), (0, 4, 4), (1, 1, 5), (2, 2, 4), (1, 5, 5), (2, 4, 4))
+    spec += [("c", ijk) for ijk in cubes]
+    spec += [("a", ij) for ij in ((0, 1), (0, 2), (0, 5), (0, 4), (1, 2), (2, 1), (1, 3), (5, 3))]
+    out: list[NDArray[np.intp]] = []
+    for kind in "xpac":
+        cols = [j for j, (k, _) in enumerate(spec) if k == kind]
+        src = [ix for k, ix in spec if k == kind]
+        out.append(np.array(cols, dtype=np.intp))
+        if kind == "x":
+            out.append(np.array([ix[0] for ix in src], dtype=np.intp))
+        elif kind == "c":
+            out.append(np.array([6 * ix[0] + ix[1] for ix in src], dtype=np.intp))
+            out.append(np.array([ix[2] for ix in src], dtype=np.intp))
+        else:
+            out.append(np.array([6 * ix[0] + ix[1] for ix in src], dtype=np.intp))
+    return tuple(out)
+
+
+_HULL_INDEX = _hull_index()
+_GATHER_MAX_RUNS = 16
+"""Up to this many runs the regressors are gathered from outer products in a few calls (per-call
+overhead dominates); above it they are built column by column (no large temporaries). The
+two give the same numbers bit for bit."""
+
+
 def hull_regressors(nu: NDArray[np.float64]) -> NDArray[np.float64]:
     """The regressors :data:`HULL_TERMS` of relative body velocities.
 
@@ -89,6 +128,23 @@ def hull_regressors(nu: NDArray[np.float64]) -> NDArray[np.float64]:
     Returns:
         Shape (n, len(HULL_TERMS)).
     """
+    n = nu.shape[0]
+    if n > _GATHER_MAX_RUNS:
+        return _hull_regressors_columns(nu)
+    cx, sx, cp, sp, ca, sa, cc, sc, kc = _HULL_INDEX
+    x = nu.T  # (6, n): whole rows gathered below
+    P = (x[:, None, :] * x[None, :, :]).reshape(36, n)  # x_i x_j
+    A = (np.abs(x)[:, None, :] * x[None, :, :]).reshape(36, n)  # abs(x_i) x_j
+    out = np.empty((len(HULL_TERMS), n))
+    out[cx] = x[sx]
+    out[cp] = P[sp]
+    out[ca] = A[sa]
+    out[cc] = P[sc] * x[kc]
+    return np.ascontiguousarray(out.T)
+
+
+def _hull_regressors_columns(nu: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`hull_regressors` column by column (many runs: no large temporaries)."""
     u, v, w, p, q, r = nu.T
     a = np.abs(nu)
     au, av, aw, ap, aq, ar = a.T
@@ -163,6 +219,39 @@ def _fin_plate_features(
     return np.stack(cols, axis=1)
 
 
+def _fin_plate_change(
+    u_l: NDArray[np.float64], w_l: NDArray[np.float64], d: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`_fin_plate_features` at d minus at 0 (the level fin), any shape (...) of the
+    arguments, result (..., 8): the same numbers in fewer calls (the level fin's chord and
+    normal components are u_l and w_l themselves)."""
+    c, s = np.cos(d), np.sin(d)
+    uc = c * u_l + s * w_l
+    un = -s * u_l + c * w_l
+    sp = np.sqrt(uc * uc + un * un)
+    inv = np.divide(1.0, sp, out=np.zeros_like(sp), where=sp > 0)
+    k = uc * un * inv
+    ki = k**2 * inv
+    sp0 = np.sqrt(u_l * u_l + w_l * w_l)
+    inv0 = np.divide(1.0, sp0, out=np.zeros_like(sp0), where=sp0 > 0)
+    k0 = u_l * w_l * inv0
+    ki0 = k0**2 * inv0
+    out = np.empty((*u_l.shape, 8))
+    a_c, a_n = k * un, -k * uc  # lift
+    out[..., 0] = (c * a_c - s * a_n) - k0 * w_l
+    out[..., 1] = (s * a_c + c * a_n) - -k0 * u_l
+    a_c, a_n = ki * uc, ki * un  # induced drag
+    out[..., 2] = (c * a_c - s * a_n) - ki0 * u_l
+    out[..., 3] = (s * a_c + c * a_n) - ki0 * w_l
+    a_n = np.abs(un) * un  # normal force
+    out[..., 4] = -(s * a_n)
+    out[..., 5] = c * a_n - np.abs(w_l) * w_l
+    a_c = np.abs(uc) * uc  # profile drag
+    out[..., 6] = c * a_c - np.abs(u_l) * u_l
+    out[..., 7] = s * a_c
+    return out
+
+
 def fin_flow_regressors(
     nu: NDArray[np.float64], d: NDArray[np.float64], position_body_m: NDArray[np.float64]
 ) -> NDArray[np.float64]:
@@ -181,7 +270,7 @@ def fin_flow_regressors(
     x, y, z = position_body_m
     u_l = nu[:, 0] + nu[:, 4] * z - nu[:, 5] * y
     w_l = nu[:, 2] + nu[:, 3] * y - nu[:, 4] * x
-    return _fin_plate_features(u_l, w_l, d) - _fin_plate_features(u_l, w_l, np.zeros_like(d))
+    return _fin_plate_change(u_l, w_l, d)
 
 
 TAIL_TERMS: tuple[str, ...] = (
@@ -210,7 +299,14 @@ def tail_regressors(
     uu = u * np.abs(u)
     ff = f * f
     s2 = s * s
-    return np.stack([uu * s, uu * s2, uu * s2 * s, ff * s, ff * s2, ff * s2 * s], axis=1)
+    out = np.empty((s.shape[0], 6))
+    out[:, 0] = uu * s
+    out[:, 1] = uu * s2
+    out[:, 2] = uu * s2 * s
+    out[:, 3] = ff * s
+    out[:, 4] = ff * s2
+    out[:, 5] = ff * s2 * s
+    return out
 
 
 TAIL_HEAVE_TERMS: tuple[str, ...] = ("f w", "f w|w|", "f w^2")
@@ -231,7 +327,11 @@ def tail_heave_regressors(f: NDArray[np.float64], w: NDArray[np.float64]) -> NDA
         Shape (n, 3).
     """
     fw = f * w
-    return np.stack([fw, fw * np.abs(w), fw * w], axis=1)
+    out = np.empty((fw.shape[0], 3))
+    out[:, 0] = fw
+    out[:, 1] = fw * np.abs(w)
+    out[:, 2] = fw * w
+    return out
 
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -239,7 +339,11 @@ def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64
     for small n)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def skew(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -507,14 +611,18 @@ class ManoeuvringWorld:
         bias: NDArray[np.float64],
         battery: NDArray[np.float64],
         tail_table: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+        bias_table: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
         """All forces but inertia: -C_RB nu + F_hull + F_fins + F_tail + g, body FLU about the
         hull origin, shape (n, 6) (N, N m). Arguments as the state's arrays; ``tail_table``:
-        :meth:`tail_table` of the current frequencies (computed if None)."""
+        :meth:`tail_table` of the current frequencies, ``bias_table``: :meth:`bias_table` of
+        ``bias`` (each computed if None)."""
         c = self.c
         v, w = nu[:, :3], nu[:, 3:]
         m = c.rigid_mass_kg
-        rg = c.cg_body_m[None, :] + (c.battery_kg / m) * np.c_[battery, 0 * battery, 0 * battery]
+        rg = np.empty((nu.shape[0], 3))
+        rg[:] = c.cg_body_m
+        rg[:, 0] = c.cg_body_m[0] + (c.battery_kg / m) * battery  # the battery slides along x
         # rigid body Coriolis, Fossen (2021) eq. 3.57 with r_g: force m (w x v + w x (w x r_g)),
         # moment m r_g x (w x v) + w x (I_o w)
         wxv = _cross(w, v)
@@ -525,19 +633,19 @@ class ManoeuvringWorld:
         u = nu[:, 0]
         rf = c.fin_position_body_m
         if c.fin_flow_port is not None and c.fin_flow_starboard is not None and rf is not None:
-            out += fin_flow_regressors(nu, fins[:, 0], rf[0]) @ c.fin_flow_port
-            out += fin_flow_regressors(nu, fins[:, 1], rf[1]) @ c.fin_flow_starboard
+            # both fins at once, (2, n): fin_flow_regressors of each
+            u_l = nu[None, :, 0] + nu[None, :, 4] * rf[:, 2:3] - nu[None, :, 5] * rf[:, 1:2]
+            w_l = nu[None, :, 2] + nu[None, :, 3] * rf[:, 1:2] - nu[None, :, 4] * rf[:, 0:1]
+            a = _fin_plate_change(u_l, w_l, fins.T)
+            out += a[0] @ c.fin_flow_port
+            out += a[1] @ c.fin_flow_starboard
         else:
             out += fin_regressors(u, fins[:, 0]) @ c.fin_port
             out += fin_regressors(u, fins[:, 1]) @ c.fin_starboard
         out += tail_regressors(self.frequency_hz, bias, u) @ c.tail
         if c.tail_heave is not None:
             out += tail_heave_regressors(self.frequency_hz, nu[:, 2]) @ c.tail_heave
-        gb = c.tail_bias_grid_rad
-        xb = np.interp(bias, gb, np.arange(gb.size, dtype=float))
-        ib = np.minimum(xb.astype(int), gb.size - 2)
-        ab = (xb - ib)[:, None]
-        tb = (1 - ab) * c.tail_bias_per_uu[ib] + ab * c.tail_bias_per_uu[ib + 1]
+        tb = bias_table if bias_table is not None else self.bias_table(bias)
         out += (u * np.abs(u))[:, None] * tb
         tab, u_ss = tail_table if tail_table is not None else self.tail_table(self.frequency_hz)
         out += tab
@@ -545,12 +653,25 @@ class ManoeuvringWorld:
         # restoring: weight at the CG, buoyancy at the CB; world down in the body frame
         cf, sf = np.cos(eul[:, 0]), np.sin(eul[:, 0])
         ct, st = np.cos(eul[:, 1]), np.sin(eul[:, 1])
-        down = np.stack([st, -ct * sf, -ct * cf], axis=1)  # R^T (0, 0, -1)
+        down = np.empty((nu.shape[0], 3))  # R^T (0, 0, -1)
+        down[:, 0] = st
+        down[:, 1] = -ct * sf
+        down[:, 2] = -ct * cf
         fw = c.weight_n * down
         fb = -c.buoyancy_n * down
         out[:, :3] += fw + fb
         out[:, 3:] += _cross(rg, fw) + _cross(np.broadcast_to(c.cb_body_m, fb.shape), fb)
         return out
+
+    def bias_table(self, bias: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The bias table's share over u abs(u) at tail biases ``bias`` (rad, shape (n,)),
+        interpolated linearly: shape (n, 6), N / (m/s)^2."""
+        c = self.c
+        gb = c.tail_bias_grid_rad
+        xb = np.interp(bias, gb, np.arange(gb.size, dtype=float))
+        ib = np.minimum(xb.astype(int), gb.size - 2)
+        ab = (xb - ib)[:, None]
+        return (1 - ab) * c.tail_bias_per_uu[ib] + ab * c.tail_bias_per_uu[ib + 1]
 
     def tail_table(self, f: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The straight-swim table at frequencies f (Hz, shape (n,)): the unbiased tail's mean
@@ -565,17 +686,18 @@ class ManoeuvringWorld:
         us = (1 - a[:, 0]) * c.straight_speed_m_s[i] + a[:, 0] * c.straight_speed_m_s[i + 1]
         return tab, us
 
-    def _derivative(self, eul, nu, fins, bias, battery, tab):
-        tau = self.generalised_force(eul, nu, fins, bias, battery, tab)
+    def _derivative(self, eul, nu, fins, bias, battery, tab, tb):
+        tau = self.generalised_force(eul, nu, fins, bias, battery, tab, tb)
         nu_dot = tau @ self._Minv.T
         R = self._rotation(eul)
         pos_dot = np.einsum("nij,nj->ni", R, nu[:, :3])
         cf, sf = np.cos(eul[:, 0]), np.sin(eul[:, 0])
         ct, tt = np.cos(eul[:, 1]), np.tan(eul[:, 1])
         p, q, r = nu[:, 3], nu[:, 4], nu[:, 5]
-        eul_dot = np.stack(
-            [p + sf * tt * q + cf * tt * r, cf * q - sf * r, (sf * q + cf * r) / ct], axis=1
-        )
+        eul_dot = np.empty((nu.shape[0], 3))
+        eul_dot[:, 0] = p + sf * tt * q + cf * tt * r
+        eul_dot[:, 1] = cf * q - sf * r
+        eul_dot[:, 2] = (sf * q + cf * r) / ct
         return pos_dot, eul_dot, nu_dot
 
     def step(self) -> None:
@@ -594,10 +716,11 @@ class ManoeuvringWorld:
             t1 = self.battery_cmd_m + (t0 - self.battery_cmd_m) * kbat
             bm, fm, tm = 0.5 * (b0 + b1), 0.5 * (f0 + f1), 0.5 * (t0 + t1)
             x, e, nu = self.position_world_m, self.euler_rad, self.nu_r
-            d1 = self._derivative(e, nu, fm, bm, tm, tab)
-            d2 = self._derivative(e + 0.5 * h * d1[1], nu + 0.5 * h * d1[2], fm, bm, tm, tab)
-            d3 = self._derivative(e + 0.5 * h * d2[1], nu + 0.5 * h * d2[2], fm, bm, tm, tab)
-            d4 = self._derivative(e + h * d3[1], nu + h * d3[2], fm, bm, tm, tab)
+            a = (fm, bm, tm, tab, self.bias_table(bm))  # held over the substep
+            d1 = self._derivative(e, nu, *a)
+            d2 = self._derivative(e + 0.5 * h * d1[1], nu + 0.5 * h * d1[2], *a)
+            d3 = self._derivative(e + 0.5 * h * d2[1], nu + 0.5 * h * d2[2], *a)
+            d4 = self._derivative(e + h * d3[1], nu + h * d3[2], *a)
             self.position_world_m = x + (h / 6) * (
                 d1[0] + 2 * d2[0] + 2 * d3[0] + d4[0] + 6 * self.current_world_m_s
             )

@@ -242,3 +242,17 @@ def test_depth_step_matches_the_full_model(coef):
     rise, over = timestep.depth_step_metrics(t, depth, sc, f)
     assert rise == pytest.approx(rise_full, rel=0.05)
     assert abs(over - over_full) <= 2.0
+
+
+def test_fast_paths_give_the_written_out_numbers_bit_for_bit(coef):
+    """The regressors are computed in few calls (the hull's from outer products for few runs,
+    the fins' change in one pass for both): equal bit for bit to the terms written out one by
+    one (the hull's column by column, the fins' plate terms at d minus at the level fin)."""
+    rng = np.random.default_rng(5)
+    for n in (1, 3, mm._GATHER_MAX_RUNS + 1, 200):
+        nu = rng.normal(0.0, 0.5, (n, 6))
+        np.testing.assert_array_equal(mm.hull_regressors(nu), mm._hull_regressors_columns(nu))
+        d = rng.uniform(-0.5, 0.5, n)
+        u_l, w_l = nu[:, 0], nu[:, 2]
+        written = mm._fin_plate_features(u_l, w_l, d) - mm._fin_plate_features(u_l, w_l, 0 * d)
+        np.testing.assert_array_equal(mm._fin_plate_change(u_l, w_l, d), written)
