@@ -530,6 +530,7 @@ class ManoeuvringWorld:
         self.fins_rad = np.zeros((n, 2))
         self.battery_m = np.zeros(n)
         self.beat_phase_rad = np.zeros(n)
+        self._kernel: tuple | None = None
 
     # -------------------------------------------------------------------------------------
     # set-up and commands
@@ -700,8 +701,66 @@ class ManoeuvringWorld:
         eul_dot[:, 2] = (sf * q + cf * r) / ct
         return pos_dot, eul_dot, nu_dot
 
+    def _kernel_args(self) -> tuple:
+        """The coefficients as :func:`bauv_sim.manoeuvring.kernel.step` takes them."""
+        c = self.c
+        flow = c.fin_flow_port is not None and c.fin_flow_starboard is not None
+        flow = flow and c.fin_position_body_m is not None
+        f64 = np.ascontiguousarray
+
+        def arr(a: NDArray[np.float64] | None, shape: tuple[int, ...]) -> NDArray[np.float64]:
+            return f64(a, dtype=float) if a is not None else np.zeros(shape)
+
+        P = (
+            f64(c.hull, dtype=float),
+            f64(c.hull_box_low, dtype=float),
+            f64(c.hull_box_high, dtype=float),
+            arr(c.fin_flow_port if flow else c.fin_port, (8, 6)),
+            arr(c.fin_flow_starboard if flow else c.fin_starboard, (8, 6)),
+            arr(c.fin_position_body_m if flow else None, (2, 3)),
+            f64(c.tail, dtype=float),
+            arr(c.tail_heave, (3, 6)),
+            f64(c.inertia_origin_kg_m2, dtype=float),
+            f64(c.cg_body_m, dtype=float),
+            f64(c.cb_body_m, dtype=float),
+            np.array(
+                [c.rigid_mass_kg, c.battery_kg, c.weight_n, c.buoyancy_n, c.thrust_speed_slope]
+            ),
+        )
+        F = (int(flow), int(c.tail_heave is not None))
+        return P, F, f64(self._Minv), f64(c.tail_bias_grid_rad, dtype=float)
+
     def step(self) -> None:
-        """Advance every run by one control tick."""
+        """Advance every run by one control tick (compiled: :mod:`bauv_sim.manoeuvring.kernel`;
+        the same equations as :meth:`generalised_force`, to rounding)."""
+        from bauv_sim.manoeuvring import kernel
+
+        if self._kernel is None:
+            self._kernel = self._kernel_args()
+        P, F, minv, grid = self._kernel
+        h = self.tick_s / self.substeps
+        c = self.c
+        tab, u_ss = self.tail_table(self.frequency_hz)  # the frequency is held over the tick
+        # new arrays each tick, as the numpy step: a reference kept by a caller keeps its values
+        pos, eul, nu = self.position_world_m.copy(), self.euler_rad.copy(), self.nu_r.copy()
+        bias, fins, bat = self.bias_rad.copy(), self.fins_rad.copy(), self.battery_m.copy()
+        phase = self.beat_phase_rad.copy()
+        f64 = np.ascontiguousarray
+        kernel.step(
+            pos, eul, nu, bias, fins, bat, phase, f64(self.frequency_hz, dtype=float),
+            f64(self.bias_cmd_rad, dtype=float), f64(self.fins_cmd_rad, dtype=float),
+            f64(self.battery_cmd_m, dtype=float), f64(self.current_world_m_s, dtype=float),
+            f64(tab), f64(u_ss), grid, f64(c.tail_bias_per_uu, dtype=float), h, self.substeps,
+            math.exp(-h / c.bias_time_constant_s), math.exp(-h / c.fin_time_constant_s),
+            math.exp(-h / c.battery_time_constant_s), P, F, minv,
+        )  # fmt: skip
+        self.position_world_m, self.euler_rad, self.nu_r = pos, eul, nu
+        self.bias_rad, self.fins_rad, self.battery_m = bias, fins, bat
+        self.beat_phase_rad = phase
+        self.time_s += self.tick_s
+
+    def _step_numpy(self) -> None:
+        """:meth:`step` in numpy (the reference the compiled step is tested against)."""
         h = self.tick_s / self.substeps
         c = self.c
         kb = math.exp(-h / c.bias_time_constant_s)
