@@ -10,6 +10,7 @@ import pytest
 
 from bauv_sim.errors import ConfigError
 from bauv_sim.manoeuvring import model as mm
+from bauv_sim.manoeuvring import regressors as rg
 from bauv_sim.manoeuvring import trials
 from tests.model_tools import tool
 
@@ -249,13 +250,13 @@ def test_fast_paths_give_the_written_out_numbers_bit_for_bit(coef):
     the fins' change in one pass for both): equal bit for bit to the terms written out one by
     one (the hull's column by column, the fins' plate terms at d minus at the level fin)."""
     rng = np.random.default_rng(5)
-    for n in (1, 3, mm._GATHER_MAX_RUNS + 1, 200):
+    for n in (1, 3, rg._GATHER_MAX_RUNS + 1, 200):
         nu = rng.normal(0.0, 0.5, (n, 6))
-        np.testing.assert_array_equal(mm.hull_regressors(nu), mm._hull_regressors_columns(nu))
+        np.testing.assert_array_equal(mm.hull_regressors(nu), rg._hull_regressors_columns(nu))
         d = rng.uniform(-0.5, 0.5, n)
         u_l, w_l = nu[:, 0], nu[:, 2]
-        written = mm._fin_plate_features(u_l, w_l, d) - mm._fin_plate_features(u_l, w_l, 0 * d)
-        np.testing.assert_array_equal(mm._fin_plate_change(u_l, w_l, d), written)
+        written = rg._fin_plate_features(u_l, w_l, d) - rg._fin_plate_features(u_l, w_l, 0 * d)
+        np.testing.assert_array_equal(rg._fin_plate_change(u_l, w_l, d), written)
 
 
 @pytest.mark.parametrize("terms", ["identified", "without the fins' flow and heave terms"])
