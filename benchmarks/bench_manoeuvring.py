@@ -4,7 +4,10 @@ batches of 1, 100 and 1000 runs, against the full MuJoCo model flying the same s
 Every run flies 60 s at the missions' 0.2 s control tick (2 Runge-Kutta substeps) with its own
 tail-beat frequency and bias (a spread of straight swims and turns), fins at a fixed angle. The
 reference variant is the full model (one vehicle, 4 ms step, 0.2 s ticks) flying the same 60 s
-at the cruise frequency and 10 deg of bias. Variants are interleaved by
+at the cruise frequency and 10 deg of bias. The manoeuvring model's tick is compiled
+(:mod:`bauv_sim.manoeuvring.kernel`); its numpy implementation of the same equations
+(``ManoeuvringWorld._step_numpy``, the tests' reference) flies 1 and 1000 runs beside it. Variants
+are interleaved by
 :func:`harness.measure`; the table gives each variant's time per vehicle-second and the full
 model's time over it (> 1: the manoeuvring model is faster per vehicle).
 
@@ -24,8 +27,8 @@ from harness import machine, measure, table
 SECONDS = 60.0
 
 
-def manoeuvring(n: int):
-    """A call flying n runs for :data:`SECONDS`."""
+def manoeuvring(n: int, numpy_step: bool = False):
+    """A call flying n runs for :data:`SECONDS` (``numpy_step``: the numpy implementation)."""
     from bauv_sim.manoeuvring import model as mm
     from bauv_sim.manoeuvring import trials
 
@@ -37,7 +40,11 @@ def manoeuvring(n: int):
     def run() -> None:
         w = trials.start(coef, n=n, tick_s=0.2)
         w.command(f, b, 0.05, 0.05)
-        w.advance(SECONDS)
+        if numpy_step:
+            for _ in range(round(SECONDS / w.tick_s)):
+                w._step_numpy()
+        else:
+            w.advance(SECONDS)
 
     return run
 
@@ -67,6 +74,9 @@ def main() -> None:
     for n in sizes:
         variants[f"manoeuvring, n_runs = {n}"] = manoeuvring(n)
         per[f"manoeuvring, n_runs = {n}"] = n * SECONDS
+    for n in (1, 1000):
+        variants[f"manoeuvring, numpy step, n_runs = {n}"] = manoeuvring(n, numpy_step=True)
+        per[f"manoeuvring, numpy step, n_runs = {n}"] = n * SECONDS
     res = measure(variants, repeats=args.repeats, warmup=1, per=per)
     print(machine())
     print(table(res, reference="full model (1 vehicle)", unit="ms per vehicle-second", scale=1e3))
@@ -75,6 +85,10 @@ def main() -> None:
         print(
             f"{name}: {1.0 / best:,.0f} vehicle-seconds per wall second (best of {len(r.seconds)})"
         )
+    for n in (1, 1000):
+        a, b = res[f"manoeuvring, numpy step, n_runs = {n}"], res[f"manoeuvring, n_runs = {n}"]
+        print(f"n_runs = {n}: numpy step / compiled step {a.min / b.min:.1f} (min), "
+              f"{a.median / b.median:.1f} (median)")  # fmt: skip
 
 
 if __name__ == "__main__":

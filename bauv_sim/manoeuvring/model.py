@@ -5,8 +5,8 @@ The equations of motion, in the body frame FLU about the hull origin (the facade
 point), with nu_r = (u, v, w, p, q, r) the velocity relative to the water (Fossen 2021, eq. 6.5
 and 10.46 for an irrotational current that is uniform around the vehicle)::
 
-    (M_RB + M_A) d(nu_r)/dt = -C_RB(nu_r) nu_r + F_hull(nu_r) + F_fins(delta, u)
-                              + F_tail(f, b, u) + g(eta)
+    (M_RB + M_A) d(nu_r)/dt = -C_RB(nu_r) nu_r + F_hull(nu_r) + F_fins(delta, nu_r)
+                              + F_tail(f, b, u, w) + g(eta)
 
 * ``M_RB``, ``M_A``: the full model's free-joint mass matrix with the tail straight (the plugin
   puts ``M_A`` there), split with the plugin's own ``M_A``;
@@ -14,10 +14,12 @@ and 10.46 for an irrotational current that is uniform around the vehicle)::
 * ``F_hull``: the quasi-steady fluid force on the whole vehicle (MuJoCo's ellipsoid drag, the
   plugin's crossflow, lift, Munk couple, plates, the added mass's velocity terms) as a polynomial
   in ``nu_r`` fitted to captive tests of the full model (tail straight, fins level);
-* ``F_fins``: each lateral fin's change of that force with its angle, fitted to captive tests;
-* ``F_tail``: the flapping tail's force averaged over a beat: thrust ``a f^2 - b f u`` fitted to
-  accelerations of the full model from rest, and the bias's force and moments fitted to its steady
-  turns;
+* ``F_fins``: each lateral fin's change of that force with its angle, in the local flow at the
+  fin's centre (the plugin's thin-plate terms as regressors), fitted to captive tests;
+* ``F_tail``: the flapping tail's force averaged over a beat: a straight-swim table in f, the
+  thrust's change ``-k f (u - u_ss(f))`` fitted to accelerations of the full model from rest, the
+  beat's share in heave fitted to its steady glides after fin steps, and the bias's force and
+  moments fitted to its steady turns;
 * ``g(eta)``: weight at the CG and buoyancy at the CB (neutral: the vehicle's BG of 48 mm).
 
 The vehicle moves with the water: a neutrally buoyant body in a uniform current feels no force
@@ -50,130 +52,49 @@ from numpy.typing import NDArray
 
 from bauv_sim.errors import ConfigError
 from bauv_sim.hull import MODEL_DIR
+from bauv_sim.manoeuvring.regressors import (
+    FIN_FLOW_TERMS as FIN_FLOW_TERMS,
+)
+from bauv_sim.manoeuvring.regressors import (
+    FIN_TERMS as FIN_TERMS,
+)
+from bauv_sim.manoeuvring.regressors import (  # the model's public names, as before
+    HULL_LINE_TERMS as HULL_LINE_TERMS,
+)
+from bauv_sim.manoeuvring.regressors import (
+    HULL_TERMS as HULL_TERMS,
+)
+from bauv_sim.manoeuvring.regressors import (
+    TAIL_HEAVE_TERMS as TAIL_HEAVE_TERMS,
+)
+from bauv_sim.manoeuvring.regressors import (
+    TAIL_TERMS as TAIL_TERMS,
+)
+from bauv_sim.manoeuvring.regressors import _cross, _fin_plate_change
+from bauv_sim.manoeuvring.regressors import (
+    fin_flow_regressors as fin_flow_regressors,
+)
+from bauv_sim.manoeuvring.regressors import (
+    fin_regressors as fin_regressors,
+)
+from bauv_sim.manoeuvring.regressors import (
+    hull_regressors as hull_regressors,
+)
+from bauv_sim.manoeuvring.regressors import (
+    skew as skew,
+)
+from bauv_sim.manoeuvring.regressors import (
+    tail_heave_regressors as tail_heave_regressors,
+)
+from bauv_sim.manoeuvring.regressors import (
+    tail_regressors as tail_regressors,
+)
 
 DATA_PATH = MODEL_DIR / "manoeuvring.json"
 """The identified tables, written by ``models/bauv/tools/manoeuvring_id.py``."""
 
 GRAVITY_M_S2 = 9.81
 """Gravity, m/s^2 (the scene's ``option gravity``)."""
-
-HULL_LINE_TERMS: tuple[str, ...] = ("u", "u|u|", "u^3")
-"""Regressors of the hull's force in straight flight (functions of the surge u, m/s, alone)."""
-
-HULL_TERMS: tuple[str, ...] = (
-    *HULL_LINE_TERMS,
-    *("v", "w", "p", "q", "r"),
-    *("v|v|", "w|w|", "p|p|", "q|q|", "r|r|"),
-    *("uv", "uw", "up", "uq", "ur", "vw", "vp", "vq", "vr", "wp", "wq", "wr", "pq", "pr", "qr"),
-    *("|v|r", "|r|v", "|w|q", "|q|w"),
-    *("v^2", "w^2", "p^2", "q^2", "r^2"),
-    *("u|v|", "u|w|", "u|p|", "u|q|", "u|r|"),
-    *("uv^2", "uw^2", "ur^2", "uq^2", "v^2r", "w^2q", "vr^2"),
-    *("wq^2", "|u|v", "|u|w", "|u|r", "|u|q", "|v|w", "|w|v", "|v|p", "|r|p"),
-)
-"""Regressors of the hull's quasi-steady force, in this order: :data:`HULL_LINE_TERMS`, then
-products that vanish in straight flight, of the relative body velocity's components u, v, w
-(m/s) and p, q, r (rad/s). The force is fitted in two stages (straight tows for the first,
-random states for the rest), so that straight flight, where the missions spend their time, is
-not traded against the large coupling terms of a turn."""
-
-
-def hull_regressors(nu: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The regressors :data:`HULL_TERMS` of relative body velocities.
-
-    Args:
-        nu: (u, v, w, p, q, r) relative to the water, body FLU, m/s and rad/s, shape (n, 6).
-
-    Returns:
-        Shape (n, len(HULL_TERMS)).
-    """
-    u, v, w, p, q, r = nu.T
-    a = np.abs(nu)
-    au, av, aw, ap, aq, ar = a.T
-    return np.stack(
-        [
-            u, au * u, u * u * u,
-            v, w, p, q, r,
-            av * v, aw * w, ap * p, aq * q, ar * r,
-            u * v, u * w, u * p, u * q, u * r, v * w, v * p, v * q, v * r,
-            w * p, w * q, w * r, p * q, p * r, q * r,
-            av * r, ar * v, aw * q, aq * w,
-            v * v, w * w, p * p, q * q, r * r,
-            u * av, u * aw, u * ap, u * aq, u * ar,
-            u * v * v, u * w * w, u * r * r, u * q * q, v * v * r, w * w * q, v * r * r, w * q * q,
-            au * v, au * w, au * r, au * q, av * w, aw * v, av * p, ar * p,
-        ],
-        axis=1,
-    )  # fmt: skip
-
-
-FIN_TERMS: tuple[str, ...] = ("u|u| sin(d) cos(d)", "u|u| sin(d)^2", "u|u| sin(d)|sin(d)|")
-"""Regressors of one lateral fin's force at angle d (rad) and surge u (m/s)."""
-
-
-def fin_regressors(u: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The regressors :data:`FIN_TERMS`.
-
-    Args:
-        u: surge relative to the water, m/s, shape (n,).
-        d: fin angle, rad (leading edge up +), shape (n,).
-
-    Returns:
-        Shape (n, 3).
-    """
-    q = u * np.abs(u)
-    s = np.sin(d)
-    return np.stack([q * s * np.cos(d), q * s * s, q * s * np.abs(s)], axis=1)
-
-
-TAIL_TERMS: tuple[str, ...] = (
-    *("u|u| sin(b)", "u|u| sin(b)^2", "u|u| sin(b)^3"),
-    *("f^2 sin(b)", "f^2 sin(b)^2", "f^2 sin(b)^3"),
-)
-"""Regressors of the tail bias's share of the tail's beat-averaged force at frequency f (Hz),
-bias b (rad, tail to port +) and surge u (m/s); the straight swim's share is a table in f
-(:attr:`ManoeuvringCoefficients.tail_straight`)."""
-
-
-def tail_regressors(
-    f: NDArray[np.float64], b: NDArray[np.float64], u: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """The regressors :data:`TAIL_TERMS`.
-
-    Args:
-        f: tail-beat frequency, Hz, shape (n,).
-        b: tail bias, rad (tail to port +), shape (n,).
-        u: surge relative to the water, m/s, shape (n,).
-
-    Returns:
-        Shape (n, 6).
-    """
-    s = np.sin(b)
-    uu = u * np.abs(u)
-    ff = f * f
-    s2 = s * s
-    return np.stack([uu * s, uu * s2, uu * s2 * s, ff * s, ff * s2, ff * s2 * s], axis=1)
-
-
-def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Row-wise a x b of shape (n, 3) arrays (np.cross's result, at a fraction of its overhead
-    for small n)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-def skew(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Cross-product matrix S(a) with S(a) b = a x b, shape (..., 3, 3)."""
-    z = np.zeros_like(a[..., 0])
-    return np.stack(
-        [
-            np.stack([z, -a[..., 2], a[..., 1]], -1),
-            np.stack([a[..., 2], z, -a[..., 0]], -1),
-            np.stack([-a[..., 1], a[..., 0], z], -1),
-        ],
-        -2,
-    )
 
 
 @dataclass(frozen=True)
@@ -212,6 +133,13 @@ class ManoeuvringCoefficients:
         roll_phase_rad: phase of the roll oscillation after the heading's, rad.
         bias_time_constant_s, fin_time_constant_s, battery_time_constant_s: the actuators'
             first-order filters, s.
+        fin_flow_port, fin_flow_starboard: coefficients of :data:`FIN_FLOW_TERMS` for each fin,
+            shape (8, 6); when present they replace ``fin_port`` and ``fin_starboard`` (which
+            see the fins at zero heave only). None in data identified before them.
+        fin_position_body_m: the fins' centres (port, starboard), body FLU from the hull origin,
+            shape (2, 3), m; with ``fin_flow_*``.
+        tail_heave: coefficients of :data:`TAIL_HEAVE_TERMS`, shape (3, 6); None (no term) in
+            data identified before it.
     """
 
     mass_matrix: NDArray[np.float64]
@@ -241,6 +169,10 @@ class ManoeuvringCoefficients:
     bias_time_constant_s: float = 0.2
     fin_time_constant_s: float = 0.05
     battery_time_constant_s: float = 1.0
+    fin_flow_port: NDArray[np.float64] | None = None
+    fin_flow_starboard: NDArray[np.float64] | None = None
+    fin_position_body_m: NDArray[np.float64] | None = None
+    tail_heave: NDArray[np.float64] | None = None
 
     def to_json(self) -> dict:
         """Plain JSON-able dict (arrays as nested lists)."""
@@ -259,6 +191,8 @@ class ManoeuvringCoefficients:
                     continue
                 raise ConfigError(f"manoeuvring data: field {k!r} missing")
             v = data[k]
+            if v is None and f.default is None:
+                continue
             kw[k] = np.asarray(v, dtype=float) if isinstance(v, list) else float(v)
         return cls(**kw)
 
@@ -334,6 +268,7 @@ class ManoeuvringWorld:
         self.fins_rad = np.zeros((n, 2))
         self.battery_m = np.zeros(n)
         self.beat_phase_rad = np.zeros(n)
+        self._kernel: tuple | None = None
 
     # -------------------------------------------------------------------------------------
     # set-up and commands
@@ -415,14 +350,18 @@ class ManoeuvringWorld:
         bias: NDArray[np.float64],
         battery: NDArray[np.float64],
         tail_table: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+        bias_table: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
         """All forces but inertia: -C_RB nu + F_hull + F_fins + F_tail + g, body FLU about the
         hull origin, shape (n, 6) (N, N m). Arguments as the state's arrays; ``tail_table``:
-        :meth:`tail_table` of the current frequencies (computed if None)."""
+        :meth:`tail_table` of the current frequencies, ``bias_table``: :meth:`bias_table` of
+        ``bias`` (each computed if None)."""
         c = self.c
         v, w = nu[:, :3], nu[:, 3:]
         m = c.rigid_mass_kg
-        rg = c.cg_body_m[None, :] + (c.battery_kg / m) * np.c_[battery, 0 * battery, 0 * battery]
+        rg = np.empty((nu.shape[0], 3))
+        rg[:] = c.cg_body_m
+        rg[:, 0] = c.cg_body_m[0] + (c.battery_kg / m) * battery  # the battery slides along x
         # rigid body Coriolis, Fossen (2021) eq. 3.57 with r_g: force m (w x v + w x (w x r_g)),
         # moment m r_g x (w x v) + w x (I_o w)
         wxv = _cross(w, v)
@@ -431,14 +370,21 @@ class ManoeuvringWorld:
         out = -np.concatenate([f_c, m_c], axis=1)
         out += hull_regressors(np.clip(nu, c.hull_box_low, c.hull_box_high)) @ c.hull
         u = nu[:, 0]
-        out += fin_regressors(u, fins[:, 0]) @ c.fin_port
-        out += fin_regressors(u, fins[:, 1]) @ c.fin_starboard
+        rf = c.fin_position_body_m
+        if c.fin_flow_port is not None and c.fin_flow_starboard is not None and rf is not None:
+            # both fins at once, (2, n): fin_flow_regressors of each
+            u_l = nu[None, :, 0] + nu[None, :, 4] * rf[:, 2:3] - nu[None, :, 5] * rf[:, 1:2]
+            w_l = nu[None, :, 2] + nu[None, :, 3] * rf[:, 1:2] - nu[None, :, 4] * rf[:, 0:1]
+            a = _fin_plate_change(u_l, w_l, fins.T)
+            out += a[0] @ c.fin_flow_port
+            out += a[1] @ c.fin_flow_starboard
+        else:
+            out += fin_regressors(u, fins[:, 0]) @ c.fin_port
+            out += fin_regressors(u, fins[:, 1]) @ c.fin_starboard
         out += tail_regressors(self.frequency_hz, bias, u) @ c.tail
-        gb = c.tail_bias_grid_rad
-        xb = np.interp(bias, gb, np.arange(gb.size, dtype=float))
-        ib = np.minimum(xb.astype(int), gb.size - 2)
-        ab = (xb - ib)[:, None]
-        tb = (1 - ab) * c.tail_bias_per_uu[ib] + ab * c.tail_bias_per_uu[ib + 1]
+        if c.tail_heave is not None:
+            out += tail_heave_regressors(self.frequency_hz, nu[:, 2]) @ c.tail_heave
+        tb = bias_table if bias_table is not None else self.bias_table(bias)
         out += (u * np.abs(u))[:, None] * tb
         tab, u_ss = tail_table if tail_table is not None else self.tail_table(self.frequency_hz)
         out += tab
@@ -446,12 +392,25 @@ class ManoeuvringWorld:
         # restoring: weight at the CG, buoyancy at the CB; world down in the body frame
         cf, sf = np.cos(eul[:, 0]), np.sin(eul[:, 0])
         ct, st = np.cos(eul[:, 1]), np.sin(eul[:, 1])
-        down = np.stack([st, -ct * sf, -ct * cf], axis=1)  # R^T (0, 0, -1)
+        down = np.empty((nu.shape[0], 3))  # R^T (0, 0, -1)
+        down[:, 0] = st
+        down[:, 1] = -ct * sf
+        down[:, 2] = -ct * cf
         fw = c.weight_n * down
         fb = -c.buoyancy_n * down
         out[:, :3] += fw + fb
         out[:, 3:] += _cross(rg, fw) + _cross(np.broadcast_to(c.cb_body_m, fb.shape), fb)
         return out
+
+    def bias_table(self, bias: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The bias table's share over u abs(u) at tail biases ``bias`` (rad, shape (n,)),
+        interpolated linearly: shape (n, 6), N / (m/s)^2."""
+        c = self.c
+        gb = c.tail_bias_grid_rad
+        xb = np.interp(bias, gb, np.arange(gb.size, dtype=float))
+        ib = np.minimum(xb.astype(int), gb.size - 2)
+        ab = (xb - ib)[:, None]
+        return (1 - ab) * c.tail_bias_per_uu[ib] + ab * c.tail_bias_per_uu[ib + 1]
 
     def tail_table(self, f: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The straight-swim table at frequencies f (Hz, shape (n,)): the unbiased tail's mean
@@ -466,21 +425,80 @@ class ManoeuvringWorld:
         us = (1 - a[:, 0]) * c.straight_speed_m_s[i] + a[:, 0] * c.straight_speed_m_s[i + 1]
         return tab, us
 
-    def _derivative(self, eul, nu, fins, bias, battery, tab):
-        tau = self.generalised_force(eul, nu, fins, bias, battery, tab)
+    def _derivative(self, eul, nu, fins, bias, battery, tab, tb):
+        tau = self.generalised_force(eul, nu, fins, bias, battery, tab, tb)
         nu_dot = tau @ self._Minv.T
         R = self._rotation(eul)
         pos_dot = np.einsum("nij,nj->ni", R, nu[:, :3])
         cf, sf = np.cos(eul[:, 0]), np.sin(eul[:, 0])
         ct, tt = np.cos(eul[:, 1]), np.tan(eul[:, 1])
         p, q, r = nu[:, 3], nu[:, 4], nu[:, 5]
-        eul_dot = np.stack(
-            [p + sf * tt * q + cf * tt * r, cf * q - sf * r, (sf * q + cf * r) / ct], axis=1
-        )
+        eul_dot = np.empty((nu.shape[0], 3))
+        eul_dot[:, 0] = p + sf * tt * q + cf * tt * r
+        eul_dot[:, 1] = cf * q - sf * r
+        eul_dot[:, 2] = (sf * q + cf * r) / ct
         return pos_dot, eul_dot, nu_dot
 
+    def _kernel_args(self) -> tuple:
+        """The coefficients as :func:`bauv_sim.manoeuvring.kernel.step` takes them."""
+        c = self.c
+        flow = c.fin_flow_port is not None and c.fin_flow_starboard is not None
+        flow = flow and c.fin_position_body_m is not None
+        f64 = np.ascontiguousarray
+
+        def arr(a: NDArray[np.float64] | None, shape: tuple[int, ...]) -> NDArray[np.float64]:
+            return f64(a, dtype=float) if a is not None else np.zeros(shape)
+
+        P = (
+            f64(c.hull, dtype=float),
+            f64(c.hull_box_low, dtype=float),
+            f64(c.hull_box_high, dtype=float),
+            arr(c.fin_flow_port if flow else c.fin_port, (8, 6)),
+            arr(c.fin_flow_starboard if flow else c.fin_starboard, (8, 6)),
+            arr(c.fin_position_body_m if flow else None, (2, 3)),
+            f64(c.tail, dtype=float),
+            arr(c.tail_heave, (3, 6)),
+            f64(c.inertia_origin_kg_m2, dtype=float),
+            f64(c.cg_body_m, dtype=float),
+            f64(c.cb_body_m, dtype=float),
+            np.array(
+                [c.rigid_mass_kg, c.battery_kg, c.weight_n, c.buoyancy_n, c.thrust_speed_slope]
+            ),
+        )
+        F = (int(flow), int(c.tail_heave is not None))
+        return P, F, f64(self._Minv), f64(c.tail_bias_grid_rad, dtype=float)
+
     def step(self) -> None:
-        """Advance every run by one control tick."""
+        """Advance every run by one control tick (compiled: :mod:`bauv_sim.manoeuvring.kernel`;
+        the same equations as :meth:`generalised_force`, to rounding)."""
+        from bauv_sim.manoeuvring import kernel
+
+        if self._kernel is None:
+            self._kernel = self._kernel_args()
+        P, F, minv, grid = self._kernel
+        h = self.tick_s / self.substeps
+        c = self.c
+        tab, u_ss = self.tail_table(self.frequency_hz)  # the frequency is held over the tick
+        # new arrays each tick, as the numpy step: a reference kept by a caller keeps its values
+        pos, eul, nu = self.position_world_m.copy(), self.euler_rad.copy(), self.nu_r.copy()
+        bias, fins, bat = self.bias_rad.copy(), self.fins_rad.copy(), self.battery_m.copy()
+        phase = self.beat_phase_rad.copy()
+        f64 = np.ascontiguousarray
+        kernel.step(
+            pos, eul, nu, bias, fins, bat, phase, f64(self.frequency_hz, dtype=float),
+            f64(self.bias_cmd_rad, dtype=float), f64(self.fins_cmd_rad, dtype=float),
+            f64(self.battery_cmd_m, dtype=float), f64(self.current_world_m_s, dtype=float),
+            f64(tab), f64(u_ss), grid, f64(c.tail_bias_per_uu, dtype=float), h, self.substeps,
+            math.exp(-h / c.bias_time_constant_s), math.exp(-h / c.fin_time_constant_s),
+            math.exp(-h / c.battery_time_constant_s), P, F, minv,
+        )  # fmt: skip
+        self.position_world_m, self.euler_rad, self.nu_r = pos, eul, nu
+        self.bias_rad, self.fins_rad, self.battery_m = bias, fins, bat
+        self.beat_phase_rad = phase
+        self.time_s += self.tick_s
+
+    def _step_numpy(self) -> None:
+        """:meth:`step` in numpy (the reference the compiled step is tested against)."""
         h = self.tick_s / self.substeps
         c = self.c
         kb = math.exp(-h / c.bias_time_constant_s)
@@ -495,10 +513,11 @@ class ManoeuvringWorld:
             t1 = self.battery_cmd_m + (t0 - self.battery_cmd_m) * kbat
             bm, fm, tm = 0.5 * (b0 + b1), 0.5 * (f0 + f1), 0.5 * (t0 + t1)
             x, e, nu = self.position_world_m, self.euler_rad, self.nu_r
-            d1 = self._derivative(e, nu, fm, bm, tm, tab)
-            d2 = self._derivative(e + 0.5 * h * d1[1], nu + 0.5 * h * d1[2], fm, bm, tm, tab)
-            d3 = self._derivative(e + 0.5 * h * d2[1], nu + 0.5 * h * d2[2], fm, bm, tm, tab)
-            d4 = self._derivative(e + h * d3[1], nu + h * d3[2], fm, bm, tm, tab)
+            a = (fm, bm, tm, tab, self.bias_table(bm))  # held over the substep
+            d1 = self._derivative(e, nu, *a)
+            d2 = self._derivative(e + 0.5 * h * d1[1], nu + 0.5 * h * d1[2], *a)
+            d3 = self._derivative(e + 0.5 * h * d2[1], nu + 0.5 * h * d2[2], *a)
+            d4 = self._derivative(e + h * d3[1], nu + h * d3[2], *a)
             self.position_world_m = x + (h / 6) * (
                 d1[0] + 2 * d2[0] + 2 * d3[0] + d4[0] + 6 * self.current_world_m_s
             )

@@ -15,17 +15,24 @@ Identification, all on the full model at the missions' 4 ms step:
    the fluid force about the hull origin are fitted by least squares to
    :data:`bauv_sim.manoeuvring.model.HULL_TERMS`, and checked on other random states.
 3. **Fins (captive tests)**: each fin set to an angle, the change of that force against level
-   fins, fitted to :data:`~bauv_sim.manoeuvring.model.FIN_TERMS`.
+   fins: at random states of the hull's box (heave, pitch and roll rate change the fin's angle of
+   attack) fitted to :data:`~bauv_sim.manoeuvring.model.FIN_FLOW_TERMS` (the plugin's plate
+   terms in the local flow at the fin's centre, which the model uses), and in straight flight
+   to :data:`~bauv_sim.manoeuvring.model.FIN_TERMS` (kept for data identified before).
 4. **Tail (free runs)**: straight swims at several frequencies (steady speed, motor power, the
    beat's heading and roll oscillation fitted as a sinusoid at the beat frequency), accelerations
-   from rest at two frequencies (thrust = inertia x acceleration - hull drag, beat by beat) and
-   steady turns at several biases and two frequencies (the tail's mean force is what balances the
-   rest of the model in the turn); fitted to :data:`~bauv_sim.manoeuvring.model.TAIL_TERMS`.
+   from rest at two frequencies (thrust = inertia x acceleration - hull drag, beat by beat),
+   steady glides after open-loop fin steps (the beat's share in heave,
+   :data:`~bauv_sim.manoeuvring.model.TAIL_HEAVE_TERMS`: what the beat-averaged rest of the model
+   misses there) and steady turns at several biases and two frequencies (the tail's mean force is
+   what balances the rest of the model in the turn); fitted to
+   :data:`~bauv_sim.manoeuvring.model.TAIL_TERMS`.
 
 Validation (other manoeuvres than those identified on): the timestep table's quantities (cruise
 speed and power, turn rate and radius at +-10 and +-20 deg of bias, the autopilot's 5 m depth
 step, the +0.2 rad fin step) and 0.3 m/s current steps along and across the track, full model
-against the manoeuvring model, with the timestep table's thresholds.
+against the manoeuvring model, with the timestep table's thresholds; then further autopilot depth
+steps (:data:`EXTRA_DEPTH_STEPS`: up and down, 2 and 5 m, at 0.6 and 1 m/s).
 
 Run from the repository root (about 3 minutes)::
 
@@ -45,7 +52,7 @@ from pathlib import Path
 
 import hydro_body
 import numpy as np
-from timestep import THRESHOLDS, depth_step, depth_step_metrics
+from timestep import DEPTH_STEP_AT_S, THRESHOLDS, depth_step, depth_step_metrics, rise_time_s
 
 from bauv_sim import manoeuvres
 from bauv_sim.manoeuvring import model as mm
@@ -199,6 +206,48 @@ def fit_fin(ph: BauvPhysics, rng: np.random.Generator, joint: str, n: int = 300)
     return coef, rel
 
 
+def fin_position(ph: BauvPhysics, geom: str) -> np.ndarray:
+    """A fin's centre (its fluid plate's, the fin level), body FLU from the hull origin, m."""
+    tow_nu(ph, np.zeros(6))  # level, at rest: the kinematics of the tows' pose
+    g = ph.model.ptr.geom(geom).id
+    return ph.R_world_from_body().T @ (ph.data.ptr.geom_xpos[g] - ph.position_world())
+
+
+def fit_fin_flow(
+    ph: BauvPhysics, rng: np.random.Generator, joint: str, geom: str, n: int = 1200,
+    n_check: int = 300,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """One fin in the local flow: coefficients (8, 6) of
+    :data:`~bauv_sim.manoeuvring.model.FIN_FLOW_TERMS`, the held-out relative RMS error per
+    component and the fin's centre (body FLU, m).
+
+    Captive tows at random relative velocities of the hull's box (:func:`sample_box`: heave,
+    pitch and roll rates change the fin's angle of attack; in the depth step the fins sit at
+    -25 deg while the vehicle sinks at 0.2 m/s, where the fin at -25 deg sees about -11 deg)
+    and random fin angles in the fins' range; the change of the fluid force against the level
+    fin at the same velocity."""
+    m, d = ph.model.ptr, ph.data.ptr
+    adr = m.joint(joint).qposadr[0]
+    r_fin = fin_position(ph, geom)
+    X = sample_box(rng, n + n_check)
+    a = rng.uniform(-trials.FIN_LIMIT_RAD, trials.FIN_LIMIT_RAD, n + n_check)
+    dF = []
+    for nu, ai in zip(X, a, strict=True):
+        d.qpos[adr] = 0.0
+        f0 = tow_nu(ph, nu)
+        d.qpos[adr] = ai
+        dF.append(tow_nu(ph, nu) - f0)
+    d.qpos[adr] = 0.0
+    dF = np.array(dF)
+    A = mm.fin_flow_regressors(X, a, r_fin)
+    coef, *_ = np.linalg.lstsq(A[:n], dF[:n], rcond=None)
+    res = A[n:] @ coef - dF[n:]
+    rms = np.sqrt(np.mean(dF[n:] ** 2, axis=0))
+    rel = np.sqrt(np.mean(res**2, axis=0)) / np.maximum(rms, 1e-12)
+    rel[rms < 1e-6] = 0.0  # a component the fin does not produce (Y: zero to rounding)
+    return coef, rel, r_fin
+
+
 # --------------------------------------------------------------------------------------------
 # 4: the tail, from free runs
 
@@ -320,10 +369,48 @@ def full_turn(f: float, bias_deg: float) -> Turn:
     return Turn(f, math.radians(bias_deg), r[:6], np.r_[r[6:8], 0.0], float(r[8]))
 
 
-def fit_tail(coef: mm.ManoeuvringCoefficients, swims, accels, turns) -> dict:
+ID_GLIDES = tuple((f, a) for f in (0.61, 0.75) for a in (-0.35, -0.25, -0.1, 0.1, 0.3))
+"""(frequency Hz, fin angle rad) of the identification's open-loop fin steps; the validation's
+is +0.2 rad at the cruise frequency (and the autopilot's depth step)."""
+
+
+@dataclass(frozen=True)
+class Glide:
+    """The steady climb or dive of the full model after an open-loop fin step (beat means)."""
+
+    frequency_hz: float
+    fin_rad: float
+    nu: np.ndarray  # (6,) mean relative body velocity
+    nu_dot: np.ndarray  # (6,) its mean rate (the swim is close to, not at, a steady state)
+    roll_pitch_heading: np.ndarray  # (3,)
+
+
+def full_glide(f: float, fin_rad: float, approach_s: float = 30.0, step_s: float = 40.0) -> Glide:
+    """As :func:`bauv_sim.manoeuvres.depth_change` (level fins, then both fins at ``fin_rad``,
+    open loop), longer: the means over the last 20 s of ``step_s``."""
+    ph = scene()
+    ph.set_tail_beat_frequency_hz(f)
+    tick = ph.control_tick_s
+    ph.advance(round(approach_s / tick) * tick)
+    ph.set_lateral_fins_rad(fin_rad, fin_rad)
+    rows = []
+    for k in range(round(step_s / tick)):
+        ph.advance(tick)
+        if k >= round((step_s - 20.0) / tick):
+            v = ph.R_world_from_body().T @ ph.velocity_through_water_world()
+            rows.append(np.r_[ph.time_s(), v, ph.angular_velocity_body(), ph.roll_pitch_heading()])
+    a = np.array(rows)
+    slope = np.array([np.polyfit(a[:, 0], a[:, 1 + j], 1)[0] for j in range(6)])
+    r = a[:, 1:].mean(axis=0)
+    return Glide(f, fin_rad, r[:6], slope, np.r_[r[6:8], 0.0])
+
+
+def fit_tail(coef: mm.ManoeuvringCoefficients, swims, accels, turns, glides=()) -> dict:
     """The tail's tables and coefficients: the force that balances the rest of the model in the
-    straight swims (tables), the thrust's slope in surge from the accelerations, the bias's share
-    from the turns."""
+    straight swims (tables), the thrust's slope in surge from the accelerations, the beat's share
+    in heave from the glides (what the rest of the model, beat-averaged, misses there: X even in
+    the heave, Z and M odd), the bias's share from the turns (with the heave term in the
+    rest)."""
     k0 = len(mm.TAIL_TERMS)
     fz = coef.power_frequency_hz
     zero = mm.ManoeuvringCoefficients(
@@ -346,19 +433,54 @@ def fit_tail(coef: mm.ManoeuvringCoefficients, swims, accels, turns) -> dict:
         straight[i] = -rest(s.frequency_hz, 0.0, nu, (0.0, s.pitch_rad), s.fin_rad)
     u_ss = coef.straight_speed_m_s
     mx = coef.mass_matrix[0, 0]
-    x, y = [], []
-    for f, u, du in accels:
-        nu = np.array([u, 0, 0, 0, 0, 0.0])
-        thrust = mx * du - rest(f, 0.0, nu, (0.0, 0.0), 0.0)[0]
-        x.append(-f * (u - np.interp(f, fz, u_ss)))
-        y.append(thrust - np.interp(f, fz, straight[:, 0]))
-    slope = float(np.dot(x, y) / np.dot(x, x))
+
+    def thrust_slope():
+        x, y = [], []
+        for f, u, du in accels:
+            nu = np.array([u, 0, 0, 0, 0, 0.0])
+            thrust = mx * du - rest(f, 0.0, nu, (0.0, 0.0), 0.0)[0]
+            x.append(-f * (u - np.interp(f, fz, u_ss)))
+            y.append(thrust - np.interp(f, fz, straight[:, 0]))
+        return float(np.dot(x, y) / np.dot(x, x)), y
+
+    def base_of(f, u):
+        b = np.array([np.interp(f, fz, straight[:, j]) for j in range(6)])
+        b[0] -= slope * f * (u - np.interp(f, fz, u_ss))
+        return b
+
+    slope, y = thrust_slope()
+    heave = None
+    if len(glides):
+        # the heave term is the change off the straight swim at the same frequency (the swims
+        # above 0.61 Hz hold depth with the nose up and heave -0.1 to -0.34 m/s: the table
+        # balances the term there): glide residual = A(glide) c - A(swim at its f) c, with the
+        # table's linear interpolation in f
+        A_sw = np.zeros((fz.size, len(mm.TAIL_HEAVE_TERMS)))
+        for i, s in enumerate(swims, start=1):
+            A_sw[i] = mm.tail_heave_regressors(np.array([s.frequency_hz]), s.nu[2:3])[0]
+        gw = np.array([(g.frequency_hz, g.nu[2]) for g in glides])
+        Ag = mm.tail_heave_regressors(gw[:, 0], gw[:, 1]) - np.array(
+            [[np.interp(f, fz, A_sw[:, k]) for k in range(A_sw.shape[1])] for f in gw[:, 0]]
+        )
+        tau_g = np.array(
+            [coef.mass_matrix @ g.nu_dot - base_of(g.frequency_hz, g.nu[0])
+             - rest(g.frequency_hz, 0.0, g.nu, g.roll_pitch_heading, g.fin_rad) for g in glides]
+        )  # fmt: skip
+        heave = np.zeros((Ag.shape[1], 6))
+        for j, cols in ((0, [2]), (2, [0, 1]), (4, [0, 1])):  # X even in w; Z, M odd
+            heave[cols, j], *_ = np.linalg.lstsq(Ag[:, cols], tau_g[:, j], rcond=None)
+        print("glides (f, w; residual X Z M before, after the heave term):")
+        print(np.c_[gw, tau_g[:, [0, 2, 4]], (tau_g - Ag @ heave)[:, [0, 2, 4]]].round(3))
+        straight -= A_sw @ heave  # the table balances the term at the swims
+        slope, y = thrust_slope()  # with the table's new X (the accelerations: heave ~ 0)
     print("accel samples (f, u, du/dt, thrust - table):")
     print(np.c_[accels, y].round(3)[::4])
+
     rows, tau = [], []
     for tr in turns:
-        base = np.array([np.interp(tr.frequency_hz, fz, straight[:, j]) for j in range(6)])
-        base[0] -= slope * tr.frequency_hz * (tr.nu[0] - np.interp(tr.frequency_hz, fz, u_ss))
+        base = base_of(tr.frequency_hz, tr.nu[0])
+        if heave is not None:
+            base += (mm.tail_heave_regressors(np.array([tr.frequency_hz]), tr.nu[2:3]) @ heave)[0]
         rows.append((tr.frequency_hz, tr.bias_rad, tr.nu[0]))
         tau.append(
             -rest(tr.frequency_hz, tr.bias_rad, tr.nu, tr.roll_pitch_heading, tr.fin_rad) - base
@@ -379,7 +501,8 @@ def fit_tail(coef: mm.ManoeuvringCoefficients, swims, accels, turns) -> dict:
         f"tail: thrust slope {slope:.4g} N/(Hz m/s); turn fit residual rms "
         f"{np.sqrt(np.mean((A @ tail - tau) ** 2, axis=0)).round(3)}"
     )
-    return {"tail": tail, "tail_straight": straight, "thrust_speed_slope": slope}
+    return {"tail": tail, "tail_straight": straight, "thrust_speed_slope": slope,
+            "tail_heave": heave}  # fmt: skip
 
 
 def identify(seed: int = 27) -> tuple[mm.ManoeuvringCoefficients, dict]:
@@ -391,6 +514,11 @@ def identify(seed: int = 27) -> tuple[mm.ManoeuvringCoefficients, dict]:
     hull, hull_err = fit_hull(ph, rng)
     fin_p, fin_p_err = fit_fin(ph, rng, "bauv/fin_port_pitch")
     fin_s, fin_s_err = fit_fin(ph, rng, "bauv/fin_starboard_pitch")
+    flow_p, flow_p_err, r_p = fit_fin_flow(ph, rng, "bauv/fin_port_pitch", "bauv/fin_port_fluid")
+    flow_s, flow_s_err, r_s = fit_fin_flow(
+        ph, rng, "bauv/fin_starboard_pitch", "bauv/fin_starboard_fluid"
+    )
+    print(f"fins in the local flow: held-out rel. RMS {flow_p_err.round(4)}, {flow_s_err.round(4)}")
     print(f"captive tests: {time.perf_counter() - t0:.0f} s; hull fit rel. RMS {hull_err.round(3)}")
     swims = [full_swim(f) for f in ID_FREQUENCIES_HZ]
     for s in swims:
@@ -401,6 +529,7 @@ def identify(seed: int = 27) -> tuple[mm.ManoeuvringCoefficients, dict]:
         )
     accels = np.vstack([full_accel(f) for f in (0.61, 1.0)])
     turns = [full_turn(f, b) for f, b in ID_TURNS]
+    glides = [full_glide(f, a) for f, a in ID_GLIDES]
     print(f"free runs: {time.perf_counter() - t0:.0f} s")
     fz = np.r_[0.0, [s.frequency_hz for s in swims]]
     coef = mm.ManoeuvringCoefficients(
@@ -423,13 +552,18 @@ def identify(seed: int = 27) -> tuple[mm.ManoeuvringCoefficients, dict]:
         yaw_amplitude_rad=np.r_[0.0, [s.yaw_amplitude_rad for s in swims]],
         roll_amplitude_rad=np.r_[0.0, [s.roll_amplitude_rad for s in swims]],
         roll_phase_rad=float(np.angle(np.mean(np.exp(1j * np.array([s.roll_phase_rad for s in swims]))))),  # noqa: E501
+        fin_flow_port=flow_p,
+        fin_flow_starboard=flow_s,
+        fin_position_body_m=np.stack([r_p, r_s]),
     )  # fmt: skip
-    tail = fit_tail(coef, swims, accels, turns)
+    tail = fit_tail(coef, swims, accels, turns, glides)
     coef = mm.ManoeuvringCoefficients(**{**coef.__dict__, **tail})
     report = {
         "hull_fit_relative_rms": hull_err.tolist(),
         "fin_port_fit_relative_rms": fin_p_err.tolist(),
         "fin_starboard_fit_relative_rms": fin_s_err.tolist(),
+        "fin_flow_port_fit_relative_rms": flow_p_err.tolist(),
+        "fin_flow_starboard_fit_relative_rms": flow_s_err.tolist(),
         "swims": [{k: np.asarray(v).tolist() for k, v in s.__dict__.items()} for s in swims],
         "identification_s": time.perf_counter() - t0,
     }
@@ -562,6 +696,62 @@ def write_readme(table: str, tag: str = "manoeuvring") -> None:
     README.write_text(pat.sub(lambda m: m.group(1) + table + m.group(2), text))
 
 
+EXTRA_DEPTH_STEPS = ((-5.0, 1.0), (2.0, 1.0), (5.0, 0.6), (-2.0, 0.6))
+"""(step m, positive deeper; speed m/s) of the autopilot's further depth steps from 10 m, beside
+the table's +5 m at 1 m/s: up as well as down, smaller, slower (none identified on)."""
+
+
+def _step_metrics(t_s, depth_m, sc, step_m: float, frequency_hz: float) -> tuple[float, float]:
+    """10-90 % rise (s) and overshoot past the new depth (% of the step) of the beat-averaged
+    depth of a step of either sign (:func:`timestep.depth_step_metrics` for any step)."""
+    from tasks.vehicle.autopilot import beat_average
+
+    n = max(1, round(1.0 / (frequency_hz * sc.control_tick_s)))
+    depth = beat_average(np.asarray(depth_m, dtype=float), n)
+    t = np.asarray(t_s, dtype=float)
+    after = t >= DEPTH_STEP_AT_S
+    y0, y1 = sc.depth_m, sc.depth_m + step_m
+    rise = rise_time_s(t[after] - DEPTH_STEP_AT_S, depth[after], y0, y1)
+    past = np.max((depth[after] - y1) * math.copysign(1.0, step_m))
+    return rise, max(0.0, float(past)) / abs(step_m) * 100.0
+
+
+def extra_depth_steps(coef: mm.ManoeuvringCoefficients) -> str:
+    """The autopilot's depth steps of :data:`EXTRA_DEPTH_STEPS`, full model (``fly_trial`` at 4
+    ms) against the manoeuvring model: a markdown table with the timestep table's thresholds."""
+    from bauv_sim.design.speed_table import load_speed_table
+    from tasks.vehicle.autopilot import AutopilotTrialsScenario, fly_trial
+
+    sc = AutopilotTrialsScenario().model_copy(update={"physics_timestep_s": TIMESTEP_S})
+    lines = [
+        "| depth step | speed (m/s) | rise, full model (s) | rise, manoeuvring (s) | difference "
+        "| overshoot, full / manoeuvring (%) | holds |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for step, speed in EXTRA_DEPTH_STEPS:
+        f = float(load_speed_table().frequency_for(speed))
+        tr = fly_trial(
+            sc, 80.0, lambda t: 0.0,
+            lambda t, s=step: sc.depth_m + (s if t >= DEPTH_STEP_AT_S else 0.0),
+            lambda t, v=speed: v,
+        )  # fmt: skip
+        rf, of = _step_metrics(tr["t"], tr["depth"], sc, step, f)
+        t, d = trials.autopilot_depth_step(
+            coef, sc.autopilot, sc.control_tick_s, sc.depth_m, step, speed
+        )
+        rm, om = _step_metrics(t, d, sc, step, f)
+        diff = (rm - rf) / rf
+        ok = (
+            abs(diff) <= THRESHOLDS["depth_rise_time_s"][1]
+            and abs(om - of) <= THRESHOLDS["depth_overshoot_percent"][1]
+        )
+        lines.append(
+            f"| {step:+g} m | {speed:g} | {rf:.2f} | {rm:.2f} | {diff * 100:+.2f} % "
+            f"| {of:.2f} / {om:.2f} | {'yes' if ok else 'NO'} |"
+        )
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--validate", action="store_true", help="validate the stored data only")
@@ -576,7 +766,9 @@ def main() -> None:
         coef, report = identify()
         if not args.no_write:
             data = {"about": "identified by manoeuvring_id.py from the full model at 4 ms",
-                    "terms": {"hull": mm.HULL_TERMS, "fin": mm.FIN_TERMS, "tail": mm.TAIL_TERMS},
+                    "terms": {"hull": mm.HULL_TERMS, "fin": mm.FIN_TERMS, "tail": mm.TAIL_TERMS,
+                              "fin_flow": mm.FIN_FLOW_TERMS,
+                              "tail_heave": mm.TAIL_HEAVE_TERMS},
                     "fit": report, **coef.to_json()}  # fmt: skip
             mm.DATA_PATH.write_text(json.dumps(data, indent=1) + "\n")
         print(json.dumps({k: v for k, v in report.items() if k != "swims"}, indent=1))
@@ -586,8 +778,11 @@ def main() -> None:
     full = full_results(f)
     table = render(full, man)
     print(table)
+    extra = extra_depth_steps(coef)
+    print(extra)
     if not args.no_write:
         write_readme(table)
+        write_readme(extra, "manoeuvring-depth-steps")
 
 
 if __name__ == "__main__":
