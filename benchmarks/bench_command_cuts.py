@@ -79,7 +79,7 @@ def capture() -> None:
         FIGURES.write_bytes(pickle.dumps(args[:-1]))
         return real(*args)
 
-    report.mission_figures = keep  # type: ignore[assignment]
+    report.mission_figures = keep
     with tempfile.TemporaryDirectory() as tmp:
         try:
             main(["run", "mission/survey", "--out", f"{tmp}/run", "--quiet"])
