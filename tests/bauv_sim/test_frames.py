@@ -68,3 +68,44 @@ def test_scalar_attitude_equals_the_array_form():
         unit, rph = fr.attitude_from_quat_wxyz_scalar(*qi.tolist())
         assert np.allclose(unit, qi / np.linalg.norm(qi), atol=1e-15)
         assert np.allclose(fr.wrap_pi(np.array(rph) - wi + 1.0) - 1.0, 0.0, atol=1e-12)
+
+
+def _scipy_quat_wxyz(M: np.ndarray) -> np.ndarray:
+    """What ``quat_wxyz_from_R`` returned when it called scipy (w >= 0)."""
+    q = Rotation.from_matrix(M.reshape(-1, 3, 3)).as_quat(scalar_first=True)
+    return np.where(q[:, :1] < 0, -q, q).reshape(M.shape[:-2] + (4,))
+
+
+def test_quaternion_from_matrix_equals_scipy_bit_for_bit():
+    rng = np.random.default_rng(3)
+    mats = [
+        Rotation.random(4000, rng=rng).as_matrix(),  # every branch of the largest-term choice
+        fr.R_from_roll_pitch_heading(
+            rng.uniform(-np.pi, np.pi, 2000),
+            rng.uniform(-np.pi / 2, np.pi / 2, 2000),
+            rng.uniform(0, 2 * np.pi, 2000),
+        ),
+        fr.R_from_roll_pitch_heading(0.0, 0.0, np.linspace(0, 2 * np.pi, 73)),
+        np.stack([np.eye(3), np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0])]),
+        np.stack([np.diag([-1.0, -1.0, 1.0])] * 2),
+    ]
+    # Covariance eigenvectors made right-handed (the recording's ellipsoids).
+    A = rng.normal(size=(500, 3, 3))
+    _, V = np.linalg.eigh(A @ np.transpose(A, (0, 2, 1)))
+    V[..., :, 2] *= np.sign(np.linalg.det(V))[..., None]
+    mats.append(V)
+    n_branch = np.zeros(4, int)
+    for M in mats:
+        got = fr.quat_wxyz_from_R(M)
+        assert got.tobytes() == _scipy_quat_wxyz(M).tobytes()
+        tr = M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2]
+        d = np.stack([M[..., 0, 0], M[..., 1, 1], M[..., 2, 2], tr], -1).reshape(-1, 4)
+        n_branch += np.bincount(np.argmax(d, axis=1), minlength=4)
+    assert np.all(n_branch > 100)
+    # A single matrix keeps its shape; one that scipy orthogonalises first goes to scipy.
+    R1 = fr.R_from_roll_pitch_heading(0.1, -0.2, 1.3)
+    assert fr.quat_wxyz_from_R(R1).tobytes() == _scipy_quat_wxyz(R1).tobytes()
+    skew = R1 + 1e-9
+    assert fr.quat_wxyz_from_R(skew).tobytes() == _scipy_quat_wxyz(skew).tobytes()
+    with pytest.raises(ValueError, match="determinant"):
+        fr.quat_wxyz_from_R(-np.eye(3))
