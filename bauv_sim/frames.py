@@ -168,58 +168,12 @@ def quat_wxyz_from_R(R: ArrayLike) -> NDArray[np.float64]:
     Returns:
         Quaternion (w, x, y, z), shape (..., 4).
     """
+    from scipy.spatial.transform import Rotation  # on first use: scipy.spatial costs ~0.5 s
+
     M = np.asarray(R, dtype=float)
-    flat = _quat_xyzw_from_matrix(M.reshape(-1, 3, 3))
-    flat = np.roll(flat, 1, axis=1)  # (x, y, z, w) -> (w, x, y, z)
+    flat = Rotation.from_matrix(M.reshape(-1, 3, 3)).as_quat(scalar_first=True)
     flat = np.where(flat[:, :1] < 0, -flat, flat)
     return flat.reshape(M.shape[:-2] + (4,))
-
-
-def _quat_xyzw_from_matrix(M: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``scipy.spatial.transform.Rotation.from_matrix(M).as_quat()`` without importing
-    ``scipy.spatial`` (0.4-0.5 s of imports at a mission's first pose), bit for bit.
-
-    The same operations in the same order as scipy's Cython backend (Markley's method: the
-    largest of the diagonal and the trace picks the formula, then the quaternion is divided by
-    its norm ``sqrt(((x x + y y) + z z) + w w)``), vectorised; matrices scipy would first
-    orthogonalise by SVD (its Gram check, ``isclose(M M^T, I, atol=1e-12)``), reject (determinant
-    <= 0) or cannot order (non-finite) go to scipy itself. Tested equal bit for bit to scipy
-    (``tests/bauv_sim/test_frames.py``).
-
-    Args:
-        M: rotation matrices, shape (n, 3, 3).
-
-    Returns:
-        Quaternions (x, y, z, w), shape (n, 4), not made canonical.
-    """
-    ok = (
-        bool(np.all(np.isfinite(M)))
-        and bool(np.all(np.linalg.det(M) > 0))
-        and bool(np.all(np.isclose(M @ np.transpose(M, (0, 2, 1)), np.eye(3), atol=1e-12)))
-    )
-    if not ok:
-        from scipy.spatial.transform import Rotation
-
-        return np.asarray(Rotation.from_matrix(M).as_quat(), dtype=float).reshape(-1, 4)
-    trace = M[:, 0, 0] + M[:, 1, 1] + M[:, 2, 2]
-    choice = np.argmax(np.stack([M[:, 0, 0], M[:, 1, 1], M[:, 2, 2], trace], axis=1), axis=1)
-    q = np.empty((M.shape[0], 4))
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        m = choice == i
-        Mi = M[m]
-        q[m, i] = 1 - trace[m] + 2 * Mi[:, i, i]
-        q[m, j] = Mi[:, j, i] + Mi[:, i, j]
-        q[m, k] = Mi[:, k, i] + Mi[:, i, k]
-        q[m, 3] = Mi[:, k, j] - Mi[:, j, k]
-    m = choice == 3
-    Mi = M[m]
-    q[m, 0] = Mi[:, 2, 1] - Mi[:, 1, 2]
-    q[m, 1] = Mi[:, 0, 2] - Mi[:, 2, 0]
-    q[m, 2] = Mi[:, 1, 0] - Mi[:, 0, 1]
-    q[m, 3] = 1 + trace[m]
-    norm = np.sqrt(q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3])
-    return q / norm[:, None]
 
 
 def R_from_roll_pitch_heading(
