@@ -12,7 +12,6 @@ Usage::
 
     python benchmarks/bench_command_cuts.py                   # every cut, 7 repeats
     python benchmarks/bench_command_cuts.py --cut stats --repeats 11
-    python benchmarks/bench_command_cuts.py --capture   # re-capture the survey's figure data
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ import argparse
 import json
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -36,58 +34,7 @@ CUTS: dict[str, tuple[str, str, str, str]] = {
         "from nav.distributions import chi2_ppf, rice_cdf\n"
         "chi2_ppf(0.99, 2); rice_cdf(9.0, 3.0 / 2.0, scale=2.0)",
     ),
-    "rotation": (
-        "the first pose's quaternion without scipy.spatial (first call, with imports)",
-        "import tasks.closed_loop.experiment, bauv_sim.build, numpy as np\n"
-        "from bauv_sim import frames\n"
-        "R = frames.R_from_roll_pitch_heading(0.0, 0.0, 1.0)",
-        "from scipy.spatial.transform import Rotation\n"
-        "Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(scalar_first=True)",
-        "frames.quat_wxyz_from_R(R)",
-    ),
 }
-
-FIGURES = Path(tempfile.gettempdir()) / "bauv-bench-survey-figures.pkl"
-"""The arguments of the survey's ``mission_figures`` call, captured once (``--capture``)."""
-
-_FIG_PRE = (
-    "import pickle, tempfile\n"
-    "import tasks.closed_loop.experiment\n"
-    "from tasks.closed_loop import figures\n"
-    "from tasks.core import style\n"
-    f"args = pickle.load(open({str(FIGURES)!r}, 'rb'))\n"
-    "from pathlib import Path\nout = Path(tempfile.mkdtemp())\n"
-)
-CUTS["pdf_fonts"] = (
-    "the survey's three figures (PNG + PDF, first call): PDF fonts subset without layout tables",
-    _FIG_PRE,
-    "style.LEAN_PDF_FONTS = False\nfigures.mission_figures(*args, out)",
-    "style.LEAN_PDF_FONTS = True\nfigures.mission_figures(*args, out)",
-)
-
-
-def capture() -> None:
-    """Run ``mission/survey`` once and keep its ``mission_figures`` arguments in :data:`FIGURES`."""
-    import pickle
-
-    from tasks.closed_loop import figures, report
-    from tasks.core.cli import main
-
-    real = figures.mission_figures
-
-    def keep(*args):
-        FIGURES.write_bytes(pickle.dumps(args[:-1]))
-        return real(*args)
-
-    report.mission_figures = keep
-    with tempfile.TemporaryDirectory() as tmp:
-        try:
-            main(["run", "mission/survey", "--out", f"{tmp}/run", "--quiet"])
-        except SystemExit as e:
-            if e.code not in (0, None):
-                raise
-    print(f"captured {FIGURES}")
-
 
 CHILD = """
 import json, sys, time
@@ -131,13 +78,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cut", choices=[*CUTS, "all"], default="all")
     ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--capture", action="store_true", help="capture the survey's figure data")
     args = ap.parse_args()
     sys.path.insert(0, str(HERE))
-    if args.capture or (args.cut in ("pdf_fonts", "all") and not FIGURES.exists()):
-        capture()
-        if args.capture:
-            return
     for name in CUTS if args.cut == "all" else [args.cut]:
         bench(name, args.repeats)
 

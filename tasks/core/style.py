@@ -34,12 +34,11 @@ the same method with the same look, a different look is refused (:class:`StyleCl
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import io
 import re
 import types
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, ParamSpec, TypeVar
@@ -281,54 +280,6 @@ mission's figures take 10 % less CPU (``benchmarks/README.md``, "Where a step go
 lays the vector file out again at its own resolution (axes up to 0.5 % of the figure elsewhere)."""
 
 
-LEAN_PDF_FONTS = True
-"""Subset the PDF's TrueType fonts without their OpenType layout tables (GSUB, GPOS, GDEF, BASE,
-JSTF, MATH): fontTools no longer decompiles and subsets DejaVu's substitution and positioning
-tables for every font of every PDF, which a PDF's Type 42 font does not use (matplotlib places
-each glyph itself) and which the subset it embeds did not keep: the mission's PDFs are identical
-byte for byte, and their fonts cost a third of the time (``benchmarks/README.md``, "Where a step
-goes"). False subsets them as matplotlib does."""
-
-_LAYOUT_TABLES = ("GSUB", "GPOS", "GDEF", "BASE", "JSTF", "MATH")
-
-
-class _LeanSubset:
-    """``fontTools.subset`` as matplotlib's PDF backend sees it, with ``Options`` that drop the
-    OpenType layout tables (:data:`LEAN_PDF_FONTS`); every other name is fontTools'."""
-
-    def __init__(self, module: types.ModuleType) -> None:
-        self._module = module
-
-        class Options(module.Options):  # type: ignore[name-defined]
-            def __init__(self, **kwargs: Any) -> None:
-                super().__init__(**kwargs)
-                drop: list[str] = list(getattr(self, "drop_tables"))  # noqa: B009
-                self.drop_tables = [*drop, *_LAYOUT_TABLES]
-                self.layout_features: list[str] = []
-
-        self.Options = Options
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._module, name)
-
-
-@contextlib.contextmanager
-def _lean_pdf_fonts() -> Iterator[None]:
-    """Within the block, matplotlib's PDF backend subsets fonts with :class:`_LeanSubset` (a
-    no-op if :data:`LEAN_PDF_FONTS` is False or the backend has no ``subset`` to wrap)."""
-    from matplotlib.backends import _backend_pdf_ps as pdf_ps
-
-    module = getattr(pdf_ps, "subset", None)
-    if not LEAN_PDF_FONTS or not isinstance(module, types.ModuleType):
-        yield
-        return
-    pdf_ps.subset = _LeanSubset(module)
-    try:
-        yield
-    finally:
-        pdf_ps.subset = module
-
-
 def save(fig, path: Path, vector: Literal["pdf", "svg"] = "pdf") -> list[str]:
     """Write ``path`` (PNG, :data:`PNG_DPI`) and the vector file beside it; close the figure.
 
@@ -358,8 +309,7 @@ def save(fig, path: Path, vector: Literal["pdf", "svg"] = "pdf") -> list[str]:
                 (vec, {"metadata": None if vector == "svg" else {"CreationDate": None}}),
             ):
                 buf = io.BytesIO()
-                with _lean_pdf_fonts() if target.suffix == ".pdf" else contextlib.nullcontext():
-                    fig.savefig(buf, format=target.suffix[1:], **kwargs)
+                fig.savefig(buf, format=target.suffix[1:], **kwargs)
                 drawn.append((target, buf))
                 if FREEZE_LAYOUT and fig.get_layout_engine() is not None:
                     # the vector file keeps the layout the PNG was drawn with: the layout
