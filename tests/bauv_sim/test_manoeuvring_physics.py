@@ -13,7 +13,7 @@ import pytest
 from bauv_sim import frames
 from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.errors import ConfigError, PhysicsError
-from bauv_sim.manoeuvring.physics import ManoeuvringPhysics
+from bauv_sim.manoeuvring.physics import ManoeuvringPhysics, quat_wxyz_scalar
 from bauv_sim.physics_index import SENSOR_SITES
 
 
@@ -163,3 +163,20 @@ def test_bad_commands_and_what_the_model_lacks_are_refused(scene):
     )
     with pytest.raises(ConfigError, match="holds one vehicle; the scene has 2"):
         ManoeuvringPhysics(two, 0.2)
+
+
+def test_scalar_quaternion_is_the_frames_one():
+    """The facade's scalar quaternion equals :mod:`bauv_sim.frames`' (through the rotation
+    matrix and scipy), w >= 0, over random attitudes, near-vertical pitch included."""
+    rng = np.random.default_rng(5)
+    for roll, pitch, head in zip(
+        rng.uniform(-math.pi, math.pi, 200),
+        np.r_[rng.uniform(-1.5, 1.5, 198), 1.5707, -1.5707],
+        rng.uniform(0, 2 * math.pi, 200),
+        strict=True,
+    ):
+        np.testing.assert_allclose(
+            quat_wxyz_scalar(roll, pitch, head),
+            frames.quat_wxyz_from_roll_pitch_heading(roll, pitch, head),
+            atol=1e-12,
+        )
