@@ -253,6 +253,27 @@ class ManoeuvringPhysics:
                     "non-finite state" + (" (injected fault)" if self._fault else "")
                 )
 
+    def advance(self, duration_s: float) -> None:
+        """Advance by whole control ticks, running the tick hook (a sea's
+        :meth:`~bauv_sim.sea.Sea.apply`) at the start of each, as
+        :meth:`bauv_sim.physics.BauvPhysics.advance`.
+
+        Raises:
+            ConfigError: if ``duration_s`` is not a whole number of ticks.
+            PhysicsError: as :meth:`step`.
+        """
+        tick = self.world.tick_s
+        n = round(duration_s / tick)
+        if n < 0 or abs(n * tick - duration_s) > 1e-9 * max(1.0, duration_s):
+            raise ConfigError(
+                f"duration = {duration_s} s: must be a non-negative whole number of "
+                f"control ticks of {tick} s"
+            )
+        for _ in range(n):
+            if self._tick_hook is not None:
+                self._tick_hook(self)
+            self.step()
+
     def inject_fault(self) -> None:
         """Corrupt the state on purpose so that the next :meth:`step` raises
         :class:`~bauv_sim.errors.PhysicsError` (for tests of a mission's error handling)."""
@@ -425,7 +446,8 @@ class ManoeuvringPhysics:
     # the sea
 
     def set_tick_hook(self, hook: Any) -> None:
-        """Kept for :meth:`bauv_sim.sea.Sea.immerse`; a mission's task applies its sea itself."""
+        """What :meth:`advance` runs at the start of every tick (a sea's ``apply``, installed by
+        :meth:`bauv_sim.sea.Sea.immerse`); a mission's task applies its sea itself."""
         self._tick_hook = hook
 
     def current_at_vehicle_world(self, vehicle: str | None = None) -> NDArray[np.float64]:
