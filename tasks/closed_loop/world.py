@@ -472,8 +472,8 @@ def check_world(design: Any, scenario: Any) -> None:
         )
     if world not in getattr(design, "worlds", ("mujoco",)):
         raise ConfigError(
-            f"{what}: the mission's design ({type(design).__name__}) needs the full physics; "
-            "allowed: 'mujoco'"
+            f"{what}: the mission's design ({type(design).__name__}) is flown on the full physics "
+            "only (it does not declare the manoeuvring world in its worlds); allowed: 'mujoco'"
         )
     guidance = getattr(scenario, "guidance", None)
     for i, w in enumerate(getattr(guidance, "waypoints", ())):

@@ -84,6 +84,7 @@ def test_a_physics_failure_is_reported_not_raised():
         ("mission/short", ("--set", "timing.world=gazebo"), "timing.world"),
         ("mission/surfacing", ("--set", M), "no free surface"),
         ("mission/swarm", ("--set", M), "manoeuvring world holds one"),
+        ("mission/trn", ("--set", M), "is flown on the full physics only"),
     ],
 )
 def test_what_the_world_cannot_fly_is_refused_in_one_line(tmp_path, name, args, pattern):
