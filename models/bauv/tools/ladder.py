@@ -9,6 +9,7 @@ Run from the repository root::
 
     python models/bauv/tools/ladder.py                # both batches (16 runs, 2 workers), table
     python models/bauv/tools/ladder.py --reuse        # the table from the batches in --out
+    python models/bauv/tools/ladder.py --energy       # + the motor energy's difference traced
 
 Each batch is the user's command, ``bauv run mission/survey --runs 16 --workers 2 --seed 0
 --set timing.world=<world>`` (its report included), timed by ``benchmarks/harness.py`` (the two
@@ -225,6 +226,107 @@ def ladder_table(out: Path, timing: dict | None, flights: dict | None) -> str:
     return "\n".join(lines)
 
 
+def _straight_legs(out: Path, world: str, runs: range) -> dict[str, float]:
+    """Means over the straight legs (|tail bias command| < 2 deg, 10 s windows) of the first runs
+    of a batch: commanded frequency (Hz), progress through the water (m/s: the norm of the
+    window's mean velocity through water), the log's body-x speed (m/s), and the logged power
+    against the straight-swim table at the commanded frequency (W)."""
+    import pyarrow.parquet as pq
+
+    from bauv_sim.manoeuvring.model import load_coefficients
+
+    c = load_coefficients()
+    acc: dict[str, list[float]] = {"f": [], "progress": [], "u": [], "power": [], "table": []}
+    for r in runs:
+        t = pq.read_table(out / world / "data" / "ticks" / f"run-{r:06d}-bauv.parquet").to_pandas()
+        vw = t[["truth_vel_water_east", "truth_vel_water_north", "truth_vel_water_up"]].to_numpy()
+        h = np.radians(t["truth_rph_deg_heading"].to_numpy())
+        p = np.radians(t["truth_rph_deg_pitch"].to_numpy())
+        u = np.cos(p) * (np.sin(h) * vw[:, 0] + np.cos(h) * vw[:, 1]) + np.sin(p) * vw[:, 2]
+        f = t["cmd_tail_beat_frequency"].to_numpy()
+        straight = np.abs(t["cmd_tail_bias_deg"].to_numpy()) < 2.0
+        k = 50
+        for i in range(0, len(t) - k, k):
+            if straight[i : i + k].all():
+                acc["f"].append(float(f[i : i + k].mean()))
+                acc["progress"].append(float(np.linalg.norm(vw[i : i + k, :2].mean(0))))
+                acc["u"].append(float(u[i : i + k].mean()))
+        acc["power"].append(float(t["motor_power"].mean()))
+        acc["table"].append(float(np.interp(f, c.power_frequency_hz, c.power_w).mean()))
+    return {k: float(np.mean(v)) for k, v in acc.items()}
+
+
+def _swim(world: str, frequency_hz: float, battery_m: float, fins=None) -> float:
+    """Progress speed (m/s) over 50-100 s of a swim at 20 m, 0.2 s ticks (the full model at 4 ms):
+    fins holding depth (``DepthHold``) or replaying ``fins`` (port, starboard commands per tick,
+    rad, 500 each)."""
+    from bauv_sim import manoeuvres
+    from bauv_sim.manoeuvring import model as mm
+    from bauv_sim.manoeuvring import trials
+
+    if world == "manoeuvring":
+        w = trials.start(mm.load_coefficients(), tick_s=0.2)
+        w.command(tail_beat_frequency_hz=frequency_hz, battery_m=battery_m)
+        for k in range(500):
+            if fins is None:
+                a = float(trials.depth_hold(w, 20.0)[0])
+                w.command(fin_port_rad=a, fin_starboard_rad=a)
+            else:
+                w.command(fin_port_rad=fins[0][k], fin_starboard_rad=fins[1][k])
+            w.step()
+            if k == 249:
+                p0, t0 = w.position_world_m[0].copy(), w.time_s
+        return float(np.hypot(*(w.position_world_m[0, :2] - p0[:2])) / (w.time_s - t0))
+    ph = manoeuvres.open_water_scene(speed_m_s=1.0)
+    ph.set_timestep(0.004, 0.2)
+    ph.set_tail_beat_frequency_hz(frequency_hz)
+    ph.set_battery_position_m(battery_m)
+    hold = manoeuvres.DepthHold(20.0)
+    for k in range(500):
+        if fins is None:
+            a = hold.fins_rad(ph)
+            ph.set_lateral_fins_rad(a, a)
+        else:
+            ph.set_lateral_fins_rad(float(fins[0][k]), float(fins[1][k]))
+        ph.advance(0.2)
+        if k == 249:
+            p0, t0 = ph.position_world().copy(), ph.time_s()
+    return float(np.hypot(*(ph.position_world()[:2] - p0[:2])) / (ph.time_s() - t0))
+
+
+def energy_trace(out: Path) -> str:
+    """The motor energy's difference traced (the model README's reading of section 13): power
+    against the straight-swim table, the straight legs' frequency and progress, the trim's and
+    the fins' unsteady motion's effect on the speed of both models."""
+    import pyarrow.parquet as pq
+
+    lines = ["Straight legs of runs 0-7 (10 s windows, |tail bias| < 2 deg):", ""]
+    for w in WORLDS:
+        s = _straight_legs(out, w, range(8))
+        lines.append(
+            f"- {w}: frequency {s['f']:.4f} Hz, progress through water {s['progress']:.4f} m/s, "
+            f"log body-x speed {s['u']:.4f} m/s; mean power {s['power']:.3f} W against the "
+            f"straight-swim table at its commands {s['table']:.3f} W"
+        )
+    t = pq.read_table(out / "manoeuvring" / "data" / "ticks" / "run-000000-bauv.parquet")
+    t = t.to_pandas()
+    straight = np.abs(t["cmd_tail_bias_deg"].to_numpy()) < 2.0
+    fins = tuple(
+        np.radians(t[c].to_numpy()[straight][:500])
+        for c in ("cmd_fin_port_deg", "cmd_fin_starboard_deg")
+    )
+    lines += ["", "Swims at 0.61 Hz, 20 m deep, progress over 50-100 s (m/s):", ""]
+    lines.append("| model | fins hold depth, battery 0 | battery 5 mm | survey fins replayed |")
+    lines.append("|---|---|---|---|")
+    for w in WORLDS:
+        a, b, c = _swim(w, 0.61, 0.0), _swim(w, 0.61, 0.005), _swim(w, 0.61, 0.0, fins)
+        lines.append(
+            f"| {w} | {a:.4f} | {b:.4f} ({100 * (b / a - 1):+.2f} %) | "
+            f"{c:.4f} ({100 * (c / a - 1):+.2f} %) |"
+        )
+    return "\n".join(lines)
+
+
 def write_readme(block: str) -> None:
     """Replace the block between the ``results:ladder-survey`` markers of the model README."""
     text = README.read_text()
@@ -244,6 +346,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--flights", type=int, default=0, help="repeats of the flight alone (0: none)")
     ap.add_argument("--reuse", action="store_true", help="the batches already in --out")
     ap.add_argument("--no-readme", action="store_true", help="print the table only")
+    ap.add_argument(
+        "--energy", action="store_true", help="trace the motor energy's difference (prints)"
+    )
     a = ap.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -259,6 +364,8 @@ def main(argv: list[str] | None = None) -> None:
         flights = json.loads((a.out / "flights.json").read_text())
     block = ladder_table(a.out, timing, flights)
     print(block)
+    if a.energy:
+        print(energy_trace(a.out))
     if not a.no_readme:
         write_readme(block)
         print(f"wrote {README} ({time.perf_counter() - t0:.0f} s)")
