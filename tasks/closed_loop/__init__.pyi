@@ -41,6 +41,8 @@ from .scenario import (
 )
 from .world import (
     build_environment as build_environment,
+    build_physics_of as build_physics_of,
+    check_world as check_world,
     fly as fly,
     MissionWorld as MissionWorld,
     standard_vehicle as standard_vehicle,

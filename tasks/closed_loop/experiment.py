@@ -16,7 +16,7 @@ from tasks.closed_loop.recording import MESH_MAX_SIDE
 from tasks.closed_loop.report import MissionMetrics, report_mission
 from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario
-from tasks.closed_loop.world import WaypointMission, fly
+from tasks.closed_loop.world import WaypointMission, check_world, fly
 from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary
 
 MESH_BYTES_PER_CELL = 600.0
@@ -240,6 +240,7 @@ class MissionExperiment(Experiment):
             )
         check_in_water(scenario)
         check_current_covers(scenario)
+        check_world(self.flight(scenario, 0, 0)[0], scenario)
 
     def memory(self, scenario: MissionScenario, n_runs: int) -> list[MemoryTerm]:
         """Estimated peak memory, bytes: a run of ``timing.max_duration_s`` in the worker that

@@ -204,6 +204,13 @@ class TimingConfig(Config):
         "finer steps",
     )
     max_duration_s: float = Field(2400.0, gt=0, description="the mission is stopped after, s")
+    world: Literal["mujoco", "manoeuvring"] = Field(
+        "mujoco",
+        description="the physics the vehicle flies in: 'mujoco', the full MuJoCo vehicle at "
+        "physics_timestep_s; or 'manoeuvring', the 6-DOF manoeuvring model identified from it "
+        "(bauv_sim.manoeuvring), one step per control tick (physics_timestep_s unused); one "
+        "vehicle, no free surface (models/bauv/README.md, Results 13)",
+    )
 
     @model_validator(mode="after")
     def _check_tick(self) -> TimingConfig:

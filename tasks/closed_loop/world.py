@@ -217,6 +217,9 @@ class WaypointMission:
     """
 
     guidance: Callable[[MissionScenario, SensorRig], P.Guidance] | None = None
+    worlds: tuple[str, ...] = ("mujoco", "manoeuvring")
+    """The physics this design flies in (``timing.world``): both, one vehicle; a design
+    without the attribute flies in ``"mujoco"`` only (:func:`check_world`)."""
 
     def vehicle_names(self, scenario: MissionScenario) -> tuple[str, ...]:
         return ("bauv",)
@@ -441,15 +444,73 @@ class MissionWorld(control.Task):
         return out
 
 
+def world_of(scenario: Any) -> str:
+    """The physics a scenario flies in: its ``timing.world`` (``"mujoco"`` where it has none)."""
+    return getattr(getattr(scenario, "timing", None), "world", "mujoco")
+
+
+def check_world(design: Any, scenario: Any) -> None:
+    """Refuse a world the mission cannot fly in, with one line naming the field, its value and
+    what is allowed: the manoeuvring world (``timing.world = "manoeuvring"``) holds one vehicle
+    and has no free surface, and flies designs that declare it in ``worlds``
+    (:attr:`WaypointMission.worlds`).
+
+    Raises:
+        ConfigError: for a mission the world cannot fly.
+    """
+    from bauv_sim.errors import ConfigError
+
+    world = world_of(scenario)
+    if world == "mujoco":
+        return
+    what = f"timing.world = {world!r}"
+    names = tuple(design.vehicle_names(scenario))
+    if len(names) != 1:
+        raise ConfigError(
+            f"{what}: this mission flies {len(names)} vehicles in one physics and the "
+            "manoeuvring world holds one; allowed: 'mujoco'"
+        )
+    if world not in getattr(design, "worlds", ("mujoco",)):
+        raise ConfigError(
+            f"{what}: the mission's design ({type(design).__name__}) is flown on the full physics "
+            "only (it does not declare the manoeuvring world in its worlds); allowed: 'mujoco'"
+        )
+    guidance = getattr(scenario, "guidance", None)
+    for i, w in enumerate(getattr(guidance, "waypoints", ())):
+        if w.surface:
+            raise ConfigError(
+                f"{what}: guidance.waypoints[{i}].surface = true, and the manoeuvring world has "
+                "no free surface; allowed: 'mujoco', or no surfacing way-points"
+            )
+
+
+def build_physics_of(design: P.MissionDesign, scenario: Any) -> Any:
+    """The physics of one run: the design's scene in MuJoCo, or (``timing.world =
+    "manoeuvring"``) the manoeuvring model behind the same accessors
+    (:class:`bauv_sim.manoeuvring.physics.ManoeuvringPhysics`, reading that scene's sites,
+    transceiver and seabed).
+
+    Raises:
+        ConfigError: a world the mission cannot fly in (:func:`check_world`).
+    """
+    check_world(design, scenario)
+    t = scenario.timing
+    physics = build_physics(
+        design.scene(scenario), control_tick_s=t.control_tick_s, timestep_s=t.physics_timestep_s
+    )
+    if world_of(scenario) == "manoeuvring":
+        from bauv_sim.manoeuvring.physics import ManoeuvringPhysics
+
+        return ManoeuvringPhysics(physics, t.control_tick_s)
+    return physics
+
+
 def build_environment(
     design: P.MissionDesign, scenario: Any, seed: int, run: int
 ) -> control.Environment:
-    """The physics, the world and the dm_control environment of one run."""
-    physics = build_physics(
-        design.scene(scenario),
-        control_tick_s=scenario.timing.control_tick_s,
-        timestep_s=scenario.timing.physics_timestep_s,
-    )
+    """The physics (:func:`build_physics_of`), the world and the dm_control environment of one
+    run."""
+    physics = build_physics_of(design, scenario)
     world = MissionWorld(design, scenario, seed, run)
     return control.Environment(
         physics,

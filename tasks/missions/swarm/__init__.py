@@ -102,6 +102,7 @@ from dataclasses import dataclass
 from bauv_sim import seabed
 from bauv_sim.errors import ConfigError
 from tasks.closed_loop.experiment import BYTES_PER_TICK, MissionExperiment, check_gridded_current
+from tasks.closed_loop.world import check_world
 from tasks.core.registry import MemoryTerm, ReportContext, ReportSummary, register
 from tasks.missions.swarm.design import SwarmMission
 from tasks.missions.swarm.figures import record_swarm, swarm_figure
@@ -206,6 +207,7 @@ class SwarmExperiment(MissionExperiment):
         return SwarmMission(scenario.methods()[0]), scenario
 
     def check(self, scenario: SwarmScenario, n_runs: int) -> None:
+        check_world(self.flight(scenario, 0, 0)[0], scenario)  # several vehicles: full physics
         if scenario.report.record_run >= n_runs:
             raise ConfigError(
                 f"report.record_run = {scenario.report.record_run}: must be < runs = {n_runs}"
