@@ -373,8 +373,9 @@ _MODELS: dict[int, tuple[weakref.ref, NativeHydro]] = {}
 
 
 def prepare(m: mujoco.MjModel, d: mujoco.MjData) -> NativeHydro:
-    """Make a compiled model without the plugin native: armature and residual added mass,
-    zeroed virtual masses and Kutta lifts, the callback installed for it.
+    """Make a compiled model without the plugin native: MuJoCo's fluid model on (``option
+    density`` and ``viscosity`` from the plugin's ``hydro_water``), armature and residual added
+    mass, zeroed virtual masses and Kutta lifts, the callback installed for it.
 
     Args:
         m: the model (``strip_plugin_xml``'s), modified in place.
@@ -392,6 +393,9 @@ def prepare(m: mujoco.MjModel, d: mujoco.MjData) -> NativeHydro:
     prefixes = hydro.native_prefixes(m)
     if m.nuserdata < WATER_SIZE * len(prefixes):
         raise ConfigError(f"nuserdata = {m.nuserdata}: need {WATER_SIZE * len(prefixes)}")
+    # MuJoCo's ellipsoid fluid model is native (Warp runs it): a model file whose plugin applied
+    # it (numeric hydro_water, option density and viscosity 0) gets it back in the option
+    m.opt.density, m.opt.viscosity = hydro.water_properties(m)
     vehicles = [_vehicle_tables(m, p, k) for k, p in enumerate(prefixes)]
     ratio = 0.0
     for v in vehicles:

@@ -38,8 +38,18 @@
 //     the normal (crossflow) force -1/2 rho C_N dA |u_n| u_n of each panel's normal velocity
 //     (translation and rotation);
 //   * the Froude-Krylov force rho V a_water on every displacing body (gravcomp x mass);
-//   * for a vehicle whose water is not MuJoCo's (option wind: the first vehicle's), the change of
-//     MuJoCo's translational drag (blunt, slender, Stokes) of its fluid geoms in its own water.
+//   * MuJoCo's ellipsoid fluid model of every fluid geom of the vehicle (MuJoCo documentation,
+//     "Fluid forces": Stokes, blunt and slender quadratic drag, angular drag, Kutta and Magnus
+//     lift; not its virtual-mass velocity terms, which the added mass above replaces), in the
+//     vehicle's own water, summed per body and applied once per body, when the model gives the
+//     water as numeric "<prefix>hydro_water" (density kg/m^3, viscosity Pa s) with MuJoCo's own
+//     fluid model off (option density and viscosity 0: the model file's default since issue 27;
+//     the step then computes neither MuJoCo's fluid forces nor their velocity derivatives, which
+//     were half of its cost, and these forces are explicit in the step);
+//   * without "<prefix>hydro_water" (MuJoCo's fluid model on, the water is option density and
+//     viscosity), for a vehicle whose water is not MuJoCo's (option wind: the first vehicle's),
+//     the change of MuJoCo's translational drag (blunt, slender, Stokes) of its fluid geoms in its
+//     own water.
 //
 // The water at the vehicle is the plugin's state (7 numbers: w0[3], a[3], t0): w(t) = w0 + a (t -
 // t0), set by the simulator once per control tick (bauv_sim/hydro.py, set_water). The Python
@@ -93,6 +103,9 @@ typedef struct {
   mjtNum* seg_roll;  // per segment: roll damping K (N m s^2)
   int nsegstrip;
   mjtNum* seg_strip; // 8 per strip: segment, x y z (its body frame), a_y a_z C_y C_z
+  int own_fluid;     // 1: the plugin applies the ellipsoid model (numeric "<prefix>hydro_water")
+  mjtNum rho;        // water density, kg/m^3
+  mjtNum mu;         // water dynamic viscosity, Pa s
 } Hydro;
 
 static void hydro_free(Hydro* h) {
@@ -283,6 +296,25 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
   h->dof = m->jnt_dofadr[j];
 
   int size = 0;
+  const mjtNum* water = numeric(m, prefix, "hydro_water", &size);
+  if (water) {
+    if (size != 2 || !(water[0] > 0) || !(water[1] >= 0)) {
+      hydro_free(h);
+      return fail(iname, "numeric '<prefix>hydro_water' must hold density > 0 and viscosity >= 0");
+    }
+    if (m->opt.density != 0 || m->opt.viscosity != 0) {
+      hydro_free(h);
+      return fail(iname,
+                  "numeric '<prefix>hydro_water' makes the plugin apply the ellipsoid fluid "
+                  "model: option density and viscosity must be 0 (MuJoCo's would count twice)");
+    }
+    h->own_fluid = 1;
+    h->rho = water[0];
+    h->mu = water[1];
+  } else {
+    h->rho = m->opt.density;
+    h->mu = m->opt.viscosity;
+  }
   const mjtNum* ma = numeric(m, prefix, "hydro_added_mass", &size);
   if (!ma || size != 36) {
     hydro_free(h);
@@ -410,11 +442,11 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
       h->foil_geom[i] = g;
       h->foil_normal[i] = normal;
       const mjtNum area = mjPI * s[0] * s[3 - normal];
-      h->foil_k[i] = 0.5 * m->opt.density * area * cla[i];
+      h->foil_k[i] = 0.5 * h->rho * area * cla[i];
       if (fd) {
-        h->foil_drag[3 * i] = 0.5 * m->opt.density * area * fd[3 * i];
-        h->foil_drag[3 * i + 1] = 0.5 * m->opt.density * area * fd[3 * i + 1] * cla[i] * cla[i];
-        h->foil_drag[3 * i + 2] = 0.5 * m->opt.density * fd[3 * i + 2];
+        h->foil_drag[3 * i] = 0.5 * h->rho * area * fd[3 * i];
+        h->foil_drag[3 * i + 1] = 0.5 * h->rho * area * fd[3 * i + 1] * cla[i] * cla[i];
+        h->foil_drag[3 * i + 2] = 0.5 * h->rho * fd[3 * i + 2];
       }
       // normal-force panels of the ellipse: NSPAN span stations eta_j = cos(j pi / (NSPAN + 1))
       // with the Gauss-Chebyshev weights of the second kind, which integrate sqrt(1 - eta^2) f(eta)
@@ -513,12 +545,108 @@ static void ellipsoid_drag(mjtNum f[3], const mjtNum u[3], const mjtNum r[3], mj
   f[2] = c * u[2];
 }
 
+// MuJoCo's ellipsoid fluid model of one geom without its virtual-mass terms (MuJoCo documentation,
+// "Fluid forces"; the plugin's added mass replaces them), in the geom's frame: om and u are the
+// geom's angular velocity (rad/s) and its velocity through the water at its centre (m/s), r its
+// semi-axes (m), c its fluidcoef (blunt drag, slender drag, angular drag, Kutta lift, Magnus lift);
+// adds the torque (N m) to t and the force (N) to f:
+//   Stokes drag      -3 pi D mu u and -pi D^3 mu om, D = 2 (r0 + r1 + r2) / 3;
+//   quadratic drag   -rho |u| (C_blunt A_proj + C_slender (A_max - A_proj)) u, A_proj the area
+//                    the ellipsoid shows to u, A_max = pi r_max r_mid;
+//   angular drag     -rho |m| om, m_i = om_i (C_ang I_i + C_slender (I_max - I_i)),
+//                    I_i = 8/15 pi r_i max(r_j, r_k)^4, I_max = 8/15 pi r_mid r_max^4;
+//   Kutta lift       rho C_K cos(a) A_proj ((n x u) x u), n = ((r1 r2)^2 u0, (r2 r0)^2 u1,
+//                    (r0 r1)^2 u2) the (unnormalised) normal of the projected section;
+//   Magnus lift      rho C_M V (om x u), V = 4/3 pi r0 r1 r2.
+static void ellipsoid_model(mjtNum t[3], mjtNum f[3], const mjtNum om[3], const mjtNum u[3],
+                            const mjtNum r[3], const mjtNum c[5], mjtNum rho, mjtNum mu) {
+  const mjtNum lo = fmin(r[0], fmin(r[1], r[2])), hi = fmax(r[0], fmax(r[1], r[2]));
+  const mjtNum mid = r[0] + r[1] + r[2] - lo - hi;
+  const mjtNum a_max = mjPI * hi * mid;
+  const mjtNum speed = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  // squared products of the other two semi-axes: the projection of the ellipsoid along u
+  const mjtNum s0 = (r[1] * r[2]) * (r[1] * r[2]);
+  const mjtNum s1 = (r[2] * r[0]) * (r[2] * r[0]);
+  const mjtNum s2 = (r[0] * r[1]) * (r[0] * r[1]);
+  const mjtNum den = s0 * s0 * u[0] * u[0] + s1 * s1 * u[1] * u[1] + s2 * s2 * u[2] * u[2];
+  const mjtNum num = s0 * u[0] * u[0] + s1 * u[1] * u[1] + s2 * u[2] * u[2];
+  const mjtNum a_proj = mjPI * sqrt(den / fmax(mjMINVAL, num));
+
+  const mjtNum d_eq = 2.0 / 3.0 * (r[0] + r[1] + r[2]);
+  const mjtNum drag_lin =
+      mu * 3.0 * mjPI * d_eq + rho * speed * (a_proj * c[0] + c[1] * (a_max - a_proj));
+  const mjtNum i_max = 8.0 / 15.0 * mjPI * mid * hi * hi * hi * hi;
+  mjtNum mom[3];
+  for (int i = 0; i < 3; i++) {
+    mjtNum o = fmax(r[(i + 1) % 3], r[(i + 2) % 3]);
+    mjtNum ii = 8.0 / 15.0 * mjPI * r[i] * o * o * o * o;
+    mom[i] = om[i] * (c[2] * ii + c[1] * (i_max - ii));
+  }
+  const mjtNum drag_ang = mu * mjPI * d_eq * d_eq * d_eq
+                          + rho * sqrt(mom[0] * mom[0] + mom[1] * mom[1] + mom[2] * mom[2]);
+  for (int i = 0; i < 3; i++) {
+    t[i] -= drag_ang * om[i];
+    f[i] -= drag_lin * u[i];
+  }
+  if (c[3] != 0) {
+    const mjtNum n[3] = {s0 * u[0], s1 * u[1], s2 * u[2]};
+    const mjtNum cos_a = num / fmax(mjMINVAL, speed * den);
+    const mjtNum k = c[3] * rho * cos_a * a_proj;
+    mjtNum circ[3], fk[3];
+    cross3(circ, n, u);
+    for (int i = 0; i < 3; i++) circ[i] *= k;
+    cross3(fk, circ, u);
+    for (int i = 0; i < 3; i++) f[i] += fk[i];
+  }
+  if (c[4] != 0) {
+    const mjtNum k = c[4] * rho * 4.0 / 3.0 * mjPI * r[0] * r[1] * r[2];
+    mjtNum fm[3];
+    cross3(fm, om, u);
+    for (int i = 0; i < 3; i++) f[i] += k * fm[i];
+  }
+}
+
+// the ellipsoid model of every fluid geom of the vehicle in its water w (world, m/s), summed per
+// body and applied once per body at its centre of mass
+static void apply_ellipsoid_model(const mjModel* m, mjData* d, const Hydro* h, const mjtNum w[3],
+                                  mjtNum* qfrc) {
+  mjtNum fb[3] = {0, 0, 0}, tb[3] = {0, 0, 0};
+  for (int i = 0; i < h->nfluid; i++) {
+    const int g = h->fluid_geom[i];
+    const int b = m->geom_bodyid[g];
+    const mjtNum* fl = m->geom_fluid + mjNFLUID * g;
+    const mjtNum* Rg = d->geom_xmat + 9 * g;
+    mjtNum vel[6], wl[3], u[3], semi[3], t[3] = {0, 0, 0}, f[3] = {0, 0, 0};
+    mj_objectVelocity(m, d, mjOBJ_GEOM, g, vel, 1);  // (omega, v) at the geom centre, its frame
+    mju_mulMatTVec3(wl, Rg, w);
+    u[0] = vel[3] - wl[0];
+    u[1] = vel[4] - wl[1];
+    u[2] = vel[5] - wl[2];
+    semi_axes(semi, m, g);
+    ellipsoid_model(t, f, vel, u, semi, fl + 1, h->rho, h->mu);
+    mjtNum fw[3], tw[3], arm[3], ta[3];
+    mju_mulMatVec3(fw, Rg, f);
+    mju_mulMatVec3(tw, Rg, t);
+    for (int k = 0; k < 3; k++) arm[k] = d->geom_xpos[3 * g + k] - d->xipos[3 * b + k];
+    cross3(ta, arm, fw);
+    for (int k = 0; k < 3; k++) {
+      fb[k] += fl[0] * fw[k];
+      tb[k] += fl[0] * (tw[k] + ta[k]);
+    }
+    // the body's last fluid geom (the list is in geom order, a body's geoms are contiguous)
+    if (i + 1 == h->nfluid || m->geom_bodyid[h->fluid_geom[i + 1]] != b) {
+      mj_applyFT(m, d, fb, tb, d->xipos + 3 * b, b, qfrc);
+      for (int k = 0; k < 3; k++) fb[k] = tb[k] = 0;
+    }
+  }
+}
+
 static void hydro_compute(const mjModel* m, mjData* d, int instance, int capability_bit) {
   Hydro* h = (Hydro*)d->plugin_data[instance];
   if (!h) return;
   zero_model_terms(m, h);  // again after mj_setConst, which recomputes the virtual masses
   const mjtNum* st = d->plugin_state + m->plugin_stateadr[instance];
-  const mjtNum rho = m->opt.density;
+  const mjtNum rho = h->rho;
   mjtNum dt_w = d->time - st[6];
   mjtNum w[3] = {st[0] + st[3] * dt_w, st[1] + st[4] * dt_w, st[2] + st[5] * dt_w};
   const mjtNum* aw = st + 3;
@@ -746,7 +874,12 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     mj_applyFT(m, d, fg, zero, pt, m->geom_bodyid[g], qfrc);
   }
 
-  // MuJoCo's drag saw option wind: the change in this vehicle's own water
+  // the ellipsoid model in this vehicle's own water, or (MuJoCo's fluid model on: its drag saw
+  // option wind) the change of its drag in this vehicle's own water
+  if (h->own_fluid) {
+    apply_ellipsoid_model(m, d, h, w, qfrc);
+    return;
+  }
   const mjtNum* wind = m->opt.wind;
   if (h->ndrag && (w[0] != wind[0] || w[1] != wind[1] || w[2] != wind[2])) {
     for (int i = 0; i < h->ndrag; i++) {
@@ -763,8 +896,8 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       }
       mjtNum semi[3];
       semi_axes(semi, m, g);
-      ellipsoid_drag(fo, uo, semi, fc[1], fc[2], rho, m->opt.viscosity);
-      ellipsoid_drag(fr, ur, semi, fc[1], fc[2], rho, m->opt.viscosity);
+      ellipsoid_drag(fo, uo, semi, fc[1], fc[2], rho, h->mu);
+      ellipsoid_drag(fr, ur, semi, fc[1], fc[2], rho, h->mu);
       for (int k = 0; k < 3; k++) df[k] = fo[k] - fr[k];
       mju_mulMatVec3(fg, Rg, df);
       mj_applyFT(m, d, fg, zero, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
