@@ -56,9 +56,12 @@ from numpy.typing import NDArray
 from bauv_sim import hydro
 from bauv_sim.errors import ConfigError
 
-FORMULATIONS = ("plugin", "native")
+FORMULATIONS = ("plugin", "native", "mujoco-fluid")
 """The hydrodynamics a scene can be built with: the engine plugin ``bauv.hydro`` (the reference)
-or the native parameters plus one passive callback (this module)."""
+or the native parameters plus one passive callback (this module), or the plugin with MuJoCo's own
+fluid model doing the ellipsoid forces (the model as before issue 27: the water in ``option
+density`` and ``viscosity``, no ``hydro_water``; the same forces, with MuJoCo's velocity
+derivatives of them in implicitfast, at twice the cost of a step), for validation."""
 
 WATER_SIZE = hydro.WATER_STATE_SIZE
 """Numbers of one vehicle's water in ``MjData.userdata``: w0 (3), a (3), t0."""

@@ -7,9 +7,9 @@ The missions' scene (``bauv_sim.build.build_physics``, the missions' step
 * **plugin fluid model** (the model file since issue 27): MuJoCo's fluid model off (``option
   density`` and ``viscosity`` 0), the plugin ``bauv.hydro`` applies the same ellipsoid forces once
   per body (numeric ``hydro_water``), explicit in the step;
-* **MuJoCo fluid model** (the model as before): the same vehicle file with the water back in the
-  option and without ``hydro_water``, so that MuJoCo computes ``qfrc_fluid`` per geom and its
-  velocity derivatives for implicitfast.
+* **MuJoCo fluid model** (the model as before, ``build_physics(hydrodynamics="mujoco-fluid")``):
+  the water back in the option and no ``hydro_water``, so that MuJoCo computes ``qfrc_fluid`` per
+  geom and its velocity derivatives for implicitfast.
 
 Both vehicles apply the same forces (``tests/bauv_sim/test_hydro_fluid.py``: to 1e-9). MuJoCo's
 stage timers of each are printed too (their own overhead included).
@@ -50,21 +50,8 @@ STAGES = [
 
 def _physics(mujoco_fluid: bool):
     """The missions' scene cruising, with the fluid model in the plugin or in MuJoCo."""
-    original = build._vehicle
-
-    def vehicle(name: str):
-        v = original(name)
-        if mujoco_fluid:
-            rho, mu = (float(x) for x in v.find("numeric", "hydro_water").data)
-            v.find("numeric", "hydro_water").remove()
-            v.option.density, v.option.viscosity = rho, mu
-        return v
-
-    build._vehicle = vehicle
-    try:
-        p = build.build_physics(control_tick_s=0.2, timestep_s=PHYSICS_TIMESTEP_S)
-    finally:
-        build._vehicle = original
+    kind = "mujoco-fluid" if mujoco_fluid else "plugin"
+    p = build.build_physics(control_tick_s=0.2, timestep_s=PHYSICS_TIMESTEP_S, hydrodynamics=kind)
     m, d = p.model.ptr, p.data.ptr
     assert hydro.plugin_fluid_model(m) != mujoco_fluid
     assert (m.opt.density > 0) == mujoco_fluid

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from bauv_sim import hydro
+from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.hull import MODEL_DIR, SEAWATER_DENSITY_KG_M3, SEAWATER_VISCOSITY_PA_S
 
 SCENE = MODEL_DIR / "scene.xml"
@@ -90,3 +91,28 @@ def test_water_with_mujoco_fluid_model_on_is_refused():
     spec.option.density = SEAWATER_DENSITY_KG_M3
     with pytest.raises(ValueError, match="option density and viscosity must be 0"):
         spec.compile()
+
+
+def test_built_two_vehicle_scene_equals_mujoco_fluid_formulation():
+    """A built scene of two vehicles (prefixed elements), each in its own water, MuJoCo's wind the
+    first one's: the plugin's ellipsoid forces equal MuJoCo's (``hydrodynamics="mujoco-fluid"``,
+    the model as before) on both vehicles to 1e-9."""
+    cfg = SceneConfig(
+        vehicles=[VehicleSpec(name="a", speed_m_s=1.0), VehicleSpec(name="b", east_m=20.0)]
+    )
+    phys = {k: build_physics(cfg, hydrodynamics=k) for k in ("plugin", "mujoco-fluid")}
+    new, old = phys["plugin"].model.ptr, phys["mujoco-fluid"].model.ptr
+    assert hydro.plugin_fluid_model(new) and not hydro.plugin_fluid_model(old)
+    rng = np.random.default_rng(5)
+    waters = {"a/": rng.normal(0.0, 0.3, 3), "b/": rng.normal(0.0, 0.3, 3)}
+    v = rng.normal(0.0, 0.5, new.nv)
+    for p in phys.values():
+        m, d = p.model.ptr, p.data.ptr
+        d.qvel[:] = v
+        for prefix, w in waters.items():
+            hydro.set_water(m, d, hydro.plugin_instances(m)[prefix], w)
+        m.opt.wind[:] = waters["a/"]
+        mujoco.mj_forward(m, d)
+    dn, do = phys["plugin"].data.ptr, phys["mujoco-fluid"].data.ptr
+    assert np.abs(do.qfrc_fluid).max() > 0.5
+    np.testing.assert_allclose(dn.qfrc_passive, do.qfrc_passive, rtol=0, atol=1e-9)
