@@ -106,6 +106,11 @@ typedef struct {
   int own_fluid;     // 1: the plugin applies the ellipsoid model (numeric "<prefix>hydro_water")
   mjtNum rho;        // water density, kg/m^3
   mjtNum mu;         // water dynamic viscosity, Pa s
+  int nbody;         // the model's bodies (sizes of the wrench accumulator)
+  mjtNum* acc;       // per weld body: force (3, N, world) and moment about its xipos (3, N m)
+  char* acc_on;      // per weld body: holds a wrench of this evaluation
+  int* acc_list;     // the weld bodies holding one, in the order they were first touched
+  int nacc;
 } Hydro;
 
 static void hydro_free(Hydro* h) {
@@ -123,6 +128,9 @@ static void hydro_free(Hydro* h) {
   free(h->seg_body);
   free(h->seg_roll);
   free(h->seg_strip);
+  free(h->acc);
+  free(h->acc_on);
+  free(h->acc_list);
   free(h);
 }
 
@@ -156,6 +164,10 @@ static Hydro* hydro_copy(const Hydro* s) {
   h->seg_body = dup_int(s->seg_body, s->nseg);
   h->seg_roll = dup_num(s->seg_roll, s->nseg);
   h->seg_strip = dup_num(s->seg_strip, 8 * s->nsegstrip);
+  h->acc = (mjtNum*)calloc(6 * (s->nbody + 1), sizeof(mjtNum));
+  h->acc_on = (char*)calloc(s->nbody + 1, 1);
+  h->acc_list = (int*)calloc(s->nbody + 1, sizeof(int));
+  h->nacc = 0;
   return h;
 }
 
@@ -294,6 +306,10 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
   }
   h->free_body = fb;
   h->dof = m->jnt_dofadr[j];
+  h->nbody = m->nbody;
+  h->acc = (mjtNum*)calloc(6 * (m->nbody + 1), sizeof(mjtNum));
+  h->acc_on = (char*)calloc(m->nbody + 1, 1);
+  h->acc_list = (int*)calloc(m->nbody + 1, sizeof(int));
 
   int size = 0;
   const mjtNum* water = numeric(m, prefix, "hydro_water", &size);
@@ -545,6 +561,37 @@ static void ellipsoid_drag(mjtNum f[3], const mjtNum u[3], const mjtNum r[3], mj
   f[2] = c * u[2];
 }
 
+// the wrenches of one evaluation, summed per weld body (a body without joints moves with its
+// parent: the same Jacobian at any point) and applied once per weld body at the end, which saves
+// most of the mj_applyFT calls (a Jacobian each): add force f (N, world) and moment t (N m,
+// world) acting at point p (m, world) on body b
+static void add_wrench(Hydro* h, const mjModel* m, const mjData* d, int b, const mjtNum f[3],
+                       const mjtNum t[3], const mjtNum p[3]) {
+  const int w = m->body_weldid[b];
+  mjtNum* a = h->acc + 6 * w;
+  if (!h->acc_on[w]) {
+    h->acc_on[w] = 1;
+    h->acc_list[h->nacc++] = w;
+    for (int k = 0; k < 6; k++) a[k] = 0;
+  }
+  mjtNum arm[3], ta[3];
+  for (int k = 0; k < 3; k++) arm[k] = p[k] - d->xipos[3 * w + k];
+  cross3(ta, arm, f);
+  for (int k = 0; k < 3; k++) {
+    a[k] += f[k];
+    a[3 + k] += t[k] + ta[k];
+  }
+}
+
+static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) {
+  for (int i = 0; i < h->nacc; i++) {
+    const int w = h->acc_list[i];
+    mj_applyFT(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    h->acc_on[w] = 0;
+  }
+  h->nacc = 0;
+}
+
 // MuJoCo's ellipsoid fluid model of one geom without its virtual-mass terms (MuJoCo documentation,
 // "Fluid forces"; the plugin's added mass replaces them), in the geom's frame: om and u are the
 // geom's angular velocity (rad/s) and its velocity through the water at its centre (m/s), r its
@@ -606,14 +653,11 @@ static void ellipsoid_model(mjtNum t[3], mjtNum f[3], const mjtNum om[3], const 
   }
 }
 
-// the ellipsoid model of every fluid geom of the vehicle in its water w (world, m/s), summed per
-// body and applied once per body at its centre of mass
-static void apply_ellipsoid_model(const mjModel* m, mjData* d, const Hydro* h, const mjtNum w[3],
-                                  mjtNum* qfrc) {
-  mjtNum fb[3] = {0, 0, 0}, tb[3] = {0, 0, 0};
+// the ellipsoid model of every fluid geom of the vehicle in its water w (world, m/s), into the
+// per-body wrenches
+static void ellipsoid_forces(const mjModel* m, const mjData* d, Hydro* h, const mjtNum w[3]) {
   for (int i = 0; i < h->nfluid; i++) {
     const int g = h->fluid_geom[i];
-    const int b = m->geom_bodyid[g];
     const mjtNum* fl = m->geom_fluid + mjNFLUID * g;
     const mjtNum* Rg = d->geom_xmat + 9 * g;
     mjtNum vel[6], wl[3], u[3], semi[3], t[3] = {0, 0, 0}, f[3] = {0, 0, 0};
@@ -624,20 +668,14 @@ static void apply_ellipsoid_model(const mjModel* m, mjData* d, const Hydro* h, c
     u[2] = vel[5] - wl[2];
     semi_axes(semi, m, g);
     ellipsoid_model(t, f, vel, u, semi, fl + 1, h->rho, h->mu);
-    mjtNum fw[3], tw[3], arm[3], ta[3];
+    mjtNum fw[3], tw[3];
     mju_mulMatVec3(fw, Rg, f);
     mju_mulMatVec3(tw, Rg, t);
-    for (int k = 0; k < 3; k++) arm[k] = d->geom_xpos[3 * g + k] - d->xipos[3 * b + k];
-    cross3(ta, arm, fw);
     for (int k = 0; k < 3; k++) {
-      fb[k] += fl[0] * fw[k];
-      tb[k] += fl[0] * (tw[k] + ta[k]);
+      fw[k] *= fl[0];  // the geom's interaction coefficient (1)
+      tw[k] *= fl[0];
     }
-    // the body's last fluid geom (the list is in geom order, a body's geoms are contiguous)
-    if (i + 1 == h->nfluid || m->geom_bodyid[h->fluid_geom[i + 1]] != b) {
-      mj_applyFT(m, d, fb, tb, d->xipos + 3 * b, b, qfrc);
-      for (int k = 0; k < 3; k++) fb[k] = tb[k] = 0;
-    }
+    add_wrench(h, m, d, m->geom_bodyid[g], fw, tw, d->geom_xpos + 3 * g);
   }
 }
 
@@ -771,7 +809,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       int b = h->fk_body[i];
       mjtNum mb = m->body_gravcomp[b] * m->body_mass[b];
       mjtNum fb[3] = {mb * aw[0], mb * aw[1], mb * aw[2]};
-      mj_applyFT(m, d, fb, zero, d->xipos + 3 * b, b, qfrc);
+      add_wrench(h, m, d, b, fb, zero, d->xipos + 3 * b);
     }
   }
 
@@ -807,7 +845,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     mjtNum fw2[3], tw2[3];
     mju_mulMatVec3(fw2, Rb, fs);
     mju_mulMatVec3(tw2, Rb, ts);
-    mj_applyFT(m, d, fw2, tw2, d->xpos + 3 * b, b, qfrc);
+    add_wrench(h, m, d, b, fw2, tw2, d->xpos + 3 * b);
   }
 
   // plates: thin-plate drag (profile, induced, normal) and lift in the chord-normal plane
@@ -860,7 +898,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       mjtNum fw2[3], tw2[3];
       mju_mulMatVec3(fw2, Rg, fp);
       mju_mulMatVec3(tw2, Rg, tp);
-      mj_applyFT(m, d, fw2, tw2, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
+      add_wrench(h, m, d, m->geom_bodyid[g], fw2, tw2, d->geom_xpos + 3 * g);
     }
     if (sp <= 0) continue;
     mjtNum k = h->foil_k[i] * uc * un / sp;
@@ -871,13 +909,14 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     // at the quarter chord: half the chord semi-axis ahead of the centre (along the flow's x)
     mjtNum off = (uc > 0 ? 0.5 : -0.5) * m->geom_size[3 * g];
     for (int k = 0; k < 3; k++) pt[k] = d->geom_xpos[3 * g + k] + off * Rg[3 * k];
-    mj_applyFT(m, d, fg, zero, pt, m->geom_bodyid[g], qfrc);
+    add_wrench(h, m, d, m->geom_bodyid[g], fg, zero, pt);
   }
 
   // the ellipsoid model in this vehicle's own water, or (MuJoCo's fluid model on: its drag saw
   // option wind) the change of its drag in this vehicle's own water
   if (h->own_fluid) {
-    apply_ellipsoid_model(m, d, h, w, qfrc);
+    ellipsoid_forces(m, d, h, w);
+    apply_wrenches(h, m, d, qfrc);
     return;
   }
   const mjtNum* wind = m->opt.wind;
@@ -900,9 +939,10 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       ellipsoid_drag(fr, ur, semi, fc[1], fc[2], rho, h->mu);
       for (int k = 0; k < 3; k++) df[k] = fo[k] - fr[k];
       mju_mulMatVec3(fg, Rg, df);
-      mj_applyFT(m, d, fg, zero, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
+      add_wrench(h, m, d, m->geom_bodyid[g], fg, zero, d->geom_xpos + 3 * g);
     }
   }
+  apply_wrenches(h, m, d, qfrc);
 }
 
 mjPLUGIN_LIB_INIT(bauv_hydro) {
