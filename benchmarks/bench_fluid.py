@@ -11,7 +11,9 @@ The missions' scene (``bauv_sim.build.build_physics``, the missions' step
   the water back in the option and no ``hydro_water``, so that MuJoCo computes ``qfrc_fluid`` per
   geom and its velocity derivatives for implicitfast.
 
-Both vehicles apply the same forces (``tests/bauv_sim/test_hydro_fluid.py``: to 1e-9). MuJoCo's
+Both vehicles apply the same forces (``tests/bauv_sim/test_hydro_fluid.py``: to 1e-9), and the
+plugin's other terms are this checkout's in both, so the ratio is that of the fluid model alone;
+the whole command against an older checkout is ``bench_step_profile.py --part compare``. MuJoCo's
 stage timers of each are printed too (their own overhead included).
 
 Usage::
