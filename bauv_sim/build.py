@@ -207,6 +207,18 @@ def initial_velocities(config: SceneConfig) -> dict[str, np.ndarray]:
     return out
 
 
+def _mujoco_fluid_model(root: mjcf.RootElement) -> None:
+    """Give the vehicles' water (numeric ``hydro_water``) back to MuJoCo's fluid model (``option
+    density`` and ``viscosity``) and take it from the plugin: the model as before issue 27."""
+    water = [n for n in root.find_all("numeric") if n.name == "hydro_water"]
+    if not water:
+        raise ConfigError("hydrodynamics = 'mujoco-fluid': the vehicles have no 'hydro_water'")
+    rho, mu = (float(x) for x in water[0].data)
+    for n in water:
+        n.remove()
+    root.option.density, root.option.viscosity = rho, mu
+
+
 def build_physics(
     config: SceneConfig | None = None,
     control_tick_s: float = DEFAULT_CONTROL_TICK_S,
@@ -220,9 +232,11 @@ def build_physics(
         control_tick_s: control tick, s (an integer multiple of the timestep).
         timestep_s: physics timestep, s; None keeps the model file's 2 ms
             (:meth:`BauvPhysics.set_timestep`).
-        hydrodynamics: ``"plugin"`` (the engine plugin ``bauv.hydro``) or ``"native"`` (MuJoCo's
-            own parameters plus one passive callback, :mod:`bauv_sim.hydro_native`); None: the
-            current :func:`bauv_sim.hydro_native.formulation` (``"plugin"`` by default).
+        hydrodynamics: ``"plugin"`` (the engine plugin ``bauv.hydro``), ``"native"`` (MuJoCo's
+            own parameters plus one passive callback, :mod:`bauv_sim.hydro_native`) or
+            ``"mujoco-fluid"`` (the plugin with MuJoCo's fluid model doing the ellipsoid forces,
+            as before issue 27: for validation); None: the current
+            :func:`bauv_sim.hydro_native.formulation` (``"plugin"`` by default).
 
     Returns:
         The physics with every vehicle at its initial pose and speed, all commands zero.
@@ -230,6 +244,8 @@ def build_physics(
     cfg = config or SceneConfig()
     root, _ = build_scene(cfg)
     kind = hydro_native.check_formulation(hydrodynamics or hydro_native.current_formulation())
+    if kind == "mujoco-fluid":
+        _mujoco_fluid_model(root)
     with hydro_native.compiling():
         if kind == "native":
             xml = hydro_native.strip_plugin_xml(root.to_xml_string(), len(cfg.vehicles))

@@ -10,7 +10,10 @@ beyond plain MuJoCo:
   mass in the mass matrix, the hull's Munk coupling with separation, crossflow drag (the hull's
   strips, and the flapping peduncle's in its own frame), slender-body and thin-plate lift, the
   thin fins' plate drag (profile, induced, normal force), water acceleration, each vehicle's own
-  water. :func:`load_plugin` registers it (at import), :func:`load_model` compiles a model file
+  water, and (the model file's numeric ``hydro_water``: :func:`water_properties`) MuJoCo's
+  ellipsoid fluid model of the fluid geoms, with MuJoCo's own off (``option density`` and
+  ``viscosity`` 0: it and its velocity derivatives were half of a step, issue 27).
+  :func:`load_plugin` registers it (at import), :func:`load_model` compiles a model file
   with it (the one line a plain-MuJoCo user needs), :func:`set_water` and :func:`water` hold each
   vehicle's water in the plugin's state, :func:`plugin_force` reads what it applied.
 * **Water velocity**: ``option wind`` is the water velocity of MuJoCo's fluid forces;
@@ -76,6 +79,37 @@ def added_mass_removed(model: mujoco.MjModel) -> bool:
     """Whether no fluid geom has MuJoCo virtual mass left (the plugin zeroes them when it starts on
     a data, and again at every step)."""
     return not np.any(model.geom_fluid[fluid_geoms(model), FLUID_SLICE_VIRTUAL] != 0.0)
+
+
+def water_properties(model: mujoco.MjModel) -> tuple[float, float]:
+    """Density (kg/m^3) and dynamic viscosity (Pa s) of the water of a compiled model.
+
+    With a numeric ``<prefix>hydro_water`` (density, viscosity) the plugin applies MuJoCo's
+    ellipsoid fluid model itself and ``option density`` and ``viscosity`` are 0 (the model file's
+    default since issue 27); without one they are MuJoCo's ``option density`` and ``viscosity``.
+    The first vehicle's values are returned (every vehicle of a scene is a copy of one file).
+
+    Args:
+        model: compiled model.
+
+    Returns:
+        ``(density_kg_m3, viscosity_pa_s)``.
+    """
+    for i in range(model.nnumeric):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_NUMERIC, i) or ""
+        if name.endswith("hydro_water") and int(model.numeric_size[i]) == 2:
+            adr = int(model.numeric_adr[i])
+            return float(model.numeric_data[adr]), float(model.numeric_data[adr + 1])
+    return float(model.opt.density), float(model.opt.viscosity)
+
+
+def plugin_fluid_model(model: mujoco.MjModel) -> bool:
+    """Whether the plugin applies the ellipsoid fluid model (a numeric ``<prefix>hydro_water``),
+    so that MuJoCo's own is off and ``qfrc_fluid`` is zero."""
+    return any(
+        (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_NUMERIC, i) or "").endswith("hydro_water")
+        for i in range(model.nnumeric)
+    )
 
 
 # --------------------------------------------------------------------------------------------

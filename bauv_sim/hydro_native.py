@@ -56,9 +56,12 @@ from numpy.typing import NDArray
 from bauv_sim import hydro
 from bauv_sim.errors import ConfigError
 
-FORMULATIONS = ("plugin", "native")
+FORMULATIONS = ("plugin", "native", "mujoco-fluid")
 """The hydrodynamics a scene can be built with: the engine plugin ``bauv.hydro`` (the reference)
-or the native parameters plus one passive callback (this module)."""
+or the native parameters plus one passive callback (this module), or the plugin with MuJoCo's own
+fluid model doing the ellipsoid forces (the model as before issue 27: the water in ``option
+density`` and ``viscosity``, no ``hydro_water``; the same forces, with MuJoCo's velocity
+derivatives of them in implicitfast, at twice the cost of a step), for validation."""
 
 WATER_SIZE = hydro.WATER_STATE_SIZE
 """Numbers of one vehicle's water in ``MjData.userdata``: w0 (3), a (3), t0."""
@@ -373,8 +376,9 @@ _MODELS: dict[int, tuple[weakref.ref, NativeHydro]] = {}
 
 
 def prepare(m: mujoco.MjModel, d: mujoco.MjData) -> NativeHydro:
-    """Make a compiled model without the plugin native: armature and residual added mass,
-    zeroed virtual masses and Kutta lifts, the callback installed for it.
+    """Make a compiled model without the plugin native: MuJoCo's fluid model on (``option
+    density`` and ``viscosity`` from the plugin's ``hydro_water``), armature and residual added
+    mass, zeroed virtual masses and Kutta lifts, the callback installed for it.
 
     Args:
         m: the model (``strip_plugin_xml``'s), modified in place.
@@ -392,6 +396,9 @@ def prepare(m: mujoco.MjModel, d: mujoco.MjData) -> NativeHydro:
     prefixes = hydro.native_prefixes(m)
     if m.nuserdata < WATER_SIZE * len(prefixes):
         raise ConfigError(f"nuserdata = {m.nuserdata}: need {WATER_SIZE * len(prefixes)}")
+    # MuJoCo's ellipsoid fluid model is native (Warp runs it): a model file whose plugin applied
+    # it (numeric hydro_water, option density and viscosity 0) gets it back in the option
+    m.opt.density, m.opt.viscosity = hydro.water_properties(m)
     vehicles = [_vehicle_tables(m, p, k) for k, p in enumerate(prefixes)]
     ratio = 0.0
     for v in vehicles:

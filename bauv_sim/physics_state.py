@@ -285,8 +285,9 @@ class VehicleState(VehicleTables):
         return float(self.model.ptr.body_mass[self._v(vehicle).bodies].sum())
 
     def water_density_kg_m3(self) -> float:
-        """Density of the water (MuJoCo ``option density``), kg/m^3."""
-        return float(self.model.ptr.opt.density)
+        """Density of the water (the plugin's ``hydro_water``, or MuJoCo's ``option density``
+        in a model without it: :func:`bauv_sim.hydro.water_properties`), kg/m^3."""
+        return hydro.water_properties(self.model.ptr)[0]
 
     def gravity_m_s2(self) -> float:
         """Magnitude of gravity, m/s^2."""

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bauv_sim.errors import ConfigError, GeometryError
-from bauv_sim.hydro import subtree_bodies
+from bauv_sim.hydro import subtree_bodies, water_properties
 
 
 @dataclass(frozen=True)
@@ -78,7 +78,7 @@ def solve_ballast(
     if min(hb, fb) < 0:
         raise ConfigError(f"body {hull_body!r} or {float_body!r}: not in the model")
     R, p0 = data.xmat[hb].reshape(3, 3), data.xpos[hb]
-    m_disp = float(model.opt.density) * displaced_volume_m3
+    m_disp = water_properties(model)[0] * displaced_volume_m3
     total, moment = 0.0, np.zeros(3)
     for b in subtree_bodies(model, hb):
         if b == fb or model.body_gravcomp[b] == 0.0:

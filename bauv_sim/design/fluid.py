@@ -639,13 +639,13 @@ def added_mass_matrix(
     """
     import mujoco
 
-    from bauv_sim.hydro import fluid_geoms, rigid_added_mass, subtree_bodies
+    from bauv_sim.hydro import fluid_geoms, rigid_added_mass, subtree_bodies, water_properties
 
     spec = mujoco.MjSpec.from_file(str(path or hull.MODEL_DIR / "bauv.xml"))
     for p in list(spec.plugins):
         spec.delete(p)
     m = spec.compile()
-    rho = float(m.opt.density)
+    rho = water_properties(m)[0]
     vm = rho * np.array(m.geom_fluid[:, 6:12])
     d = mujoco.MjData(m)
     mujoco.mj_kinematics(m, d)

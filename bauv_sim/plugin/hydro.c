@@ -38,8 +38,18 @@
 //     the normal (crossflow) force -1/2 rho C_N dA |u_n| u_n of each panel's normal velocity
 //     (translation and rotation);
 //   * the Froude-Krylov force rho V a_water on every displacing body (gravcomp x mass);
-//   * for a vehicle whose water is not MuJoCo's (option wind: the first vehicle's), the change of
-//     MuJoCo's translational drag (blunt, slender, Stokes) of its fluid geoms in its own water.
+//   * MuJoCo's ellipsoid fluid model of every fluid geom of the vehicle (MuJoCo documentation,
+//     "Fluid forces": Stokes, blunt and slender quadratic drag, angular drag, Kutta and Magnus
+//     lift; not its virtual-mass velocity terms, which the added mass above replaces), in the
+//     vehicle's own water, summed per body and applied once per body, when the model gives the
+//     water as numeric "<prefix>hydro_water" (density kg/m^3, viscosity Pa s) with MuJoCo's own
+//     fluid model off (option density and viscosity 0: the model file's default since issue 27;
+//     the step then computes neither MuJoCo's fluid forces nor their velocity derivatives, which
+//     were half of its cost, and these forces are explicit in the step);
+//   * without "<prefix>hydro_water" (MuJoCo's fluid model on, the water is option density and
+//     viscosity), for a vehicle whose water is not MuJoCo's (option wind: the first vehicle's),
+//     the change of MuJoCo's translational drag (blunt, slender, Stokes) of its fluid geoms in its
+//     own water.
 //
 // The water at the vehicle is the plugin's state (7 numbers: w0[3], a[3], t0): w(t) = w0 + a (t -
 // t0), set by the simulator once per control tick (bauv_sim/hydro.py, set_water). The Python
@@ -93,6 +103,14 @@ typedef struct {
   mjtNum* seg_roll;  // per segment: roll damping K (N m s^2)
   int nsegstrip;
   mjtNum* seg_strip; // 8 per strip: segment, x y z (its body frame), a_y a_z C_y C_z
+  int own_fluid;     // 1: the plugin applies the ellipsoid model (numeric "<prefix>hydro_water")
+  mjtNum rho;        // water density, kg/m^3
+  mjtNum mu;         // water dynamic viscosity, Pa s
+  int nbody;         // the model's bodies (sizes of the wrench accumulator)
+  mjtNum* acc;       // per weld body: force (3, N, world) and moment about its xipos (3, N m)
+  char* acc_on;      // per weld body: holds a wrench of this evaluation
+  int* acc_list;     // the weld bodies holding one, in the order they were first touched
+  int nacc;
 } Hydro;
 
 static void hydro_free(Hydro* h) {
@@ -110,6 +128,9 @@ static void hydro_free(Hydro* h) {
   free(h->seg_body);
   free(h->seg_roll);
   free(h->seg_strip);
+  free(h->acc);
+  free(h->acc_on);
+  free(h->acc_list);
   free(h);
 }
 
@@ -143,6 +164,10 @@ static Hydro* hydro_copy(const Hydro* s) {
   h->seg_body = dup_int(s->seg_body, s->nseg);
   h->seg_roll = dup_num(s->seg_roll, s->nseg);
   h->seg_strip = dup_num(s->seg_strip, 8 * s->nsegstrip);
+  h->acc = (mjtNum*)calloc(6 * (s->nbody + 1), sizeof(mjtNum));
+  h->acc_on = (char*)calloc(s->nbody + 1, 1);
+  h->acc_list = (int*)calloc(s->nbody + 1, sizeof(int));
+  h->nacc = 0;
   return h;
 }
 
@@ -281,8 +306,31 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
   }
   h->free_body = fb;
   h->dof = m->jnt_dofadr[j];
+  h->nbody = m->nbody;
+  h->acc = (mjtNum*)calloc(6 * (m->nbody + 1), sizeof(mjtNum));
+  h->acc_on = (char*)calloc(m->nbody + 1, 1);
+  h->acc_list = (int*)calloc(m->nbody + 1, sizeof(int));
 
   int size = 0;
+  const mjtNum* water = numeric(m, prefix, "hydro_water", &size);
+  if (water) {
+    if (size != 2 || !(water[0] > 0) || !(water[1] >= 0)) {
+      hydro_free(h);
+      return fail(iname, "numeric '<prefix>hydro_water' must hold density > 0 and viscosity >= 0");
+    }
+    if (m->opt.density != 0 || m->opt.viscosity != 0) {
+      hydro_free(h);
+      return fail(iname,
+                  "numeric '<prefix>hydro_water' makes the plugin apply the ellipsoid fluid "
+                  "model: option density and viscosity must be 0 (MuJoCo's would count twice)");
+    }
+    h->own_fluid = 1;
+    h->rho = water[0];
+    h->mu = water[1];
+  } else {
+    h->rho = m->opt.density;
+    h->mu = m->opt.viscosity;
+  }
   const mjtNum* ma = numeric(m, prefix, "hydro_added_mass", &size);
   if (!ma || size != 36) {
     hydro_free(h);
@@ -410,11 +458,11 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
       h->foil_geom[i] = g;
       h->foil_normal[i] = normal;
       const mjtNum area = mjPI * s[0] * s[3 - normal];
-      h->foil_k[i] = 0.5 * m->opt.density * area * cla[i];
+      h->foil_k[i] = 0.5 * h->rho * area * cla[i];
       if (fd) {
-        h->foil_drag[3 * i] = 0.5 * m->opt.density * area * fd[3 * i];
-        h->foil_drag[3 * i + 1] = 0.5 * m->opt.density * area * fd[3 * i + 1] * cla[i] * cla[i];
-        h->foil_drag[3 * i + 2] = 0.5 * m->opt.density * fd[3 * i + 2];
+        h->foil_drag[3 * i] = 0.5 * h->rho * area * fd[3 * i];
+        h->foil_drag[3 * i + 1] = 0.5 * h->rho * area * fd[3 * i + 1] * cla[i] * cla[i];
+        h->foil_drag[3 * i + 2] = 0.5 * h->rho * fd[3 * i + 2];
       }
       // normal-force panels of the ellipse: NSPAN span stations eta_j = cos(j pi / (NSPAN + 1))
       // with the Gauss-Chebyshev weights of the second kind, which integrate sqrt(1 - eta^2) f(eta)
@@ -513,12 +561,130 @@ static void ellipsoid_drag(mjtNum f[3], const mjtNum u[3], const mjtNum r[3], mj
   f[2] = c * u[2];
 }
 
+// the wrenches of one evaluation, summed per weld body (a body without joints moves with its
+// parent: the same Jacobian at any point) and applied once per weld body at the end, which saves
+// most of the mj_applyFT calls (a Jacobian each): add force f (N, world) and moment t (N m,
+// world) acting at point p (m, world) on body b
+static void add_wrench(Hydro* h, const mjModel* m, const mjData* d, int b, const mjtNum f[3],
+                       const mjtNum t[3], const mjtNum p[3]) {
+  const int w = m->body_weldid[b];
+  mjtNum* a = h->acc + 6 * w;
+  if (!h->acc_on[w]) {
+    h->acc_on[w] = 1;
+    h->acc_list[h->nacc++] = w;
+    for (int k = 0; k < 6; k++) a[k] = 0;
+  }
+  mjtNum arm[3], ta[3];
+  for (int k = 0; k < 3; k++) arm[k] = p[k] - d->xipos[3 * w + k];
+  cross3(ta, arm, f);
+  for (int k = 0; k < 3; k++) {
+    a[k] += f[k];
+    a[3 + k] += t[k] + ta[k];
+  }
+}
+
+static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) {
+  for (int i = 0; i < h->nacc; i++) {
+    const int w = h->acc_list[i];
+    mj_applyFT(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    h->acc_on[w] = 0;
+  }
+  h->nacc = 0;
+}
+
+// MuJoCo's ellipsoid fluid model of one geom without its virtual-mass terms (MuJoCo documentation,
+// "Fluid forces"; the plugin's added mass replaces them), in the geom's frame: om and u are the
+// geom's angular velocity (rad/s) and its velocity through the water at its centre (m/s), r its
+// semi-axes (m), c its fluidcoef (blunt drag, slender drag, angular drag, Kutta lift, Magnus lift);
+// adds the torque (N m) to t and the force (N) to f:
+//   Stokes drag      -3 pi D mu u and -pi D^3 mu om, D = 2 (r0 + r1 + r2) / 3;
+//   quadratic drag   -rho |u| (C_blunt A_proj + C_slender (A_max - A_proj)) u, A_proj the area
+//                    the ellipsoid shows to u, A_max = pi r_max r_mid;
+//   angular drag     -rho |m| om, m_i = om_i (C_ang I_i + C_slender (I_max - I_i)),
+//                    I_i = 8/15 pi r_i max(r_j, r_k)^4, I_max = 8/15 pi r_mid r_max^4;
+//   Kutta lift       rho C_K cos(a) A_proj ((n x u) x u), n = ((r1 r2)^2 u0, (r2 r0)^2 u1,
+//                    (r0 r1)^2 u2) the (unnormalised) normal of the projected section;
+//   Magnus lift      rho C_M V (om x u), V = 4/3 pi r0 r1 r2.
+static void ellipsoid_model(mjtNum t[3], mjtNum f[3], const mjtNum om[3], const mjtNum u[3],
+                            const mjtNum r[3], const mjtNum c[5], mjtNum rho, mjtNum mu) {
+  const mjtNum lo = fmin(r[0], fmin(r[1], r[2])), hi = fmax(r[0], fmax(r[1], r[2]));
+  const mjtNum mid = r[0] + r[1] + r[2] - lo - hi;
+  const mjtNum a_max = mjPI * hi * mid;
+  const mjtNum speed = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  // squared products of the other two semi-axes: the projection of the ellipsoid along u
+  const mjtNum s0 = (r[1] * r[2]) * (r[1] * r[2]);
+  const mjtNum s1 = (r[2] * r[0]) * (r[2] * r[0]);
+  const mjtNum s2 = (r[0] * r[1]) * (r[0] * r[1]);
+  const mjtNum den = s0 * s0 * u[0] * u[0] + s1 * s1 * u[1] * u[1] + s2 * s2 * u[2] * u[2];
+  const mjtNum num = s0 * u[0] * u[0] + s1 * u[1] * u[1] + s2 * u[2] * u[2];
+  const mjtNum a_proj = mjPI * sqrt(den / fmax(mjMINVAL, num));
+
+  const mjtNum d_eq = 2.0 / 3.0 * (r[0] + r[1] + r[2]);
+  const mjtNum drag_lin =
+      mu * 3.0 * mjPI * d_eq + rho * speed * (a_proj * c[0] + c[1] * (a_max - a_proj));
+  const mjtNum i_max = 8.0 / 15.0 * mjPI * mid * hi * hi * hi * hi;
+  mjtNum mom[3];
+  for (int i = 0; i < 3; i++) {
+    mjtNum o = fmax(r[(i + 1) % 3], r[(i + 2) % 3]);
+    mjtNum ii = 8.0 / 15.0 * mjPI * r[i] * o * o * o * o;
+    mom[i] = om[i] * (c[2] * ii + c[1] * (i_max - ii));
+  }
+  const mjtNum drag_ang = mu * mjPI * d_eq * d_eq * d_eq
+                          + rho * sqrt(mom[0] * mom[0] + mom[1] * mom[1] + mom[2] * mom[2]);
+  for (int i = 0; i < 3; i++) {
+    t[i] -= drag_ang * om[i];
+    f[i] -= drag_lin * u[i];
+  }
+  if (c[3] != 0) {
+    const mjtNum n[3] = {s0 * u[0], s1 * u[1], s2 * u[2]};
+    const mjtNum cos_a = num / fmax(mjMINVAL, speed * den);
+    const mjtNum k = c[3] * rho * cos_a * a_proj;
+    mjtNum circ[3], fk[3];
+    cross3(circ, n, u);
+    for (int i = 0; i < 3; i++) circ[i] *= k;
+    cross3(fk, circ, u);
+    for (int i = 0; i < 3; i++) f[i] += fk[i];
+  }
+  if (c[4] != 0) {
+    const mjtNum k = c[4] * rho * 4.0 / 3.0 * mjPI * r[0] * r[1] * r[2];
+    mjtNum fm[3];
+    cross3(fm, om, u);
+    for (int i = 0; i < 3; i++) f[i] += k * fm[i];
+  }
+}
+
+// the ellipsoid model of every fluid geom of the vehicle in its water w (world, m/s), into the
+// per-body wrenches
+static void ellipsoid_forces(const mjModel* m, const mjData* d, Hydro* h, const mjtNum w[3]) {
+  for (int i = 0; i < h->nfluid; i++) {
+    const int g = h->fluid_geom[i];
+    const mjtNum* fl = m->geom_fluid + mjNFLUID * g;
+    const mjtNum* Rg = d->geom_xmat + 9 * g;
+    mjtNum vel[6], wl[3], u[3], semi[3], t[3] = {0, 0, 0}, f[3] = {0, 0, 0};
+    mj_objectVelocity(m, d, mjOBJ_GEOM, g, vel, 1);  // (omega, v) at the geom centre, its frame
+    mju_mulMatTVec3(wl, Rg, w);
+    u[0] = vel[3] - wl[0];
+    u[1] = vel[4] - wl[1];
+    u[2] = vel[5] - wl[2];
+    semi_axes(semi, m, g);
+    ellipsoid_model(t, f, vel, u, semi, fl + 1, h->rho, h->mu);
+    mjtNum fw[3], tw[3];
+    mju_mulMatVec3(fw, Rg, f);
+    mju_mulMatVec3(tw, Rg, t);
+    for (int k = 0; k < 3; k++) {
+      fw[k] *= fl[0];  // the geom's interaction coefficient (1)
+      tw[k] *= fl[0];
+    }
+    add_wrench(h, m, d, m->geom_bodyid[g], fw, tw, d->geom_xpos + 3 * g);
+  }
+}
+
 static void hydro_compute(const mjModel* m, mjData* d, int instance, int capability_bit) {
   Hydro* h = (Hydro*)d->plugin_data[instance];
   if (!h) return;
   zero_model_terms(m, h);  // again after mj_setConst, which recomputes the virtual masses
   const mjtNum* st = d->plugin_state + m->plugin_stateadr[instance];
-  const mjtNum rho = m->opt.density;
+  const mjtNum rho = h->rho;
   mjtNum dt_w = d->time - st[6];
   mjtNum w[3] = {st[0] + st[3] * dt_w, st[1] + st[4] * dt_w, st[2] + st[5] * dt_w};
   const mjtNum* aw = st + 3;
@@ -643,7 +809,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       int b = h->fk_body[i];
       mjtNum mb = m->body_gravcomp[b] * m->body_mass[b];
       mjtNum fb[3] = {mb * aw[0], mb * aw[1], mb * aw[2]};
-      mj_applyFT(m, d, fb, zero, d->xipos + 3 * b, b, qfrc);
+      add_wrench(h, m, d, b, fb, zero, d->xipos + 3 * b);
     }
   }
 
@@ -679,7 +845,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     mjtNum fw2[3], tw2[3];
     mju_mulMatVec3(fw2, Rb, fs);
     mju_mulMatVec3(tw2, Rb, ts);
-    mj_applyFT(m, d, fw2, tw2, d->xpos + 3 * b, b, qfrc);
+    add_wrench(h, m, d, b, fw2, tw2, d->xpos + 3 * b);
   }
 
   // plates: thin-plate drag (profile, induced, normal) and lift in the chord-normal plane
@@ -732,7 +898,7 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       mjtNum fw2[3], tw2[3];
       mju_mulMatVec3(fw2, Rg, fp);
       mju_mulMatVec3(tw2, Rg, tp);
-      mj_applyFT(m, d, fw2, tw2, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
+      add_wrench(h, m, d, m->geom_bodyid[g], fw2, tw2, d->geom_xpos + 3 * g);
     }
     if (sp <= 0) continue;
     mjtNum k = h->foil_k[i] * uc * un / sp;
@@ -743,10 +909,16 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
     // at the quarter chord: half the chord semi-axis ahead of the centre (along the flow's x)
     mjtNum off = (uc > 0 ? 0.5 : -0.5) * m->geom_size[3 * g];
     for (int k = 0; k < 3; k++) pt[k] = d->geom_xpos[3 * g + k] + off * Rg[3 * k];
-    mj_applyFT(m, d, fg, zero, pt, m->geom_bodyid[g], qfrc);
+    add_wrench(h, m, d, m->geom_bodyid[g], fg, zero, pt);
   }
 
-  // MuJoCo's drag saw option wind: the change in this vehicle's own water
+  // the ellipsoid model in this vehicle's own water, or (MuJoCo's fluid model on: its drag saw
+  // option wind) the change of its drag in this vehicle's own water
+  if (h->own_fluid) {
+    ellipsoid_forces(m, d, h, w);
+    apply_wrenches(h, m, d, qfrc);
+    return;
+  }
   const mjtNum* wind = m->opt.wind;
   if (h->ndrag && (w[0] != wind[0] || w[1] != wind[1] || w[2] != wind[2])) {
     for (int i = 0; i < h->ndrag; i++) {
@@ -763,13 +935,14 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
       }
       mjtNum semi[3];
       semi_axes(semi, m, g);
-      ellipsoid_drag(fo, uo, semi, fc[1], fc[2], rho, m->opt.viscosity);
-      ellipsoid_drag(fr, ur, semi, fc[1], fc[2], rho, m->opt.viscosity);
+      ellipsoid_drag(fo, uo, semi, fc[1], fc[2], rho, h->mu);
+      ellipsoid_drag(fr, ur, semi, fc[1], fc[2], rho, h->mu);
       for (int k = 0; k < 3; k++) df[k] = fo[k] - fr[k];
       mju_mulMatVec3(fg, Rg, df);
-      mj_applyFT(m, d, fg, zero, d->geom_xpos + 3 * g, m->geom_bodyid[g], qfrc);
+      add_wrench(h, m, d, m->geom_bodyid[g], fg, zero, d->geom_xpos + 3 * g);
     }
   }
+  apply_wrenches(h, m, d, qfrc);
 }
 
 mjPLUGIN_LIB_INIT(bauv_hydro) {

@@ -75,7 +75,7 @@ def reference(
     """
     inst = hydro.plugin_instances(m)[prefix]
     w, a_w = hydro.water(m, d, inst)
-    rho = float(m.opt.density)
+    rho, mu = hydro.water_properties(m)
     fb = free_body(m, prefix)
     dof = int(m.jnt_dofadr[m.body_jntadr[fb]])
     R = d.xmat[fb].reshape(3, 3)
@@ -204,7 +204,14 @@ def reference(
         f = Rg @ (mag * direction)
         quarter = d.geom_xpos[g] + np.sign(uc) * 0.5 * size[0] * Rg[:, 0]  # quarter chord
         mujoco.mj_applyFT(m, d, f, np.zeros(3), quarter, int(m.geom_bodyid[g]), qfrc)
-    # MuJoCo's drag in this vehicle's water instead of option wind
+    # the model file's hydro_water: the plugin applies MuJoCo's ellipsoid model (without virtual
+    # masses) in this vehicle's water; else MuJoCo's drag in this vehicle's water instead of
+    # option wind
+    if hydro.plugin_fluid_model(m):
+        for g in hydro.fluid_geoms(m):
+            if int(m.geom_bodyid[g]) in set(bodies.tolist()):
+                _ellipsoid_model(m, d, int(g), w, rho, mu, qfrc)
+        return qfrc, M_add
     wind = np.array(m.opt.wind)
     if not np.array_equal(w, wind):
         for g in hydro.fluid_geoms(m):
@@ -218,10 +225,52 @@ def reference(
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, vel, 1)
             Rg = d.geom_xmat[g].reshape(3, 3)
             semi = np.array(size)[None]
-            args = (semi, np.array([cb]), np.array([cs]), rho, float(m.opt.viscosity))
+            args = (semi, np.array([cb]), np.array([cs]), rho, mu)
             f_own = hydro.ellipsoid_drag((vel[3:] - Rg.T @ w)[None], *args)[0]
             f_ref = hydro.ellipsoid_drag((vel[3:] - Rg.T @ wind)[None], *args)[0]
             mujoco.mj_applyFT(
                 m, d, Rg @ (f_own - f_ref), np.zeros(3), d.geom_xpos[g], int(m.geom_bodyid[g]), qfrc
             )
     return qfrc, M_add
+
+
+def _ellipsoid_model(
+    m: mujoco.MjModel,
+    d: mujoco.MjData,
+    g: int,
+    w: NDArray[np.float64],
+    rho: float,
+    mu: float,
+    qfrc: NDArray[np.float64],
+) -> None:
+    """MuJoCo's ellipsoid model of one geom without virtual mass (MuJoCo documentation, "Fluid
+    forces"), one term per line, applied at the geom's centre."""
+    fl = m.geom_fluid[g]
+    blunt, slender, angular, kutta, magnus = fl[1:6]
+    r = np.array(m.geom_size[g], dtype=float)
+    if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE:
+        r = np.full(3, r[0])
+    vel = np.zeros(6)
+    mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, vel, 1)
+    Rg = d.geom_xmat[g].reshape(3, 3)
+    om, u = vel[:3], vel[3:] - Rg.T @ w
+    # translation: blunt and slender quadratic drag and Stokes (hydro.ellipsoid_drag)
+    f = hydro.ellipsoid_drag(u[None], r[None], np.array([blunt]), np.array([slender]), rho, mu)[0]
+    # rotation: Stokes -pi D^3 mu om and -rho |M| om, M_i = om_i (C_ang I_i + C_sl (I_max - I_i))
+    d_eq = 2.0 / 3.0 * r.sum()
+    srt = np.sort(r)
+    i_max = 8.0 / 15.0 * np.pi * srt[1] * srt[2] ** 4
+    ii = np.array([8.0 / 15.0 * np.pi * r[i] * max(r[(i + 1) % 3], r[(i + 2) % 3]) ** 4
+                   for i in range(3)])  # fmt: skip
+    mom = om * (angular * ii + slender * (i_max - ii))
+    t = -(mu * np.pi * d_eq**3 + rho * np.linalg.norm(mom)) * om
+    # lifts: Kutta (rho C_K cos a A_proj (n x u) x u) and Magnus (rho C_M V om x u)
+    speed = np.linalg.norm(u)
+    sq = np.array([(r[1] * r[2]) ** 2, (r[2] * r[0]) ** 2, (r[0] * r[1]) ** 2])
+    if kutta != 0 and speed > 0:
+        den, num = float(np.sum(sq**2 * u**2)), float(np.sum(sq * u**2))
+        a_proj = np.pi * np.sqrt(den / num)
+        f = f + kutta * rho * num / (speed * den) * a_proj * np.cross(np.cross(sq * u, u), u)
+    f = f + magnus * rho * 4.0 / 3.0 * np.pi * np.prod(r) * np.cross(om, u)
+    mujoco.mj_applyFT(m, d, fl[0] * (Rg @ f), fl[0] * (Rg @ t), d.geom_xpos[g],
+                      int(m.geom_bodyid[g]), qfrc)  # fmt: skip

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from bauv_sim import hull, hydro
-from bauv_sim.hull import MODEL_DIR, SEAWATER_DENSITY_KG_M3
+from bauv_sim.hull import MODEL_DIR, SEAWATER_DENSITY_KG_M3, SEAWATER_VISCOSITY_PA_S
 from bauv_sim.physics import BauvPhysics
 
 VEHICLE = MODEL_DIR / "bauv.xml"
@@ -96,7 +96,7 @@ def _mujoco_drag_by_hand(m: mujoco.MjModel, u: float) -> float:
     """MuJoCo's ellipsoid-model drag for a geom moving along its x axis: rho u^2 (C_b A_proj +
     C_s (A_max - A_proj)) + Stokes, from engine_passive.c, summed over the geoms (all aligned with
     the body x axis at zero joint angles)."""
-    rho, mu = m.opt.density, m.opt.viscosity
+    rho, mu = SEAWATER_DENSITY_KG_M3, SEAWATER_VISCOSITY_PA_S  # the model's water (hydro_water)
     total = 0.0
     for g in hydro.fluid_geoms(m):
         a, b, c = m.geom_size[g]
@@ -121,7 +121,7 @@ def _plate_drag_by_hand(m: mujoco.MjModel, u: float) -> float:
     total = 0.0
     for name, (c_d0, _, _) in zip(names.rstrip("\x00").split(), coefs.reshape(-1, 3), strict=True):
         a, b, c = m.geom_size[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)]
-        total += 0.5 * m.opt.density * math.pi * a * max(b, c) * c_d0 * u * u
+        total += 0.5 * SEAWATER_DENSITY_KG_M3 * math.pi * a * max(b, c) * c_d0 * u * u
     return total
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from hydro_body import _open_water
 from numpy.typing import NDArray
 
-from bauv_sim import build, hull, hydro, manoeuvres
+from bauv_sim import build, hull, hydro, hydro_native, manoeuvres
 from bauv_sim.design import fluid
 from bauv_sim.physics import BauvPhysics
 from bauv_sim.sea import Sea
@@ -220,7 +220,10 @@ def check_fins(alphas_deg: tuple[float, ...] = (1.0, 5.0, 20.0)) -> FinDragResul
             coefs[geom][a] = (plate, old, a_proj / shadow)
     tow_rows = {}
     for r in (0.0, 0.05, 0.1, 0.2):
-        ph = _open_water()
+        # MuJoCo's share is its qfrc_fluid: the model with MuJoCo's fluid model on (the same
+        # forces; since issue 27 the model file has the plugin apply them)
+        with hydro_native.formulation("mujoco-fluid"):
+            ph = _open_water()
         ph.set_pose([0.0, 0.0, -20.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], None, [0.0, 0.0, r])
         total = -float(ph.fluid_force_world()[1])
         free = np.arange(6)
