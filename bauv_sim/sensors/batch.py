@@ -9,8 +9,9 @@ a true value of zero (bias, random walk, noise, outlier) and its dropouts. The s
 order and so the draws are those of the process sampled one at a time (a run's numbers do not
 depend on the block length, the batch or the worker); where the bias is zero and there is no
 random walk and no outliers the measurements are those of :meth:`ErrorProcess.apply` bit for
-bit, otherwise to rounding (the terms are added in another order). Error models with a reference angle (sector
-bias, deviation: terms that depend on the truth) are applied sample by sample.
+bit, otherwise to rounding (the terms are added in another order). Error models with a
+reference angle (sector bias, deviation: terms that depend on the truth) are applied sample by
+sample.
 
 :class:`BatchUsbl` does the same for :class:`~bauv_sim.sensors.usbl.Usbl`'s three components and
 its fix dropouts, then folds the direction past the zenith as the device does.
