@@ -162,12 +162,10 @@ class BatchNavigator:
         update), the algebra of their ``predict_one`` over a batch: the numbers of the scalar
         navigator's :class:`nav.ekf.SingleRunEKF` (and of :class:`nav.ekf.BatchEKF` to
         rounding, tested)."""
-        inc, Q = self.motion.increment_and_Q(u, dt)
-        x_new = x.copy()
-        x_new[:, :3] += inc
+        _, Q = self.motion.increment_and_Q(u, dt)
+        x_new = self.ekf.motion.f(x, u, dt)
         P_new = P.copy()
         if self.dim == 5:
-            x_new[:, :2] += dt * x[:, 3:5]
             P_new[:, :2, :] += dt * P_new[:, 3:5, :]  # F P
             P_new[:, :, :2] += dt * P_new[:, :, 3:5]  # (F P) F^T
             P_new[:, 3, 3] += self._q_current * dt
