@@ -66,7 +66,7 @@ class PrefetchedErrors:
             v, ok = self.process.apply(true_value[:, None], np.array([t_s]), ref)
             return v[:, 0], ok[:, 0]
         if self._e is None or self._j >= self.block:
-            t = t_s + self.period_s * np.arange(self.block)
+            t = np.asarray(t_s + self.period_s * np.arange(self.block), dtype=np.float64)
             self._e, self._ok = self.process.apply(np.zeros((len(true_value), self.block)), t)
             self._j = 0
         assert self._ok is not None

@@ -90,7 +90,7 @@ class BatchNavigator:
         self._k = 0  # slot of the present
         self._x[0, :, :3] = x0
         self._P[0, :, :3, :3] = P0
-        if d == 5:
+        if current_sigma0_m_s is not None:
             self._P[0, :, 3, 3] = self._P[0, :, 4, 4] = current_sigma0_m_s**2
         self._t[0] = float(t0_s)
         self._count = 1
@@ -287,4 +287,4 @@ def _take_model(model: MeasurementModel, rows: NDArray[np.intp], n: int) -> Meas
         v = getattr(model, f.name)
         if isinstance(v, np.ndarray) and v.ndim == 2 and v.shape[0] == n:
             changes[f.name] = v[rows]
-    return dataclasses.replace(model, **changes) if changes else model  # type: ignore[type-var]
+    return dataclasses.replace(model, **changes) if changes else model

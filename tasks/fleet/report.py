@@ -105,10 +105,10 @@ def report_fleet(name: str, summary: str, ctx: ReportContext) -> ReportSummary:
     export.write_parquet(ctx.out_dir / "data" / "runs" / "runs.parquet", cols, meta)
     files.insert(0, "data/runs/runs.parquet")
     pts = scn.waypoints()
-    k = len(pts)
-    wp_index = np.tile(np.arange(k, dtype=np.int32), run.size)
+    n_wp = len(pts)
+    wp_index = np.tile(np.arange(n_wp, dtype=np.int32), run.size)
     wcols = {
-        "run": export.Column(np.repeat(run.astype(np.int32), k), "index", "run index"),
+        "run": export.Column(np.repeat(run.astype(np.int32), n_wp), "index", "run index"),
         "waypoint": export.Column(wp_index, "index", "way-point index"),
         "reached_by_estimate": export.Column(R.ravel(), "bool", "leg ended reached (estimate)"),
         "closest_true_distance": export.Column(C.ravel(), "m", "closest true horizontal approach"),

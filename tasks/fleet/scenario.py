@@ -121,7 +121,7 @@ class FleetRunner(Config):
     """Batching (fixed by the scenario, never by the worker count)."""
 
     block_size: int = Field(
-        125,
+        500,
         ge=1,
         le=10_000,
         description="runs per block (vectorised together; the blocks go to the workers)",

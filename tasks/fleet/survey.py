@@ -13,9 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bauv_sim.config import Config
 from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary, register
 from tasks.fleet.report import FleetMetrics, report_fleet
-from tasks.fleet.run import TRACK_COLUMNS, fly_block
+from tasks.fleet.run import TRACK_COLUMNS, FleetBlock, fly_block
 from tasks.fleet.scenario import FleetScenario
 
 __all__ = ["FleetExperiment"]
@@ -31,10 +32,12 @@ class FleetExperiment(Experiment):
     scenario_type = FleetScenario
     metrics_type = FleetMetrics
 
-    def block_size(self, scenario: FleetScenario) -> int:
+    def block_size(self, scenario: Config) -> int:
+        assert isinstance(scenario, FleetScenario)
         return scenario.runner.block_size
 
-    def memory(self, scenario: FleetScenario, n_runs: int) -> list[MemoryTerm]:
+    def memory(self, scenario: Config, n_runs: int) -> list[MemoryTerm]:
+        assert isinstance(scenario, FleetScenario)
         t = scenario.timing
         records = int(t.max_duration_s / t.record_every_s) + 1
         b = min(scenario.runner.block_size, n_runs)
@@ -49,7 +52,8 @@ class FleetExperiment(Experiment):
             )
         ]
 
-    def run_block(self, scenario: FleetScenario, seed: int, runs: tuple[int, ...]):
+    def run_block(self, scenario: Config, seed: int, runs: tuple[int, ...]) -> FleetBlock:
+        assert isinstance(scenario, FleetScenario)
         return fly_block(scenario, seed, runs)
 
     def report(self, ctx: ReportContext) -> ReportSummary:
