@@ -37,6 +37,7 @@ def _pair(n, current, gate, lockout, rng):
     return batch, scalars
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "current, gate, lockout", [(True, 0.999, 3), (False, 0.999, None), (True, None, None)]
 )

@@ -17,6 +17,7 @@ def _scn(*extra):
     return load_config(FleetScenario, {}, (), [*SHORT, *extra])
 
 
+@pytest.mark.slow
 def test_a_batch_of_n_equals_n_batches_of_one():
     scn = _scn()
     runs = (0, 5, 9)
@@ -38,6 +39,7 @@ def _values(path):
     return {k: c.values for k, c in read_parquet(path)[0].items()}
 
 
+@pytest.mark.slow
 def test_the_command_writes_its_run_data_the_same_for_any_worker_count(tmp_path, capsys):
     sets = [a for s in [*SHORT, "runner.block_size=2"] for a in ("--set", s)]
     tables = {}
@@ -67,6 +69,7 @@ def test_the_command_writes_its_run_data_the_same_for_any_worker_count(tmp_path,
     assert np.isfinite(r1["ekf_mean_error_m"]).all()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "arg, pattern",
     [
