@@ -2,7 +2,8 @@
 error, range), the way-point table's aggregates, ``metrics.json``, and the run data as Parquet:
 ``data/runs/runs.parquet`` (one row per run: :data:`tasks.fleet.run.OUTCOMES`),
 ``data/waypoints/waypoints.parquet`` (one row per run and way-point) and, per block,
-``data/tracks/block-NNNNNN.parquet`` (the decimated tracks, one row per run and record time),
+``data/tracks/block-NNNNNN.parquet`` (the decimated tracks, one row per run and record time,
+angles in degrees as all run data),
 written as the blocks are read so that the report holds one block's tracks at a time.
 """
 
@@ -93,7 +94,8 @@ def report_fleet(name: str, summary: str, ctx: ReportContext) -> ReportSummary:
         failed += list(b.failed)
         if b.tracks:
             rel = f"data/tracks/block-{i:06d}.parquet"
-            export.write_parquet(ctx.out_dir / rel, _track_columns(b), {**meta, "block": str(i)})
+            cols = export.data_columns(_track_columns(b))  # angles in degrees (heading_deg)
+            export.write_parquet(ctx.out_dir / rel, cols, {**meta, "block": str(i)})
             files.append(rel)
     run = np.concatenate(runs)
     out = {k: np.concatenate(v) for k, v in outcomes.items()}
