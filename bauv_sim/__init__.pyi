@@ -9,6 +9,11 @@ from .autopilot import (
     AutopilotConfig as AutopilotConfig,
     Measured as Measured,
 )
+from .autopilot_batch import (
+    BatchAutopilot as BatchAutopilot,
+    BatchCommand as BatchCommand,
+    BatchMeasured as BatchMeasured,
+)
 from .build import (
     BeaconSpec as BeaconSpec,
     build_physics as build_physics,

@@ -72,6 +72,10 @@ from .guidance import (
     Waypoint as Waypoint,
     WaypointGuidance as WaypointGuidance,
 )
+from .guidance_batch import (
+    BatchWaypointGuidance as BatchWaypointGuidance,
+    horizontal_sigma_batch_m as horizontal_sigma_batch_m,
+)
 from .metrics import (
     distance_3d as distance_3d,
     first_exceedance as first_exceedance,
@@ -92,6 +96,7 @@ from .models import (
     UsblMeasurement as UsblMeasurement,
 )
 from .navigator import (
+    BatchNavigator as BatchNavigator,
     BroadcastRangeNavigator as BroadcastRangeNavigator,
     Estimate as Estimate,
     FollowerOptions as FollowerOptions,

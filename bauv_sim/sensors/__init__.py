@@ -2,6 +2,7 @@
 :mod:`bauv_sim.sensors.errors` and one random stream per device and error term."""
 
 from bauv_sim.sensors.base import SensorSamples, check_multiple, periodic_indices
+from bauv_sim.sensors.batch import BatchUsbl, PrefetchedErrors
 from bauv_sim.sensors.compass import Compass, CompassConfig
 from bauv_sim.sensors.doa import Doa, DoaConfig, DoaSamples
 from bauv_sim.sensors.dvl import (
@@ -34,6 +35,7 @@ from bauv_sim.sensors.usbl import Usbl, UsblConfig
 
 __all__ = [
     "AngleErrorConfig",
+    "BatchUsbl",
     "Compass",
     "CompassConfig",
     "Doa",
@@ -59,6 +61,7 @@ __all__ = [
     "Odometry",
     "OdometryConfig",
     "PlaneSeabed",
+    "PrefetchedErrors",
     "Pressure",
     "PressureConfig",
     "RaySeabed",

@@ -132,6 +132,30 @@ class Usbl:
         t_arr = tr.t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
         return SensorSamples(tr.t_s, meas, produced, t_arr)
 
+    def measure(
+        self, t_s: NDArray[np.float64], transponder_world_m: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.float64]]:
+        """Fixes of given transponder positions through straight rays (what :meth:`sample`
+        gives without a medium, from positions instead of a truth record): the online form for
+        a batch of vehicles that are not in a :class:`~bauv_sim.truth.Truth`.
+
+        Args:
+            t_s: times of the replies, shape (k,), s.
+            transponder_world_m: the transponders, shape (n, k, 3), m, world.
+
+        Returns:
+            ``(values (n, k, 3): r m, alpha rad in [0, 2 pi), beta rad; produced (n, k);
+            t_arrival_s (n, k))``, as :meth:`sample`.
+        """
+        if self.propagation is not None:
+            raise ValueError("Usbl.measure: straight rays only (no propagation medium)")
+        true_rae = range_azimuth_elevation(transponder_world_m - self.transceiver_world_m)
+        meas, produced = self._measure(t_s, true_rae, np.ones(true_rae.shape[:2], dtype=bool))
+        produced &= true_rae[..., 0] <= self.cfg.max_range_m
+        produced &= true_rae[..., 2] >= np.radians(self.cfg.min_elevation_deg)
+        t_arr = t_s + true_rae[..., 0] / self.cfg.sound_speed_m_s + self.cfg.processing_delay_s
+        return meas, produced, t_arr
+
     def _measure(
         self, t_s: NDArray[np.float64], rae: NDArray[np.float64], produced: NDArray[np.bool_]
     ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:

@@ -6,9 +6,12 @@
   fuses);
 * :mod:`nav.navigator.follower`: :class:`BroadcastRangeNavigator`, a follower navigating on ranges
   to another vehicle's broadcast position with seed 003's GA fixes or the range EKF
-  (:mod:`nav.relative`), and its typed :class:`FollowerReport`.
+  (:mod:`nav.relative`), and its typed :class:`FollowerReport`;
+* :mod:`nav.navigator.batch`: :class:`BatchNavigator`, the online navigator of many runs that
+  tick together (late fixes per run, gate, lock-out, DR), vectorised.
 """
 
+from nav.navigator.batch import BatchNavigator
 from nav.navigator.follower import (
     BroadcastRangeNavigator,
     FollowerOptions,
@@ -19,6 +22,7 @@ from nav.navigator.follower import (
 from nav.navigator.online import Estimate, Measurement, Navigator, OnlineNavigator
 
 __all__ = [
+    "BatchNavigator",
     "BroadcastRangeNavigator",
     "Estimate",
     "FollowerOptions",

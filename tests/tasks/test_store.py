@@ -646,6 +646,18 @@ def test_trn_mission_block():
     same(roundtrip(block).value, block)
 
 
+def test_fleet_block():
+    block = _block(
+        "fleet/survey",
+        (0, 1),
+        "timing.max_duration_s=20",
+        "plan.lanes=1",
+        "plan.lane_length_m=20",
+    )
+    assert block.runs.tolist() == [0, 1] and block.tracks["truth_pos"].shape[1:] == (2, 3)
+    same(roundtrip(block).value, block)
+
+
 def test_every_experiment_class_has_a_block_test_above():
     tested = {
         "StraightPassageExperiment",
@@ -663,6 +675,7 @@ def test_every_experiment_class_has_a_block_test_above():
         "TrnReliefExperiment",
         "SoundSpeedExperiment",
         "CoopExperiment",
+        "FleetExperiment",
     }
     assert {type(e).__name__ for e in registry.all_experiments()} <= tested
 
