@@ -68,8 +68,9 @@ class StartConfig(Config):
     heading_sigma_deg: float = Field(5.0, ge=0, description="scatter of the true heading, deg")
 
 
-class MissionSensors(Config):
-    """The vehicle's sensors (defaults: the seeds' devices, gaussian errors)."""
+class SurveySensors(Config):
+    """The survey's four devices (compass, EM log, pressure, USBL), shared by
+    :class:`MissionSensors` and the fleet's batches (``tasks.fleet``)."""
 
     compass: CompassConfig = Field(
         default_factory=lambda: CompassConfig(
@@ -95,6 +96,11 @@ class MissionSensors(Config):
         default_factory=lambda: UsblConfig(period_s=5.0, processing_delay_s=1.0),
         description="MicronNav: 0.2 m, 3 deg, 500 m; travel time + 1 s modem latency",
     )
+
+
+class MissionSensors(SurveySensors):
+    """The vehicle's sensors (defaults: the seeds' devices, gaussian errors)."""
+
     ins: InsConfig = Field(
         default_factory=InsConfig,
         description="INS roll, pitch and rates for the autopilot and the lever arms (exact)",

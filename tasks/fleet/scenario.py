@@ -28,12 +28,7 @@ from pydantic import Field, model_validator
 from bauv_sim.autopilot import AutopilotConfig
 from bauv_sim.config import Config
 from bauv_sim.currents import CurrentConfig, UniformCurrentConfig
-from bauv_sim.sensors.compass import CompassConfig
-from bauv_sim.sensors.errors import AngleErrorConfig, LengthErrorConfig, SpeedErrorConfig
-from bauv_sim.sensors.log import LogConfig
-from bauv_sim.sensors.pressure import PressureConfig
-from bauv_sim.sensors.usbl import UsblConfig
-from tasks.closed_loop.scenario import NavigationConfig
+from tasks.closed_loop.scenario import NavigationConfig, SurveySensors
 
 MAX_WAYPOINTS = 1000
 """The most way-points a plan may have."""
@@ -61,33 +56,8 @@ class StartConfig(Config):
     heading_sigma_deg: float = Field(5.0, ge=0, description="scatter of the true heading, deg")
 
 
-class FleetSensors(Config):
-    """The vehicle's sensors (defaults: ``mission/survey``'s)."""
-
-    compass: CompassConfig = Field(
-        default_factory=lambda: CompassConfig(
-            period_s=0.2, heading=AngleErrorConfig(sigma_deg=2.0, bias_deg=0.0)
-        ),
-        description="VN-100 class compass/AHRS: 2 deg heading noise in a metal hull",
-    )
-    log: LogConfig = Field(
-        default_factory=lambda: LogConfig(
-            period_s=1.0,
-            speed=SpeedErrorConfig(sigma_m_s=0.05, scale_factor=0.01),
-            min_speed_m_s=0.15,
-        ),
-        description="ALIZE EM log at 1 Hz: speed through water, 1 % scale, blind below 0.15 m/s",
-    )
-    pressure: PressureConfig = Field(
-        default_factory=lambda: PressureConfig(
-            period_s=1.0, output="depth", depth=LengthErrorConfig(sigma_m=0.05)
-        ),
-        description="WIKA S-20 class pressure sensor at 1 Hz, 5 cm noise",
-    )
-    usbl: UsblConfig = Field(
-        default_factory=lambda: UsblConfig(period_s=5.0, processing_delay_s=1.0),
-        description="MicronNav: 0.2 m, 3 deg, 500 m; travel time + 1 s modem latency",
-    )
+class FleetSensors(SurveySensors):
+    """The vehicle's sensors (defaults: ``mission/survey``'s four devices)."""
 
 
 class FleetGuidance(Config):
