@@ -288,8 +288,8 @@ ISSUE21: list[Mutation] = [
         "issue21",
         "dof",
         "nav/ekf.py",
-        "    return float(chi2_ppf(probability, dof))\n",
-        "    return float(chi2_ppf(probability, dof + 1))\n",
+        "    return float(chi2.ppf(probability, dof))\n",
+        "    return float(chi2.ppf(probability, dof + 1))\n",
         "the EKF gate's chi-square quantile taken with one degree of freedom too many",
     ),
     Mutation(

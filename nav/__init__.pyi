@@ -8,7 +8,6 @@ from ._aliases import (
     train_cmnf as train_cmnf,
 )
 from .angles import rotation_world_from_body as rotation_world_from_body
-from .distributions import chi2_ppf as chi2_ppf, rice_cdf as rice_cdf
 from .bearings.bank import BankOptions as BankOptions
 from .bearings.cmnf import CmnfGains as CmnfGains
 from .bearings.filters import upmf_update as upmf_update

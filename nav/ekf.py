@@ -31,7 +31,6 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from nav.distributions import chi2_ppf
 from nav.errors import FilterDivergedError, NavInputError
 
 Array = NDArray[np.float64]
@@ -111,7 +110,9 @@ class Estimator(Protocol):
 @functools.lru_cache(maxsize=256)
 def gate_limit(probability: float, dof: int) -> float:
     """Chi-square quantile of ``probability`` with ``dof`` degrees of freedom (cached)."""
-    return float(chi2_ppf(probability, dof))
+    from scipy.stats import chi2  # imported at the first gate (a module of the filter needs none)
+
+    return float(chi2.ppf(probability, dof))
 
 
 def predict(x: Array, P: Array, fx: Array, F: Array, Q: Array) -> tuple[Array, Array]:

@@ -31,7 +31,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nav.angles import course_of_scalar
-from nav.distributions import rice_cdf
 from nav.errors import NavInputError
 
 Array = NDArray[np.float64]
@@ -177,7 +176,9 @@ class WaypointGuidance:
         p = self.reach_probability
         if radius_m < sigma_m * math.sqrt(-2.0 * math.log(1.0 - p)):
             return dist_m <= self.min_reach_m  # the probability cannot be met: pass over it
-        return rice_cdf(radius_m, dist_m / sigma_m, scale=sigma_m) >= p
+        from scipy.stats import rice  # on first use: scipy.stats costs ~0.4 s to import
+
+        return float(rice.cdf(radius_m, dist_m / sigma_m, scale=sigma_m)) >= p
 
     def step(self, t_s: float, position: Array, sigma_m: float = 0.0) -> GuidanceCommand:
         """The command for now.

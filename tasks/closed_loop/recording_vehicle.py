@@ -216,10 +216,10 @@ def record_vehicle(rec, tag: str, label: str, v: VehicleRun, color: Color) -> No
 
 def record_nees(rec, entity, t, values, dof: int, color: Color, name: str, p=0.95) -> None:
     """A NEES series and the chi-square band of one run (probability ``p``) beside it."""
-    from nav.distributions import chi2_ppf
+    from scipy.stats import chi2  # imported with the recording only
 
     rec.scalars(f"{entity}_nees", t, values, color, f"{name} NEES (dof {dof})")
-    lo, hi = chi2_ppf(np.array([(1 - p) / 2, (1 + p) / 2]), dof)
+    lo, hi = chi2.ppf(np.array([(1 - p) / 2, (1 + p) / 2]), dof)
     for which, val in (("low", lo), ("high", hi)):
         rec.scalars(
             f"{entity}_nees_band_{which}",
