@@ -157,7 +157,7 @@ def report_fleet(name: str, summary: str, ctx: ReportContext) -> ReportSummary:
         slug="waypoints",
     )  # fmt: skip
     files += write_tables(ctx.out_dir, [t1, t2], heading=f"{name}: {summary}")
-    text = (
+    text = "".join(t.to_text() for t in (t1, t2)) + (
         f"{name}: {run.size} runs, {metrics.vehicle_hours:.1f} vehicle-hours, "
         f"{aggs['completed'].mean:.3f} completed; EKF mean error "
         f"{aggs['ekf_mean_error_m'].mean:.2f} m, DR final {aggs['dr_final_error_m'].mean:.1f} m, "
