@@ -77,6 +77,7 @@ __all__ = [
     "navigation_rates_from_body",
     "quat_wxyz_from_R",
     "quat_wxyz_from_roll_pitch_heading",
+    "quat_wxyz_from_roll_pitch_heading_scalar",
     "quat_wxyz_to_xyzw",
     "quat_xyzw_to_wxyz",
     "range_azimuth_elevation",
@@ -245,6 +246,31 @@ def attitude_from_quat_wxyz_scalar(
     pitch = math.asin(min(1.0, max(-1.0, r20)))
     heading = course_of_scalar(r00, r10)
     return (qw, qx, qy, qz), (roll, pitch, heading)
+
+
+def quat_wxyz_from_roll_pitch_heading_scalar(
+    roll_rad: float, pitch_rad: float, heading_rad: float
+) -> np.ndarray:
+    """The quaternion (w, x, y, z), w >= 0, of :func:`R_from_roll_pitch_heading`
+    (``Rz(pi/2 - heading) Ry(-pitch) Rx(roll)``, body FLU to world ENU) with Python floats:
+    :func:`quat_wxyz_from_roll_pitch_heading` for per-tick code (it goes through a rotation
+    matrix and scipy, about 1 ms a call); the inverse of :func:`attitude_from_quat_wxyz_scalar`.
+
+    Args:
+        roll_rad, pitch_rad, heading_rad: attitude, rad (pitch nose up +, heading clockwise
+            from north).
+
+    Returns:
+        The quaternion body FLU -> world ENU, shape (4,).
+    """
+    hr, hp, hy = 0.5 * roll_rad, -0.5 * pitch_rad, 0.5 * (math.pi / 2 - heading_rad)
+    cr, sr, cp, sp, cy, sy = (math.cos(hr), math.sin(hr), math.cos(hp), math.sin(hp),
+                              math.cos(hy), math.sin(hy))  # fmt: skip
+    w = cr * cp * cy + sr * sp * sy
+    x = sr * cp * cy - cr * sp * sy
+    y = cr * sp * cy + sr * cp * sy
+    z = cr * cp * sy - sr * sp * cy
+    return np.array([w, x, y, z]) if w >= 0 else np.array([-w, -x, -y, -z])
 
 
 def roll_pitch_heading_from_quat_wxyz(quat_wxyz: ArrayLike) -> NDArray[np.float64]:

@@ -53,21 +53,6 @@ WORLDS: tuple[str, ...] = ("mujoco", "manoeuvring")
 """The physics a mission may fly in: the full MuJoCo vehicle, or the manoeuvring model."""
 
 
-def quat_wxyz_scalar(roll_rad: float, pitch_rad: float, heading_rad: float) -> np.ndarray:
-    """The quaternion (w, x, y, z), w >= 0, of :func:`bauv_sim.frames.R_from_roll_pitch_heading`
-    (``Rz(pi/2 - heading) Ry(-pitch) Rx(roll)``, body FLU to world ENU) with scalar arithmetic:
-    :func:`bauv_sim.frames.quat_wxyz_from_roll_pitch_heading` goes through a rotation matrix and
-    scipy, about 1 ms a call, at every control tick; shape (4,)."""
-    hr, hp, hy = 0.5 * roll_rad, -0.5 * pitch_rad, 0.5 * (math.pi / 2 - heading_rad)
-    cr, sr, cp, sp, cy, sy = (math.cos(hr), math.sin(hr), math.cos(hp), math.sin(hp),
-                              math.cos(hy), math.sin(hy))  # fmt: skip
-    w = cr * cp * cy + sr * sp * sy
-    x = sr * cp * cy - cr * sp * sy
-    y = cr * sp * cy + sr * cp * sy
-    z = cr * cp * sy - sr * sp * cy
-    return np.array([w, x, y, z]) if w >= 0 else np.array([-w, -x, -y, -z])
-
-
 class _Data:
     """What :class:`~bauv_sim.sea.Sea` reads of ``physics.data``: ``ptr``, the identity of the
     simulation it last applied a steady current to."""
@@ -290,7 +275,7 @@ class ManoeuvringPhysics:
         self._check(vehicle)
         wm = self.world
         roll, pitch, head = wm.roll_pitch_heading()[0].tolist()
-        quat = quat_wxyz_scalar(roll, pitch, head)
+        quat = frames.quat_wxyz_from_roll_pitch_heading_scalar(roll, pitch, head)
         pos = wm.position_world_m[0].copy()
         vtw = wm.velocity_through_water_world()[0]
         cur = self._water_w0.copy()
@@ -328,7 +313,9 @@ class ManoeuvringPhysics:
     def quat_wxyz(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Attitude quaternion (w, x, y, z), body FLU to world ENU, shape (4,)."""
         roll, pitch, head = self.roll_pitch_heading(vehicle)
-        return quat_wxyz_scalar(float(roll), float(pitch), float(head))
+        return frames.quat_wxyz_from_roll_pitch_heading_scalar(
+            float(roll), float(pitch), float(head)
+        )
 
     def R_world_from_body(self, vehicle: str | None = None) -> NDArray[np.float64]:
         """Rotation body FLU -> world ENU of the attitude with the beat's term, shape (3, 3)."""

@@ -13,7 +13,8 @@ import pytest
 from bauv_sim import frames
 from bauv_sim.build import SceneConfig, VehicleSpec, build_physics
 from bauv_sim.errors import ConfigError, PhysicsError
-from bauv_sim.manoeuvring.physics import ManoeuvringPhysics, quat_wxyz_scalar
+from bauv_sim.frames import quat_wxyz_from_roll_pitch_heading_scalar
+from bauv_sim.manoeuvring.physics import ManoeuvringPhysics
 from bauv_sim.physics_index import SENSOR_SITES
 
 
@@ -176,7 +177,7 @@ def test_scalar_quaternion_is_the_frames_one():
         strict=True,
     ):
         np.testing.assert_allclose(
-            quat_wxyz_scalar(roll, pitch, head),
+            quat_wxyz_from_roll_pitch_heading_scalar(roll, pitch, head),
             frames.quat_wxyz_from_roll_pitch_heading(roll, pitch, head),
             atol=1e-12,
         )
