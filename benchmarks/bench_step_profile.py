@@ -176,9 +176,13 @@ def _instrument_tick() -> None:
 
 def _instrument_report() -> None:
     from tasks.closed_loop import report
+    from tasks.core import report_pool
 
+    # drawn in this process only without report processes (one CPU); with them, the wait for
+    # their jobs once the rest of the report is written
     _wrap(report, "mission_figures", "report: figures (PNG + PDF)")
     _wrap(report, "record_mission", "report: rerun recording")
+    _wrap(report_pool.Offloaded, "result", "report: waiting for the report processes")
     _wrap(report, "export_runs", "report: Parquet run data")
     _wrap(report, "report_mission", "report (all)")
 
@@ -264,6 +268,7 @@ def summarise(data: dict, title: str) -> None:
         for k in (
             "report: figures (PNG + PDF)",
             "report: rerun recording",
+            "report: waiting for the report processes",
             "report: Parquet run data",
         ):
             sub += parts.get(k, 0.0)

@@ -14,10 +14,17 @@ from bauv_sim.errors import ConfigError, GeometryError
 from tasks.closed_loop.parts import MissionDesign
 from tasks.closed_loop.recording import MESH_MAX_SIDE
 from tasks.closed_loop.report import MissionMetrics, report_mission
+from tasks.closed_loop.report import report_work as mission_report_work
 from tasks.closed_loop.result import MissionRun
 from tasks.closed_loop.scenario import MissionScenario
 from tasks.closed_loop.world import WaypointMission, check_world, fly
-from tasks.core.registry import Experiment, MemoryTerm, ReportContext, ReportSummary
+from tasks.core.registry import (
+    Experiment,
+    MemoryTerm,
+    ReportContext,
+    ReportSummary,
+    ReportWork,
+)
 
 MESH_BYTES_PER_CELL = 600.0
 """Memory of the recording's seabed mesh per grid cell of the mission area, bytes, an upper
@@ -272,3 +279,10 @@ class MissionExperiment(Experiment):
 
     def report(self, ctx: ReportContext) -> ReportSummary:
         return report_mission(self, ctx)
+
+    def report_work(self, scenario: MissionScenario) -> ReportWork | None:  # type: ignore[override]
+        """The figures and recording of :func:`report_mission`, in two report processes (a
+        mission whose report is its own hands out none)."""
+        if type(self).report is not MissionExperiment.report:
+            return None
+        return mission_report_work(scenario)

@@ -99,21 +99,46 @@ def current_arrow(
     ax.plot([], [], color=color, lw=1.4, ls=ls, label=f"{label} {speed:.2f} m/s (arrow: direction)")
 
 
+MISSION_FIGURES = ("route", "errors", "state")
+"""The figures of a mission run, in the order they are listed."""
+
+
 def mission_figures(
-    name: str, scn: MissionScenario, run: MissionRun, runs: list[MissionRun], out
+    name: str,
+    scn: MissionScenario,
+    run: MissionRun,
+    runs: list[MissionRun],
+    out,
+    which: tuple[str, ...] = MISSION_FIGURES,
 ) -> list[str]:
-    """Route, errors and vehicle state of the recorded run (PNG and PDF, project style)."""
+    """Route, errors and vehicle state of the recorded run (PNG and PDF, project style).
+
+    Args:
+        name: the mission's registry name (in the titles).
+        scn: its scenario.
+        run: the recorded run.
+        runs: every run of the batch (the route figure draws the others' true tracks).
+        out: the folder to write into.
+        which: the figures to draw, names of :data:`MISSION_FIGURES` (the report draws them in
+            two processes).
+
+    Returns:
+        The files written, in the order of :data:`MISSION_FIGURES`.
+    """
     from tasks.core import style  # matplotlib only when figures are drawn
 
-    with style.context():
-        return _draw_mission(name, scn, run, runs, out, style)
-
-
-def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
-    a = run.lead
-    t = a["t"]
-    words = f"{_title_words(name)}, run {run.run}"
+    draw = {"route": _route, "errors": _errors, "state": _state}
     files: list[str] = []
+    with style.context():
+        for fig in MISSION_FIGURES:
+            if fig in which:
+                files += draw[fig](name, scn, run, runs, out, style)
+    return files
+
+
+def _route(name, scn, run, runs, out, style) -> list[str]:
+    a = run.lead
+    words = f"{_title_words(name)}, run {run.run}"
     # the figure as tall as the route (equal scales), the legend below it
     xy = np.concatenate(
         [a["truth_pos"][:, :2], a["ekf_pos"][:, :2], a["dr_pos"][:, :2]]
@@ -170,10 +195,15 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
     ax.set_ylabel(style.label("north", "m"))
     style.title(ax, f"{words}: route, steering on the {scn.navigation.steer_on.upper()} estimate")
     style.figure_legend(fig, (ax,), ncol=3 if width > 6.0 else 2)
-    files += style.save(fig, out / "route.png")
+    return style.save(fig, out / "route.png")
 
-    # errors: horizontal distance on a log axis, then the EKF's east and north errors with its
-    # own +-2 sigma
+
+def _errors(name, scn, run, runs, out, style) -> list[str]:
+    """Horizontal distance on a log axis, then the EKF's east and north errors with its own
+    +-2 sigma."""
+    a = run.lead
+    t = a["t"]
+    words = f"{_title_words(name)}, run {run.run}"
     k = 2.0
     e_ekf = a["ekf_pos"] - a["truth_pos"]
     e_dr = a["dr_pos"] - a["truth_pos"]
@@ -214,9 +244,14 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
         f"{100 * inside:.0f} % of the time)",
     )
     style.panel_letters(axs)
-    files += style.save(fig, out / "errors.png")
+    return style.save(fig, out / "errors.png")
 
-    # vehicle state
+
+def _state(name, scn, run, runs, out, style) -> list[str]:
+    """Depth, heading, speed and motor power against their commands."""
+    a = run.lead
+    t = a["t"]
+    words = f"{_title_words(name)}, run {run.run}"
     fig, axs = style.subplots("page", 6.4, 4, 1, sharex=True)
     axs[0].plot(t, -a["truth_pos"][:, 2], **style.line("truth", label="true depth"))
     axs[0].plot(t, a["guidance_depth"], **style.line("command"))
@@ -251,8 +286,7 @@ def _draw_mission(name, scn, run, runs, out, style) -> list[str]:
             x.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), borderaxespad=0.0)
     fig.suptitle(f"{words}: vehicle state")
     style.panel_letters(axs)
-    files += style.save(fig, out / "state.png")
-    return files
+    return style.save(fig, out / "state.png")
 
 
 def fix_positions(v: VehicleRun, device: str) -> NDArray[np.float64]:

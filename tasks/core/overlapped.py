@@ -17,6 +17,7 @@ from typing import Any
 from tasks.core import run_folder
 from tasks.core.plan import BatchPlan
 from tasks.core.registry import ReportContext, ReportSummary
+from tasks.core.report_pool import ReportPool
 
 
 class Abandoned(BaseException):
@@ -67,7 +68,14 @@ class OverlappedReport:
     files, as the report after the batch does, so its outputs are the same bytes; it holds no
     more blocks than that report (the one it merges)."""
 
-    def __init__(self, plan: BatchPlan, out_dir: Path, progress: bool, arrivals: Arrivals):
+    def __init__(
+        self,
+        plan: BatchPlan,
+        out_dir: Path,
+        progress: bool,
+        arrivals: Arrivals,
+        pool: ReportPool | None = None,
+    ):
         self._arrivals = arrivals
         self.summary: ReportSummary | None = None
         self.error: BaseException | None = None
@@ -78,7 +86,7 @@ class OverlappedReport:
                 yield run_folder.load_block(plan, out_dir, i)
 
         ctx = ReportContext(
-            plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress
+            plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress, pool=pool
         )
 
         def target() -> None:

@@ -28,13 +28,16 @@ import importlib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from pydantic import BaseModel
 
 from bauv_sim.config import Config
 from bauv_sim.errors import ConfigError
 from tasks.core.families import families
+
+if TYPE_CHECKING:
+    from tasks.core.report_pool import ReportPool
 
 _REGISTRY: dict[str, Experiment] = {}
 _LOADED = False
@@ -51,6 +54,7 @@ class ReportContext:
         out_dir: the run folder to write into.
         blocks: the block results, in block order (an iterator: read once).
         quiet: whether to keep the console quiet (tests).
+        pool: the batch's report processes, if any.
     """
 
     scenario: Config
@@ -59,6 +63,9 @@ class ReportContext:
     out_dir: Path
     blocks: Iterator[Any]
     quiet: bool = False
+    pool: ReportPool | None = None
+    """Processes that take jobs of the report (:func:`tasks.core.report_pool.offload`), or
+    ``None``: the report does them itself."""
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,21 @@ class ReportSummary:
     files: tuple[str, ...] = ()
     failures: tuple[str, ...] = ()
     diverged: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class ReportWork:
+    """What of an experiment's report may be written in other processes
+    (:mod:`tasks.core.report_pool`).
+
+    Attributes:
+        jobs: how many jobs the report hands out at most (no more processes are started).
+        preload: modules a report process imports as it starts, while the blocks are computed
+            (the report's libraries and modules).
+    """
+
+    jobs: int
+    preload: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -141,6 +163,11 @@ class Experiment:
     def report(self, ctx: ReportContext) -> ReportSummary:
         """Write the outputs of a finished batch; see the module docstring."""
         raise NotImplementedError
+
+    def report_work(self, scenario: Config) -> ReportWork | None:
+        """The jobs of :meth:`report` that other processes may do while this one writes the
+        rest (:mod:`tasks.core.report_pool`); none by default."""
+        return None
 
 
 MAX_BLOCK_RUNS = 100_000

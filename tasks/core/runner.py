@@ -69,6 +69,7 @@ from tasks.core.plan import (
     scenario_text,
 )
 from tasks.core.registry import ReportContext, ReportSummary
+from tasks.core.report_pool import ReportPool, start_pool
 from tasks.core.resume import MAX_RECORD_BYTES, MAX_SCENARIO_BYTES, plan_resume
 from tasks.core.run_folder import (
     BLOCK_DIR,
@@ -195,7 +196,14 @@ def execute(
                 f"{len(batch.failures)} block(s) failed; the other blocks are saved in {out_dir} "
                 "and --resume retries the failed ones:\n  " + "\n  ".join(batch.failures)
             )
-        summary = _write_report(plan, out_dir, progress, batch.overlapped)
+        batch.start_report_pool()  # nothing was computed (--resume of a complete batch)
+        try:
+            summary = _write_report(plan, out_dir, progress, batch.overlapped, batch.report_pool)
+        except BaseException:
+            batch.stop(close_bar=False)
+            raise
+        if batch.report_pool is not None:
+            batch.report_pool.close()
         try:
             run_folder.write_run_record(out_dir, plan, "complete")
         except OSError as exc:
@@ -218,8 +226,15 @@ class _Computation:
         self.todo = [i for i in range(len(plan.blocks)) if not run_folder.saved(out_dir, i)]
         self.failures: list[str] = []
         self.overlapped: OverlappedReport | None = None
+        self.report_pool: ReportPool | None = None
         self.arrivals = Arrivals(set(range(len(plan.blocks))) - set(self.todo))
         self.bar: Any = None if self.todo else self._progress_bar()
+
+    def start_report_pool(self) -> None:
+        """Start the report's processes (:mod:`tasks.core.report_pool`), if the experiment hands
+        out report work, so that they import its libraries while the blocks are computed."""
+        if self.report_pool is None:
+            self.report_pool = start_pool(self.plan, self.out_dir)
 
     def _progress_bar(self) -> Any:
         from tqdm import tqdm
@@ -268,9 +283,17 @@ class _Computation:
                 ): i
                 for i in self.todo
             }
+            if isinstance(ex, InlineExecutor):
+                # forked now, before this process starts a thread or builds a physics
+                self.start_report_pool()
             self.bar = self._progress_bar()
             if not isinstance(ex, InlineExecutor):
-                self.overlapped = OverlappedReport(plan, self.out_dir, self.progress, self.arrivals)
+                # after the workers are forked (a pool started before would make them come from
+                # a fork server)
+                self.start_report_pool()
+                self.overlapped = OverlappedReport(
+                    plan, self.out_dir, self.progress, self.arrivals, self.report_pool
+                )
             try:
                 self._save_as_finished(futures)
             except KeyboardInterrupt:
@@ -307,16 +330,22 @@ class _Computation:
             self.bar.close()
 
     def stop(self, close_bar: bool) -> None:
-        """The batch will not complete: close the bar (if asked) and stop the overlapped
-        report."""
+        """The batch will not complete: close the bar (if asked), stop the overlapped report and
+        the report's processes."""
         if close_bar:
             self.close_bar()
         if self.overlapped is not None:
             self.overlapped.abandon()
+        if self.report_pool is not None:
+            self.report_pool.close(stop=True)
 
 
 def _write_report(
-    plan: BatchPlan, out_dir: Path, progress: bool, overlapped: OverlappedReport | None
+    plan: BatchPlan,
+    out_dir: Path,
+    progress: bool,
+    overlapped: OverlappedReport | None,
+    pool: ReportPool | None,
 ) -> ReportSummary:
     """The report of a batch whose blocks are all saved: the overlapped report's result, or
     :meth:`Experiment.report` over the saved blocks, in block order.
@@ -335,7 +364,13 @@ def _write_report(
             return overlapped.result()
         return plan.experiment.report(
             ReportContext(
-                plan.scenario, plan.seed, plan.n_runs, out_dir, blocks(), quiet=not progress
+                plan.scenario,
+                plan.seed,
+                plan.n_runs,
+                out_dir,
+                blocks(),
+                quiet=not progress,
+                pool=pool,
             )
         )
     except KeyboardInterrupt:
