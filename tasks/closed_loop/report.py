@@ -84,7 +84,20 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
     from tasks.core.report import Table, write_metrics, write_tables
 
     scn: MissionScenario = ctx.scenario  # type: ignore[assignment]
-    blocks = list(ctx.blocks)
+    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
+
+    def export(block: list[MissionRun]) -> list[str]:
+        points = tx if scn.sensors.use_usbl else ()
+        return export_runs(ctx.out_dir, exp.name, block, frame=scn.frame(), points=points)
+
+    # each block's run data written as the next one arrives (on worker processes, while the
+    # later blocks are computed); the last block's once the figures are handed out
+    blocks: list[list[MissionRun]] = []
+    data_files: list[str] = []
+    for block in ctx.blocks:
+        if blocks:
+            data_files += export(blocks[-1])
+        blocks.append(block)
     runs: list[MissionRun] = [r for block in blocks for r in block]
     ok = [r for r in runs if r.failed is None]
     failures = [r.failed for r in runs if r.failed is not None]
@@ -126,11 +139,9 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
         for job in _report_jobs(scn)
         if drawn
     ]
-    files = [write_metrics(ctx.out_dir, metrics)]
-    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
-    files += export_runs(
-        ctx.out_dir, exp.name, runs, frame=scn.frame(), points=tx if scn.sensors.use_usbl else ()
-    )
+    files = [write_metrics(ctx.out_dir, metrics), *data_files]
+    if blocks:
+        files += export(blocks[-1])
     tables = []
     if rec_run is not None and rec_run.failed is None:
         tables.append(
