@@ -84,19 +84,13 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
     from tasks.core.report import Table, write_metrics, write_tables
 
     scn: MissionScenario = ctx.scenario  # type: ignore[assignment]
-    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
-
-    def export(block: list[MissionRun]) -> list[str]:
-        points = tx if scn.sensors.use_usbl else ()
-        return export_runs(ctx.out_dir, exp.name, block, frame=scn.frame(), points=points)
-
     # each block's run data written as the next one arrives (on worker processes, while the
-    # later blocks are computed); the last block's once the figures are handed out
+    # later blocks are computed); the last block's by a report process, if any
     blocks: list[list[MissionRun]] = []
     data_files: list[str] = []
     for block in ctx.blocks:
         if blocks:
-            data_files += export(blocks[-1])
+            data_files += _export_block(scn, blocks, ctx.out_dir, exp.name, len(blocks) - 1)
         blocks.append(block)
     runs: list[MissionRun] = [r for block in blocks for r in block]
     ok = [r for r in runs if r.failed is None]
@@ -139,9 +133,12 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
         for job in _report_jobs(scn)
         if drawn
     ]
+    last = [
+        offload(ctx.pool, _export_block, scn, blocks, ctx.out_dir, exp.name, len(blocks) - 1)
+        for _ in blocks[:1]
+    ]
     files = [write_metrics(ctx.out_dir, metrics), *data_files]
-    if blocks:
-        files += export(blocks[-1])
+    files += [f for job in last for f in job.result()]
     tables = []
     if rec_run is not None and rec_run.failed is None:
         tables.append(
@@ -260,6 +257,21 @@ def _report_jobs(scn: MissionScenario) -> list[tuple[tuple[str, ...], bool]]:
     return [(f, rec) for f, rec in jobs if f or rec]
 
 
+def _export_block(
+    scn: MissionScenario, blocks: list[list[MissionRun]], out_dir: Path, name: str, index: int
+) -> list[str]:
+    """The run data of block ``index`` as Parquet (:func:`export_runs`, with the scene's frame
+    and the USBL transceiver); a job of the report for the last block
+    (:func:`tasks.core.report_pool.offload`).
+
+    Returns:
+        The files written, relative to ``out_dir``.
+    """
+    tx = [("usbl transceiver", scn.transceiver_east_m, scn.transceiver_north_m)]
+    points = tx if scn.sensors.use_usbl else ()
+    return export_runs(out_dir, name, blocks[index], frame=scn.frame(), points=points)
+
+
 def _figures_and_recording(
     scn: MissionScenario,
     blocks: list[list[MissionRun]],
@@ -281,15 +293,21 @@ def _figures_and_recording(
 
 
 def report_work(scn: MissionScenario) -> ReportWork | None:
-    """The report's jobs that its processes may do (:meth:`Experiment.report_work`), with the
-    modules they need imported beforehand; ``None`` without figures and recording."""
+    """The report's jobs that its processes may do (:meth:`Experiment.report_work`): the figures
+    and recording (:func:`_report_jobs`) and the last block's run data, with the modules they
+    need imported beforehand; ``None`` without figures and recording (the run data alone is
+    written here)."""
     n = len(_report_jobs(scn))
     if n == 0:
         return None
     return ReportWork(
-        n,
+        n + 1,  # and the last block's run data
         (
+            "pyarrow.parquet",
+            # pyarrow imports pandas at its first conversion of an array
+            "pandas",
             "tasks.closed_loop.report",
+            "tasks.core.geojson",
             "matplotlib.pyplot",
             "matplotlib.backends.backend_agg",
             "matplotlib.backends.backend_pdf",

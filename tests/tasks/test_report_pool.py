@@ -97,8 +97,13 @@ def test_the_report_processes_write_what_bauv_writes_alone(alone, tmp_path, monk
     pids = before_the_report(monkeypatch, lambda out_dir, pool: None)
     out = tmp_path / "run"
     _, summary = run(SHORT, seed=2, out_dir=out, overrides=OVERRIDES, progress=False)
-    # both jobs went to the report processes: the figures in two groups, the recording with one
-    assert [args[-1] for _, args in calls] == [(("route", "errors"), False), (("state",), True)]
+    # the jobs went to the report processes: the figures in two groups, the recording with one,
+    # the run data of the last (only) block
+    assert calls == [
+        ("_figures_and_recording", ("mission/short", (("route", "errors"), False))),
+        ("_figures_and_recording", ("mission/short", (("state",), True))),
+        ("_export_block", ("mission/short", 0)),
+    ]
     # the same files in the same order, the same text
     assert same_summary(summary, out, alone[1], alone[0])
     assert_same_report(alone[0], out)
