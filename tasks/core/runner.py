@@ -22,6 +22,8 @@ The parts, each readable alone:
   after checking it;
 * :mod:`tasks.core.executors`: where blocks are computed (inline, local processes, Dask);
 * :mod:`tasks.core.overlapped`: the report written while the blocks are computed;
+* :mod:`tasks.core.report_pool`: processes started with the batch that take independent jobs of
+  the report (a mission's figures, recording and run data) while this process writes the rest;
 * this module: :func:`execute` (compute the missing blocks, save them, write the report) and
   :func:`run`, the library form of ``bauv run`` (plan, prepare, execute).
 
