@@ -1,16 +1,16 @@
 """Processes that write parts of a batch's report beside ``bauv run``.
 
-A report's figures and recording take longer than the rest of it (``mission/survey``: the three
-figures about 3.5 s, the recording 0.5 s, the Parquet run data and tables 0.7 s) and each is
-independent of the others. An experiment that says so (:meth:`Experiment.report_work
-<tasks.core.registry.Experiment.report_work>`) gets a :class:`ReportPool`: local processes
-started with the batch, which import the report's libraries (matplotlib, rerun, ...) while the
-blocks are computed, on a core the computation leaves free, and then take jobs of the report
-(:func:`offload`) while ``bauv`` writes the rest. A job reads the batch's saved blocks from the
-run folder, in block order, as the report after a batch does (:func:`tasks.core.run_folder.
-load_block`: size, sha256 and header checked; the blocks are plain data, never pickled), and
-writes its files atomically within the run folder, so its outputs are the same bytes as if
-``bauv`` had written them itself (tested).
+A report's figures and recording take longer than the rest of it (a survey mission's: three
+figures about 2.5 s of CPU, the recording 1 s with its first imports, the run data and tables
+0.4 s) and each is independent of the others. An experiment that says so
+(:meth:`Experiment.report_work <tasks.core.registry.Experiment.report_work>`) gets a
+:class:`ReportPool`: local processes started with the batch, which import the report's libraries
+(matplotlib, rerun, ...) while the blocks are computed, on a core the computation leaves free,
+and then take jobs of the report (:func:`offload`) while ``bauv`` writes the rest. A job reads
+the batch's saved blocks from the run folder, in block order, as the report after a batch does
+(:func:`tasks.core.run_folder.load_block`: size, sha256 and header checked; the blocks are plain
+data, never pickled), and writes its files atomically within the run folder, so its outputs are
+the same bytes as if ``bauv`` had written them itself (tested).
 
 Where there is no pool (one usable CPU, no figures asked for, a report called directly) or a
 report process died, the job runs in ``bauv`` itself; its outputs are the same.
