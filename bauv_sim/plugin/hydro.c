@@ -89,7 +89,8 @@ typedef struct {
   mjtNum* foil_k;    // 1/2 rho S C_La
   int* foil_normal;
   mjtNum* foil_drag; // per plate: 1/2 rho S C_D0, 1/2 rho S k_i C_La^2, 1/2 rho C_N
-  mjtNum* panel;     // per plate NPANEL x (chord, span position in the geom frame (m), area m^2)
+  mjtNum* panel;     // per plate NPANEL x (chord, span position in the geom frame (m), the
+                     // panel's -1/2 rho C_N dA (kg/m))
   int ndrag;
   int* drag_geom;    // every fluid geom of the vehicle
   int nfk;
@@ -477,7 +478,7 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
           mjtNum xi = -1.0 + (2.0 * k + 1.0) / NCHORD;
           pn[0] = xi * half * s[0];
           pn[1] = cos(th) * s[3 - normal];
-          pn[2] = area * 2.0 * half * half / (NSPAN + 1) / NCHORD;
+          pn[2] = -h->foil_drag[3 * i + 2] * (area * 2.0 * half * half / (NSPAN + 1) / NCHORD);
           pn += 3;
         }
       }
@@ -876,23 +877,28 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
         fp[n] -= di * un;
       }
       // normal force of each panel, at the panel: moment about the centre
+      // (a panel at r = x e_x + s e_span: its normal velocity un + (omega x r)_n, its moment
+      // r x (fn e_n); written out per normal axis, the terms of the cross products that are
+      // products of the zero components of r and fn e_n left out, which changes no sum)
       if (fd[2] != 0) {
         const mjtNum* pn = h->panel + 3 * NPANEL * i;
-        for (int k = 0; k < NPANEL; k++, pn += 3) {
-          mjtNum r[3] = {pn[0], 0, 0};
-          r[span] = pn[1];
-          mjtNum wr[3];
-          cross3(wr, vel, r);  // vel[0:3]: the geom's angular velocity, its frame
-          mjtNum unp = un + wr[n];
-          mjtNum fn = -fd[2] * pn[2] * fabs(unp) * unp;
-          fp[n] += fn;
-          // r x (fn e_n)
-          mjtNum fv[3] = {0, 0, 0}, tv[3];
-          fv[n] = fn;
-          cross3(tv, r, fv);
-          tp[0] += tv[0];
-          tp[1] += tv[1];
-          tp[2] += tv[2];
+        const mjtNum ox = vel[0], oy = vel[1], oz = vel[2];  // the geom's angular velocity
+        if (n == 2) {  // normal z, span y: r = (x, y, 0)
+          for (int k = 0; k < NPANEL; k++, pn += 3) {
+            mjtNum unp = un + (ox * pn[1] - oy * pn[0]);
+            mjtNum fn = pn[2] * fabs(unp) * unp;
+            fp[2] += fn;
+            tp[0] += pn[1] * fn;
+            tp[1] -= pn[0] * fn;
+          }
+        } else {  // normal y, span z: r = (x, 0, z)
+          for (int k = 0; k < NPANEL; k++, pn += 3) {
+            mjtNum unp = un + (oz * pn[0] - ox * pn[1]);
+            mjtNum fn = pn[2] * fabs(unp) * unp;
+            fp[1] += fn;
+            tp[0] -= pn[1] * fn;
+            tp[2] += pn[0] * fn;
+          }
         }
       }
       mjtNum fw2[3], tw2[3];
