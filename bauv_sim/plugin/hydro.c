@@ -584,10 +584,47 @@ static void add_wrench(Hydro* h, const mjModel* m, const mjData* d, int b, const
   }
 }
 
+// qfrc += Jp^T f + Jr^T t: force f (N, world) and moment t (N m, world) at point p (m, world) on
+// body b, as mj_applyFT adds them with dense Jacobians, written for the dofs of b's chain alone
+// (its other columns are zero): mj_jac's columns, Jr = the dof's axis cdof[0:3] and Jp =
+// cdof[3:6] + cdof[0:3] x (p - the subtree's centre of mass), and mju_mulMatTVec's sums (a zero
+// component of f or t skipped), in the same order, which gives the same numbers without the two
+// 3 x nv Jacobians, their zeroing and the passes over every dof
+static void apply_ft_chain(const mjModel* m, const mjData* d, const mjtNum f[3], const mjtNum t[3],
+                           const mjtNum p[3], int b, mjtNum* qfrc) {
+  const mjtNum* com = d->subtree_com + 3 * m->body_rootid[b];
+  const mjtNum o0 = p[0] - com[0], o1 = p[1] - com[1], o2 = p[2] - com[2];
+  const int wb = m->body_weldid[b];
+  if (!m->body_dofnum[wb]) return;
+  for (int da = m->body_dofadr[wb] + m->body_dofnum[wb] - 1; da >= 0; da = m->dof_parentid[da]) {
+    const mjtNum* c = d->cdof + 6 * da;
+    const mjtNum jp0 = c[3] + (c[1] * o2 - c[2] * o1);
+    const mjtNum jp1 = c[4] + (c[2] * o0 - c[0] * o2);
+    const mjtNum jp2 = c[5] + (c[0] * o1 - c[1] * o0);
+    mjtNum q = 0;
+    if (f[0] != 0) q += jp0 * f[0];
+    if (f[1] != 0) q += jp1 * f[1];
+    if (f[2] != 0) q += jp2 * f[2];
+    qfrc[da] += q;
+    q = 0;
+    if (t[0] != 0) q += c[0] * t[0];
+    if (t[1] != 0) q += c[1] * t[1];
+    if (t[2] != 0) q += c[2] * t[2];
+    qfrc[da] += q;
+  }
+}
+
 static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) {
+  // a model whose Jacobians are sparse (nv >= 60 by default: scenes of several vehicles) takes
+  // mj_applyFT itself, whose sparse sums this does not repeat
+  const int sparse = mj_isSparse(m);
   for (int i = 0; i < h->nacc; i++) {
     const int w = h->acc_list[i];
-    mj_applyFT(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    if (sparse) {
+      mj_applyFT(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    } else {
+      apply_ft_chain(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    }
     h->acc_on[w] = 0;
   }
   h->nacc = 0;
