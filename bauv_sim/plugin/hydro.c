@@ -645,6 +645,19 @@ static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) 
 //   Magnus lift      rho C_M V (om x u), V = 4/3 pi r0 r1 r2.
 static void ellipsoid_model(mjtNum t[3], mjtNum f[3], const mjtNum om[3], const mjtNum u[3],
                             const mjtNum r[3], const mjtNum c[5], mjtNum rho, mjtNum mu) {
+  if (c[0] == 0 && c[1] == 0 && c[2] == 0 && c[3] == 0 && c[4] == 0) {
+    // all five coefficients zero (the marker geoms): the quadratic and angular drag below are
+    // rho |u| (0 + 0) and rho |m| with m = 0, exact zeros added to the Stokes terms, and there is
+    // no lift; the Stokes drag alone gives the same numbers
+    const mjtNum d_eq = 2.0 / 3.0 * (r[0] + r[1] + r[2]);
+    const mjtNum drag_lin = mu * 3.0 * mjPI * d_eq;
+    const mjtNum drag_ang = mu * mjPI * d_eq * d_eq * d_eq;
+    for (int i = 0; i < 3; i++) {
+      t[i] -= drag_ang * om[i];
+      f[i] -= drag_lin * u[i];
+    }
+    return;
+  }
   const mjtNum lo = fmin(r[0], fmin(r[1], r[2])), hi = fmax(r[0], fmax(r[1], r[2]));
   const mjtNum mid = r[0] + r[1] + r[2] - lo - hi;
   const mjtNum a_max = mjPI * hi * mid;
