@@ -222,6 +222,31 @@ def main(argv: list[str] | None = None) -> int:
     print(f"| variant | min | median | {ref} / variant (median) |\n|---|---|---|---|")
     for k in runs:
         print(f"| {k} | {low[k]:.2f} | {med[k]:.2f} | {med[ref] / med[k]:.3g} |")
+    # MuJoCo's stage timers (their own overhead included): --repeats runs of --nstep steps each,
+    # interleaved, the median of each stage
+    stages = [
+        ("step (all)", mujoco.mjtTimer.mjTIMER_STEP),
+        ("position", mujoco.mjtTimer.mjTIMER_POSITION),
+        ("velocity (passive forces: the plugin)", mujoco.mjtTimer.mjTIMER_VELOCITY),
+        ("actuation", mujoco.mjtTimer.mjTIMER_ACTUATION),
+        ("constraint", mujoco.mjtTimer.mjTIMER_CONSTRAINT),
+        ("advance", mujoco.mjtTimer.mjTIMER_ADVANCE),
+    ]
+    per_stage: dict[str, list[list[float]]] = {k: [] for k in runs}
+    load = os.getloadavg()[0]
+    for r in range(args.repeats):
+        for k in list(runs)[:: 1 if r % 2 else -1]:
+            mm, dd = runs[k]
+            for t in dd.timer:
+                t.duration, t.number = 0.0, 0
+            mujoco.mj_step(mm, dd, n)
+            per_stage[k].append([dd.timer[int(i)].duration / n * 1e6 for _, i in stages])
+    med_stage = {k: np.median(np.array(v), axis=0) for k, v in per_stage.items()}
+    print(f"\nMuJoCo's stage timers, us per step (median of {args.repeats} interleaved runs of")
+    print(f"{n} steps, load {load:.2f}):\n")
+    print(f"| stage | this checkout | {ref} |\n|---|---|---|")
+    for j, (label, _) in enumerate(stages):
+        print(f"| {label} | {med_stage['this checkout'][j]:.2f} | {med_stage[ref][j]:.2f} |")
     return 0 if ok else 1
 
 
