@@ -89,7 +89,8 @@ typedef struct {
   mjtNum* foil_k;    // 1/2 rho S C_La
   int* foil_normal;
   mjtNum* foil_drag; // per plate: 1/2 rho S C_D0, 1/2 rho S k_i C_La^2, 1/2 rho C_N
-  mjtNum* panel;     // per plate NPANEL x (chord, span position in the geom frame (m), area m^2)
+  mjtNum* panel;     // per plate NPANEL x (chord, span position in the geom frame (m), the
+                     // panel's -1/2 rho C_N dA (kg/m))
   int ndrag;
   int* drag_geom;    // every fluid geom of the vehicle
   int nfk;
@@ -477,7 +478,7 @@ static int hydro_init(const mjModel* m, mjData* d, int instance) {
           mjtNum xi = -1.0 + (2.0 * k + 1.0) / NCHORD;
           pn[0] = xi * half * s[0];
           pn[1] = cos(th) * s[3 - normal];
-          pn[2] = area * 2.0 * half * half / (NSPAN + 1) / NCHORD;
+          pn[2] = -h->foil_drag[3 * i + 2] * (area * 2.0 * half * half / (NSPAN + 1) / NCHORD);
           pn += 3;
         }
       }
@@ -583,10 +584,47 @@ static void add_wrench(Hydro* h, const mjModel* m, const mjData* d, int b, const
   }
 }
 
+// qfrc += Jp^T f + Jr^T t: force f (N, world) and moment t (N m, world) at point p (m, world) on
+// body b, as mj_applyFT adds them with dense Jacobians, written for the dofs of b's chain alone
+// (its other columns are zero): mj_jac's columns, Jr = the dof's axis cdof[0:3] and Jp =
+// cdof[3:6] + cdof[0:3] x (p - the subtree's centre of mass), and mju_mulMatTVec's sums (a zero
+// component of f or t skipped), in the same order, which gives the same numbers without the two
+// 3 x nv Jacobians, their zeroing and the passes over every dof
+static void apply_ft_chain(const mjModel* m, const mjData* d, const mjtNum f[3], const mjtNum t[3],
+                           const mjtNum p[3], int b, mjtNum* qfrc) {
+  const mjtNum* com = d->subtree_com + 3 * m->body_rootid[b];
+  const mjtNum o0 = p[0] - com[0], o1 = p[1] - com[1], o2 = p[2] - com[2];
+  const int wb = m->body_weldid[b];
+  if (!m->body_dofnum[wb]) return;
+  for (int da = m->body_dofadr[wb] + m->body_dofnum[wb] - 1; da >= 0; da = m->dof_parentid[da]) {
+    const mjtNum* c = d->cdof + 6 * da;
+    const mjtNum jp0 = c[3] + (c[1] * o2 - c[2] * o1);
+    const mjtNum jp1 = c[4] + (c[2] * o0 - c[0] * o2);
+    const mjtNum jp2 = c[5] + (c[0] * o1 - c[1] * o0);
+    mjtNum q = 0;
+    if (f[0] != 0) q += jp0 * f[0];
+    if (f[1] != 0) q += jp1 * f[1];
+    if (f[2] != 0) q += jp2 * f[2];
+    qfrc[da] += q;
+    q = 0;
+    if (t[0] != 0) q += c[0] * t[0];
+    if (t[1] != 0) q += c[1] * t[1];
+    if (t[2] != 0) q += c[2] * t[2];
+    qfrc[da] += q;
+  }
+}
+
 static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) {
+  // a model whose Jacobians are sparse (nv >= 60 by default: scenes of several vehicles) takes
+  // mj_applyFT itself, whose sparse sums this does not repeat
+  const int sparse = mj_isSparse(m);
   for (int i = 0; i < h->nacc; i++) {
     const int w = h->acc_list[i];
-    mj_applyFT(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    if (sparse) {
+      mj_applyFT(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    } else {
+      apply_ft_chain(m, d, h->acc + 6 * w, h->acc + 6 * w + 3, d->xipos + 3 * w, w, qfrc);
+    }
     h->acc_on[w] = 0;
   }
   h->nacc = 0;
@@ -607,6 +645,19 @@ static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) 
 //   Magnus lift      rho C_M V (om x u), V = 4/3 pi r0 r1 r2.
 static void ellipsoid_model(mjtNum t[3], mjtNum f[3], const mjtNum om[3], const mjtNum u[3],
                             const mjtNum r[3], const mjtNum c[5], mjtNum rho, mjtNum mu) {
+  if (c[0] == 0 && c[1] == 0 && c[2] == 0 && c[3] == 0 && c[4] == 0) {
+    // all five coefficients zero (the marker geoms): the quadratic and angular drag below are
+    // rho |u| (0 + 0) and rho |m| with m = 0, exact zeros added to the Stokes terms, and there is
+    // no lift; the Stokes drag alone gives the same numbers
+    const mjtNum d_eq = 2.0 / 3.0 * (r[0] + r[1] + r[2]);
+    const mjtNum drag_lin = mu * 3.0 * mjPI * d_eq;
+    const mjtNum drag_ang = mu * mjPI * d_eq * d_eq * d_eq;
+    for (int i = 0; i < 3; i++) {
+      t[i] -= drag_ang * om[i];
+      f[i] -= drag_lin * u[i];
+    }
+    return;
+  }
   const mjtNum lo = fmin(r[0], fmin(r[1], r[2])), hi = fmax(r[0], fmax(r[1], r[2]));
   const mjtNum mid = r[0] + r[1] + r[2] - lo - hi;
   const mjtNum a_max = mjPI * hi * mid;
@@ -876,23 +927,28 @@ static void hydro_compute(const mjModel* m, mjData* d, int instance, int capabil
         fp[n] -= di * un;
       }
       // normal force of each panel, at the panel: moment about the centre
+      // (a panel at r = x e_x + s e_span: its normal velocity un + (omega x r)_n, its moment
+      // r x (fn e_n); written out per normal axis, the terms of the cross products that are
+      // products of the zero components of r and fn e_n left out, which changes no sum)
       if (fd[2] != 0) {
         const mjtNum* pn = h->panel + 3 * NPANEL * i;
-        for (int k = 0; k < NPANEL; k++, pn += 3) {
-          mjtNum r[3] = {pn[0], 0, 0};
-          r[span] = pn[1];
-          mjtNum wr[3];
-          cross3(wr, vel, r);  // vel[0:3]: the geom's angular velocity, its frame
-          mjtNum unp = un + wr[n];
-          mjtNum fn = -fd[2] * pn[2] * fabs(unp) * unp;
-          fp[n] += fn;
-          // r x (fn e_n)
-          mjtNum fv[3] = {0, 0, 0}, tv[3];
-          fv[n] = fn;
-          cross3(tv, r, fv);
-          tp[0] += tv[0];
-          tp[1] += tv[1];
-          tp[2] += tv[2];
+        const mjtNum ox = vel[0], oy = vel[1], oz = vel[2];  // the geom's angular velocity
+        if (n == 2) {  // normal z, span y: r = (x, y, 0)
+          for (int k = 0; k < NPANEL; k++, pn += 3) {
+            mjtNum unp = un + (ox * pn[1] - oy * pn[0]);
+            mjtNum fn = pn[2] * fabs(unp) * unp;
+            fp[2] += fn;
+            tp[0] += pn[1] * fn;
+            tp[1] -= pn[0] * fn;
+          }
+        } else {  // normal y, span z: r = (x, 0, z)
+          for (int k = 0; k < NPANEL; k++, pn += 3) {
+            mjtNum unp = un + (oz * pn[0] - ox * pn[1]);
+            mjtNum fn = pn[2] * fabs(unp) * unp;
+            fp[1] += fn;
+            tp[0] -= pn[1] * fn;
+            tp[2] += pn[0] * fn;
+          }
         }
       }
       mjtNum fw2[3], tw2[3];
