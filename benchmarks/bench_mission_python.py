@@ -12,6 +12,9 @@ Two variants per checkout, each a fresh interpreter with the checkout first on `
   the sensor rig, navigator, guidance, autopilot and world around the MuJoCo steps, and its
   tables and Parquet run data); ``--no-flight`` skips it.
 
+Each variant's wall time (the harness's table, with the load) and its CPU time (user + system of
+the child process, less sensitive to a loaded machine) are printed.
+
 Usage::
 
     python benchmarks/bench_mission_python.py --reference ../main-checkout --repeats 5
@@ -23,8 +26,12 @@ The reference checkout needs the compiled plugin beside its ``bauv_sim/plugin/hy
 from __future__ import annotations
 
 import argparse
+import resource
+import statistics
 import sys
 import tempfile
+from collections import defaultdict
+from collections.abc import Callable
 from pathlib import Path
 
 from harness import command, machine, measure, table
@@ -35,6 +42,23 @@ STARTUP = (
     "from tasks.core import runner, registry; e = registry.get('mission/survey'); "
     "assert e.name == 'mission/survey'"
 )
+
+
+CPU: dict[str, list[float]] = defaultdict(list)
+"""CPU time (user + system) of each call of each variant, s: less sensitive to a loaded machine
+than its wall time."""
+
+
+def with_cpu(name: str, f: Callable[[], None]) -> Callable[[], None]:
+    """``f`` (which runs a child process), recording the child's CPU time in :data:`CPU`."""
+
+    def run() -> None:
+        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        f()
+        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        CPU[name].append(r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
+
+    return run
 
 
 def variants(checkout: Path, label: str, tmp: Path, flight: bool) -> dict:
@@ -68,14 +92,22 @@ def main() -> None:
         v = {"python -c pass": command([sys.executable, "-c", "pass"])}
         v |= variants(ROOT, "this checkout", tmp, not a.no_flight)
         v |= variants(a.reference.resolve(), "reference", tmp, not a.no_flight)
-        res = measure(v, repeats=a.repeats, warmup=1)
+        res = measure({k: with_cpu(k, f) for k, f in v.items()}, repeats=a.repeats, warmup=1)
         print(table(res, reference="python -c pass", unit="s"))
+        print("\n| variant | CPU min (s) | CPU median (s) |\n|---|---|---|")
+        for k, cpu in CPU.items():
+            timed = cpu[1:]  # the first call is the warm-up
+            print(f"| {k} | {min(timed):.3f} | {statistics.median(timed):.3f} |")
+        print()
         for what in ("start-up",) + (() if a.no_flight else ("flight",)):
             new, old = res[f"{what} (this checkout)"], res[f"{what} (reference)"]
+            cn, co = CPU[f"{what} (this checkout)"][1:], CPU[f"{what} (reference)"][1:]
             print(
                 f"{what}: reference / this checkout = {old.median / new.median:.3f}x by the "
                 f"median, {old.min / new.min:.3f}x by the minimum; saved "
-                f"{old.median - new.median:+.3f} s (median), {old.min - new.min:+.3f} s (min)"
+                f"{old.median - new.median:+.3f} s (median), {old.min - new.min:+.3f} s (min); "
+                f"CPU saved {statistics.median(co) - statistics.median(cn):+.3f} s (median), "
+                f"{min(co) - min(cn):+.3f} s (min)"
             )
 
 
