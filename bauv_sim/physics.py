@@ -313,12 +313,14 @@ class BauvPhysics(Actuation, mjcf.Physics):
         mujoco.mj_getState(m, d, self._state_buf, mujoco.mjtState.mjSTATE_INTEGRATION)
         warn0 = d.warning.number.copy()
         t0 = float(d.time)
-        dt = float(m.opt.timestep)
-        force, vel = d.actuator_force, d.actuator_velocity
-        acc = [(v.name, v.act["motor"]) for v in self._vehicles.values()]
-        w0, a0 = hydro.water(m, d, self._v(None).hydro_instance)
-        ramp = bool(np.any(a0 != 0.0))
+        instance = self._v(None).hydro_instance
+        # the water's rate (hydro.water's second part) decides; its velocity only for a ramp
+        ramp = bool(hydro._water_slice(m, d, instance)[3:6].any())
         if self._track_energy or ramp:
+            w0, a0 = hydro.water(m, d, instance)
+            dt = float(m.opt.timestep)
+            force, vel = d.actuator_force, d.actuator_velocity
+            acc = [(v.name, v.act["motor"]) for v in self._vehicles.values()]
             energy = self._energy_j
             step = mujoco.mj_step
             wind = m.opt.wind
@@ -335,7 +337,7 @@ class BauvPhysics(Actuation, mjcf.Physics):
             mujoco.mj_step(m, d, int(nstep))
         self._kinematics_stale = True
         if (
-            np.any(d.warning.number != warn0)
+            (d.warning.number != warn0).any()
             or not (
                 np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all() and np.isfinite(d.act).all()
             )

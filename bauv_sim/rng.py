@@ -230,11 +230,12 @@ class RunStreams:
         """
         if kind not in self._KINDS:
             raise ValueError(f"kind = {kind!r}: one of {self._KINDS}")
-        n = len(self._states)
-        out = np.empty((n, size))
-        gen, bg = self._gen, self._gen.bit_generator
+        gen = self._gen
         if self._single:
             return getattr(gen, kind)(*args, size=size)[None]
+        n = len(self._states)
+        out = np.empty((n, size))
+        bg = gen.bit_generator
         pending = self._pending
         scratch = np.empty(pending[1]) if pending is not None else None
         fill = gen.standard_normal if kind == "standard_normal" else gen.random

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from bauv_sim.config import Config
-from bauv_sim.frames import course_of_scalar, wrap_2pi
+from bauv_sim.frames import course_of_scalar, wrap_2pi, wrap_2pi_scalar
 from bauv_sim.sensors.base import SensorSamples, broadcast_runs
 from bauv_sim.sensors.errors import AngleErrorConfig, ErrorProcess
 from bauv_sim.sensors.online import DeviceBuild, Measurement, TickContext, register_device
@@ -106,9 +106,10 @@ class CompassDevice:
     def step(self, ctx: TickContext) -> Measurement:
         """Measure the true heading (and pass the course over ground to sector-bias models)."""
         vt = ctx.truth
-        course = None
-        if self._needs_course:
-            v = vt.velocity_world_m_s
-            course = np.array([[course_of_scalar(v[0], v[1])]])
+        if not self._needs_course:  # one sample in Python floats: the same bits as measure()
+            value, _ = self._compass._err.apply_one(float(vt.roll_pitch_heading_rad[2]), ctx.t_s)
+            return Measurement(self.name, ctx.t_s, ctx.t_s, np.array([wrap_2pi_scalar(value)]))
+        v = vt.velocity_world_m_s
+        course = np.array([[course_of_scalar(v[0], v[1])]])
         heading = self._compass.measure(np.array([[vt.roll_pitch_heading_rad[2]]]), ctx.tt, course)
         return Measurement(self.name, ctx.t_s, ctx.t_s, heading[0][0])

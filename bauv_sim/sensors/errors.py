@@ -172,6 +172,52 @@ class ErrorProcess:
             produced = self._draw("dropout", k, "random") >= m.dropout_probability
         return out, produced
 
+    def apply_one(self, true_value: float, t_s: float) -> tuple[float, bool]:
+        """:meth:`apply` of one run and one sample with Python floats, for per-tick devices: the
+        same operations in the same order on the same draws, so the same bits (tested). A model
+        that needs a reference angle (sector bias, deviation) is measured with :meth:`apply`.
+
+        Args:
+            true_value: the true value, SI.
+            t_s: the sample's time, s (for the random walk).
+
+        Returns:
+            ``(measured, produced)``; where ``produced`` is False the measurement does not exist.
+
+        Raises:
+            ValueError: if the process is not of one run, or its model needs a reference angle.
+        """
+        m = self.model
+        if len(self.runs) != 1:
+            raise ValueError(f"apply_one is for one run; this process has {len(self.runs)}")
+        if m.needs_reference():
+            raise ValueError("this error model needs a reference angle: measure with apply()")
+        out = float(true_value) * (1.0 + m.scale_factor) + m.bias
+        if m.random_walk > 0:
+            t = float(t_s)
+            prev = t if self._t_last is None else self._t_last
+            step = self._draw("walk", 1, "standard_normal")[0, 0] * (
+                m.random_walk * math.sqrt(t - prev)
+            )
+            walk = float(self._walk[0] + step)
+            self._walk = np.array([walk])
+            self._t_last = t
+            out = out + walk
+        if m.sigma > 0:
+            if m.distribution == "uniform":
+                h = m.uniform_k * m.sigma
+                out = out + self._draw("noise", 1, "uniform", -h, h)[0, 0]
+            else:
+                out = out + m.sigma * self._draw("noise", 1, "standard_normal")[0, 0]
+        if m.outlier_probability > 0:
+            hit = self._draw("outlier", 1, "random")[0, 0] < m.outlier_probability
+            size = m.outlier_sigma * self._draw("outlier_size", 1, "standard_normal")[0, 0]
+            out = out + (size if hit else 0.0)
+        produced = True
+        if m.dropout_probability > 0:
+            produced = bool(self._draw("dropout", 1, "random")[0, 0] >= m.dropout_probability)
+        return float(out), produced
+
 
 _COMMON_DOC = """Error model of one measured quantity; the unit is in every field name.
 

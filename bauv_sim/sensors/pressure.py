@@ -95,5 +95,6 @@ class PressureDevice:
 
     def step(self, ctx: TickContext) -> Measurement:
         """Measure the true depth."""
-        value, _ = self._pressure.measure(np.array([[ctx.truth.depth_m]]), ctx.tt)
-        return Measurement(self.name, ctx.t_s, ctx.t_s, value[0])
+        # one sample in Python floats: the same bits as measure() (ErrorProcess.apply_one)
+        value, _ = self._pressure._err.apply_one(float(ctx.truth.depth_m), ctx.t_s)
+        return Measurement(self.name, ctx.t_s, ctx.t_s, np.array([value]))

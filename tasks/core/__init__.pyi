@@ -24,6 +24,7 @@ from .registry import (
     get as get,
     names as names,
     register as register,
+    register_modules as register_modules,
     ReportContext as ReportContext,
     ReportSummary as ReportSummary,
 )

@@ -36,6 +36,10 @@ import tomli_w
 from bauv_sim.errors import BauvSimError, ConfigError
 from nav.errors import NavError
 
+GL_VARIABLE = "MUJOCO_GL"
+"""MuJoCo's and dm_control's OpenGL backend variable; ``bauv run`` sets it to ``disable`` unless
+it is set."""
+
 EXIT_INPUT = 2
 EXIT_FAILED = 1
 EXIT_INTERRUPTED = 130
@@ -159,6 +163,10 @@ def run_cmd(
     from tasks.core import workers as workers_mod
 
     workers_mod.prepare_batch_process()  # before numpy is imported, here and in the workers
+    # a batch renders nothing through OpenGL (figures: matplotlib; recordings: rerun): MuJoCo and
+    # dm_control then skip their search for a GL backend at import (GLFW's library, about 0.05 s
+    # of a mission's start-up), here and in the workers, unless the user chose a backend
+    os.environ.setdefault(GL_VARIABLE, "disable")
     if executor == "local" and workers > 1:
         # before the project's imports: where workers come from a fork server (not where bauv
         # forks them itself), the server imports the project meanwhile

@@ -7,7 +7,12 @@ dm_control's suite domains add themselves with ``@SUITE.add``; its package's ``_
 it, so importing the package registers all of its experiments. :func:`get` imports only the package
 of the name's family (a kinematic run never imports MuJoCo for the missions); :func:`names` and
 :func:`all_experiments` import every package. Registration is explicit: a module that its package
-does not import is not registered, whatever its file name. :mod:`tasks.core.catalog` holds every
+does not import is not registered, whatever its file name.
+
+A package whose experiments are costly to import may instead name, for each experiment, the
+module that registers it (:func:`register_modules`) and import none of them: importing the package
+then declares every name, and :func:`get` imports the one module of the name asked for (``bauv run``
+of one mission does not import the others). :mod:`tasks.core.catalog` holds every
 name with its summary for ``bauv list`` without importing any experiment (a test keeps it equal
 to the registry).
 
@@ -40,6 +45,9 @@ if TYPE_CHECKING:
     from tasks.core.report_pool import ReportPool
 
 _REGISTRY: dict[str, Experiment] = {}
+_MODULES: dict[str, str] = {}
+"""Name -> the module whose import registers it, for names declared by :func:`register_modules`
+and not yet registered."""
 _LOADED = False
 
 
@@ -189,6 +197,17 @@ def block_by_work(block_size: int | None, steps_per_run: int, steps_per_block: i
     return max(1, min(MAX_BLOCK_RUNS, steps_per_block // max(1, steps_per_run)))
 
 
+def _check_family(name: str) -> None:
+    family = name.split("/", 1)[0]
+    declared = families()
+    if family not in declared:
+        raise ValueError(
+            f"experiment name {name!r}: family {family!r} is not declared (declared: "
+            f"{', '.join(declared)}); a package declares its family as an entry point of group "
+            "'bauv_sim.experiments' in its pyproject.toml"
+        )
+
+
 def register(experiment: Experiment) -> Experiment:
     """Add an experiment to the registry.
 
@@ -202,18 +221,50 @@ def register(experiment: Experiment) -> Experiment:
             f"experiment = {experiment!r:.60} ({type(experiment).__name__}): must be an "
             "Experiment instance (tasks.core.registry.Experiment or a subclass)"
         )
-    family = experiment.name.split("/", 1)[0]
-    declared = families()
-    if family not in declared:
-        raise ValueError(
-            f"experiment name {experiment.name!r}: family {family!r} is not declared (declared: "
-            f"{', '.join(declared)}); a package declares its family as an entry point of group "
-            "'bauv_sim.experiments' in its pyproject.toml"
-        )
+    _check_family(experiment.name)
     if experiment.name in _REGISTRY and _REGISTRY[experiment.name] is not experiment:
         raise ValueError(f"experiment name {experiment.name!r} is registered twice")
     _REGISTRY[experiment.name] = experiment
+    _MODULES.pop(experiment.name, None)
     return experiment
+
+
+def register_modules(modules: Mapping[str, str]) -> None:
+    """Declare experiments by the modules that register them, without importing those modules:
+    :func:`get` imports a name's module when the name is first asked for, :func:`names` lists the
+    names at once, and :func:`all_experiments` imports every module. For a package whose
+    experiments are costly to import, called from its ``__init__`` instead of importing them.
+
+    Args:
+        modules: experiment name (``family/name``) -> the dotted path of the module whose import
+            registers it (with :func:`register`).
+
+    Raises:
+        ValueError: if a name's family is not declared, or a name is declared with another
+            module than before.
+    """
+    for name, module in modules.items():
+        _check_family(name)
+        if _MODULES.get(name, module) != module:
+            raise ValueError(
+                f"experiment name {name!r} is declared by two modules: {_MODULES[name]!r} and "
+                f"{module!r}"
+            )
+        if name not in _REGISTRY:
+            _MODULES[name] = module
+
+
+def _import_module_of(name: str) -> None:
+    """Import the module that :func:`register_modules` named for ``name``; it must register it."""
+    module = _MODULES.get(name)
+    if module is None:
+        return
+    importlib.import_module(module)
+    if name not in _REGISTRY:
+        raise ValueError(
+            f"experiment name {name!r}: module {module!r} was declared to register it "
+            "(register_modules) but its import did not"
+        )
 
 
 def experiment_packages() -> tuple[str, ...]:
@@ -232,9 +283,9 @@ def _load_all() -> None:
 
 
 def names() -> list[str]:
-    """All registered names, sorted."""
+    """All registered names (and those declared by :func:`register_modules`), sorted."""
     _load_all()
-    return sorted(_REGISTRY)
+    return sorted({*_REGISTRY, *_MODULES})
 
 
 def get(name: str) -> Experiment:
@@ -256,12 +307,14 @@ def get(name: str) -> Experiment:
         package = families().get(name.split("/", 1)[0])
         if package is not None:
             importlib.import_module(package)
+        _import_module_of(name)
     if name not in _REGISTRY:
         _load_all()
+        _import_module_of(name)
     try:
         return _REGISTRY[name]
     except KeyError:
-        known = ", ".join(sorted(_REGISTRY)) or "(none)"
+        known = ", ".join(sorted({*_REGISTRY, *_MODULES})) or "(none)"
         raise ConfigError(f"unknown experiment {name!r}; known: {known}") from None
 
 

@@ -2,7 +2,8 @@
 ``mission/surfacing``, ``mission/short``, ``mission/correction`` (seed 001 on the BAUV),
 ``mission/swarm`` (seed 003: followers keeping station on a leader), ``mission/seed004``
 (seed 004: bearings to beacons, locally optimal control) and ``mission/trn`` (a DVL and
-terrain-relative navigation over relief). Importing registers them."""
+terrain-relative navigation over relief). Importing declares them; each mission's module is
+imported when its name is first asked for (:func:`tasks.core.registry.register_modules`)."""
 
 from tasks.core.style import PALETTE as P
 from tasks.core.style import MethodStyle, declare
@@ -26,6 +27,13 @@ declare(
     },
 )
 
-from tasks.missions import correction, seed004, short, surfacing, survey, swarm, trn  # noqa: E402
+from tasks.core.registry import register_modules  # noqa: E402
 
-__all__ = ["correction", "seed004", "short", "surfacing", "survey", "swarm", "trn"]
+# each mission's module is imported when its name is first asked for (tasks.core.registry): a run
+# of one mission does not import the others (0.18 s of mission/survey's start-up)
+register_modules(
+    {
+        f"mission/{name}": f"{__name__}.{name}"
+        for name in ("correction", "seed004", "short", "surfacing", "survey", "swarm", "trn")
+    }
+)

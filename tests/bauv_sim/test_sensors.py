@@ -319,3 +319,44 @@ def test_log_reads_the_velocity_through_water_along_the_pitched_hull():
     )
     s = Log(LogConfig(speed={"sigma_m_s": 0.0}), 0, (0,)).sample(tr, np.arange(T))
     np.testing.assert_allclose(s.values[0], [1.5, water[1] @ axis], rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        ErrorModel("gaussian", sigma=0.3, bias=0.1, scale_factor=0.01),
+        ErrorModel("uniform", sigma=0.2, uniform_k=3.0, bias=-0.05),
+        ErrorModel(
+            "gaussian",
+            sigma=1.0,
+            scale_factor=-0.02,
+            bias=0.4,
+            random_walk=0.07,
+            outlier_probability=0.2,
+            outlier_sigma=5.0,
+            dropout_probability=0.3,
+        ),
+        ErrorModel("uniform", sigma=0.5, random_walk=0.2, outlier_probability=0.5, outlier_sigma=2),
+        ErrorModel(deviation=(0.01, 0.02, -0.03, 0.004, 0.005), sigma=0.1),
+        ErrorModel(),
+    ],
+)
+def test_apply_one_is_apply_of_one_sample_bit_for_bit(model):
+    """The per-tick devices' scalar form gives the same bits as apply() of one sample at a time,
+    with the random walk carried across samples and every stream drawn in the same order."""
+    gen = np.random.default_rng(5)
+    t = np.cumsum(gen.uniform(0.05, 0.5, 300))
+    x = gen.normal(0.0, 10.0, 300)
+    arrays = ErrorProcess(model, 17, (4,), ("sensor", "dev", "q"))
+    scalars = ErrorProcess(model, 17, (4,), ("sensor", "dev", "q"))
+    for ti, xi in zip(t, x, strict=True):
+        v, ok = arrays.apply(np.array([[xi]]), np.array([ti]), np.array([[0.3 * xi]]))
+        if model.needs_reference():  # through apply(), which needs the reference angle
+            with pytest.raises(ValueError, match="reference angle"):
+                scalars.apply_one(float(xi), float(ti))
+            return
+        w, produced = scalars.apply_one(float(xi), float(ti))
+        assert type(w) is float and type(produced) is bool
+        assert w == v[0, 0] and np.signbit(w) == np.signbit(v[0, 0]) and produced == ok[0, 0]
+    with pytest.raises(ValueError, match="one run"):
+        ErrorProcess(model, 17, (4, 5), ("q",)).apply_one(0.0, 0.0)

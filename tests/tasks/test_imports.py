@@ -148,3 +148,36 @@ def test_bauv_spares_the_final_garbage_collections_at_exit():
     lines = res.stdout.strip().splitlines()
     assert lines[-2] == "frozen before exit 0", lines[-2:]
     assert lines[-1].startswith("frozen ") and int(lines[-1].split()[-1]) > 1000, lines[-1]
+
+
+@pytest.mark.slow
+def test_bauv_run_looks_for_no_opengl_backend_unless_asked(tmp_path):
+    """``bauv run`` renders nothing through OpenGL: it sets MUJOCO_GL=disable (unless the user
+    set it) before MuJoCo is imported, so that MuJoCo does not load GLFW's library at import; a
+    user's choice is kept."""
+    import os
+
+    def run(env_gl: str | None) -> tuple[str | None, bool]:
+        code = (
+            "import json, os, sys\n"
+            "from tasks.core.cli import main\n"
+            "try:\n"
+            f"    main(['run', 'paper-000/test-1', '--runs', '1', '--quiet', '--out', "
+            f"{str(tmp_path / str(env_gl))!r}, '--set', 'report.figures=false', '--set', "
+            "'report.recording=false'])\n"
+            "except SystemExit as e:\n"
+            "    assert not e.code, e.code\n"
+            "import mujoco\n"
+            "print(json.dumps([os.environ.get('MUJOCO_GL'), 'glfw' in sys.modules]))\n"
+        )
+        env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+        if env_gl is not None:
+            env["MUJOCO_GL"] = env_gl
+        res = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+        )
+        gl, glfw = json.loads(res.stdout.strip().splitlines()[-1])
+        return gl, glfw
+
+    assert run(None) == ("disable", False)
+    assert run("glfw")[0] == "glfw"

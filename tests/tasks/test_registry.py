@@ -60,11 +60,54 @@ def test_each_family_is_registered_by_its_own_package_alone(family):
     code = (
         "import importlib, json; from tasks.core import registry;"
         f"importlib.import_module({package!r});"
-        "print(json.dumps(sorted(registry._REGISTRY)))"
+        "print(json.dumps(sorted({*registry._REGISTRY, *registry._MODULES})))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     alone = set(json.loads(out.stdout))
     assert alone == {n for n in NAMES if n.split("/", 1)[0] == family}
+
+
+@pytest.mark.slow
+def test_getting_a_mission_imports_its_module_alone():
+    """The missions' package names each mission's module (register_modules) instead of importing
+    them all: get() of one mission imports that module and no other mission's (checked in a fresh
+    interpreter); every mission is still listed and found."""
+    import subprocess
+    import sys
+
+    code = (
+        "import json, sys; from tasks.core import registry;"
+        "e = registry.get('mission/short');"
+        "print(json.dumps([e.name, sorted(m for m in sys.modules "
+        "if m.startswith('tasks.missions.'))]))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    name, loaded = json.loads(out.stdout.strip().splitlines()[-1])
+    assert name == "mission/short"
+    assert loaded == ["tasks.missions.short"]
+    missions = [n for n in NAMES if n.startswith("mission/")]
+    assert len(missions) == 7 and all(registry.get(n).name == n for n in missions)
+
+
+def test_a_declared_module_must_register_its_name(monkeypatch, tmp_path):
+    """A name declared with register_modules whose module does not register it is an error
+    naming both, not an unknown name."""
+    import sys
+
+    (tmp_path / "user_module_r29.py").write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    try:
+        registry.register_modules({"mission/not-registered-r29": "user_module_r29"})
+        assert "mission/not-registered-r29" in registry.names()
+        with pytest.raises(ValueError, match=r"user_module_r29.*did not"):
+            registry.get("mission/not-registered-r29")
+        with pytest.raises(ValueError, match="two modules"):
+            registry.register_modules({"mission/not-registered-r29": "another_module_r29"})
+        with pytest.raises(ValueError, match="not declared"):
+            registry.register_modules({"no-such-family-r29/x": "user_module_r29"})
+    finally:
+        registry._MODULES.pop("mission/not-registered-r29", None)
+        sys.modules.pop("user_module_r29", None)
 
 
 def test_a_name_outside_the_families_is_refused():
