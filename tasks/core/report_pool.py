@@ -28,7 +28,7 @@ from typing import Any
 from bauv_sim.config import Config, to_plain, validate
 from tasks.core import files, registry, run_folder
 from tasks.core import workers as workers_mod
-from tasks.core.plan import BatchPlan
+from tasks.core.plan import BatchPlan, memory_limit_bytes
 from tasks.core.registry import ReportWork
 
 Job = Callable[..., Any]
@@ -111,13 +111,28 @@ class ReportPool:
             ex.shutdown(wait=True)
 
 
-def start_pool(plan: BatchPlan, out_dir: Path) -> ReportPool | None:
-    """A :class:`ReportPool` for a batch whose experiment hands out report work, with
-    :func:`processes_for` processes, or ``None`` (no work, one CPU, or processes cannot be
-    started here: the report then does its jobs itself)."""
+def start_pool(plan: BatchPlan, out_dir: Path, workers: int = 1) -> ReportPool | None:
+    """A :class:`ReportPool` for a batch whose experiment hands out report work, or ``None``
+    (no work, one CPU, or processes cannot be started here: the report then does its jobs
+    itself).
+
+    It has :func:`processes_for` processes, fewer where the batch's memory would not allow them:
+    each holds what the report holds (the terms of :meth:`Experiment.memory
+    <tasks.core.registry.Experiment.memory>` that are not per block), on top of the batch's own
+    estimate with ``workers`` processes computing blocks; the limit is
+    :func:`tasks.core.plan.memory_limit_bytes`.
+    """
     work = plan.experiment.report_work(plan.scenario)
     n = processes_for(work)
     if work is None or n == 0:
+        return None
+    terms = plan.experiment.memory(plan.scenario, plan.n_runs)
+    batch = sum(t.bytes * (workers if t.per_block else 1) for t in terms)
+    report = sum(t.bytes for t in terms if not t.per_block)
+    limit = memory_limit_bytes()
+    while n > 0 and batch + n * report > limit:
+        n -= 1
+    if n == 0:
         return None
     try:
         return ReportPool(plan, out_dir, work, n)

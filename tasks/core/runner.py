@@ -198,7 +198,7 @@ def execute(
                 f"{len(batch.failures)} block(s) failed; the other blocks are saved in {out_dir} "
                 "and --resume retries the failed ones:\n  " + "\n  ".join(batch.failures)
             )
-        batch.start_report_pool()  # nothing was computed (--resume of a complete batch)
+        batch.start_report_pool(0)  # nothing was computed (--resume of a complete batch)
         try:
             summary = _write_report(plan, out_dir, progress, batch.overlapped, batch.report_pool)
         except BaseException:
@@ -232,11 +232,12 @@ class _Computation:
         self.arrivals = Arrivals(set(range(len(plan.blocks))) - set(self.todo))
         self.bar: Any = None if self.todo else self._progress_bar()
 
-    def start_report_pool(self) -> None:
+    def start_report_pool(self, workers: int) -> None:
         """Start the report's processes (:mod:`tasks.core.report_pool`), if the experiment hands
-        out report work, so that they import its libraries while the blocks are computed."""
+        out report work, so that they import its libraries while the blocks are computed
+        (``workers``: the processes computing blocks meanwhile, for the memory they hold)."""
         if self.report_pool is None:
-            self.report_pool = start_pool(self.plan, self.out_dir)
+            self.report_pool = start_pool(self.plan, self.out_dir, workers)
 
     def _progress_bar(self) -> Any:
         from tqdm import tqdm
@@ -287,12 +288,12 @@ class _Computation:
             }
             if isinstance(ex, InlineExecutor):
                 # forked now, before this process starts a thread or builds a physics
-                self.start_report_pool()
+                self.start_report_pool(1)
             self.bar = self._progress_bar()
             if not isinstance(ex, InlineExecutor):
                 # after the workers are forked (a pool started before would make them come from
                 # a fork server)
-                self.start_report_pool()
+                self.start_report_pool(workers)
                 self.overlapped = OverlappedReport(
                     plan, self.out_dir, self.progress, self.arrivals, self.report_pool
                 )

@@ -129,7 +129,7 @@ def before_the_report(monkeypatch, action):
     pids = []
 
     def patched(plan, out_dir, progress, overlapped, pool):
-        pids.extend(pool.pids())
+        pids.extend(pool.pids() if pool is not None else [])
         action(out_dir, pool)
         return write_report(plan, out_dir, progress, overlapped, pool)
 
@@ -193,6 +193,27 @@ def test_one_process_per_job_and_per_usable_cpu(monkeypatch):
         assert report_pool.processes_for(work) == want
     assert report_pool.processes_for(None) == 0
     assert report_pool.processes_for(ReportWork(0)) == 0
+
+
+@pytest.mark.slow
+def test_no_report_process_where_the_memory_would_not_allow_it(alone, tmp_path, monkeypatch):
+    from tasks.core import plan as plan_mod
+    from tasks.core.plan import plan_batch
+
+    # the limit just above what the batch needs with bauv alone: no room for a report process
+    p = plan_batch(SHORT, seed=2, overrides=OVERRIDES)
+    terms = p.experiment.memory(p.scenario, p.n_runs)
+    alone_b = sum(t.bytes for t in terms)
+    report_b = sum(t.bytes for t in terms if not t.per_block)
+    assert report_b > 0
+    monkeypatch.setattr(report_pool, "memory_limit_bytes", lambda: alone_b + 1.5 * report_b)
+    monkeypatch.setattr(plan_mod, "memory_limit_bytes", lambda: alone_b + 1.5 * report_b)
+    pids = before_the_report(monkeypatch, lambda out_dir, pool: None)
+    out = tmp_path / "run"
+    _, summary = run(SHORT, seed=2, out_dir=out, overrides=OVERRIDES, progress=False)
+    assert len(pids) == 1  # one report process fits, not two
+    assert same_summary(summary, out, alone[1], alone[0])
+    assert_same_report(alone[0], out)
 
 
 def add(scenario, blocks, out_dir, a, b):
