@@ -10,8 +10,8 @@ missions' step ``tasks.closed_loop.scenario.PHYSICS_TIMESTEP_S``) is pointed at 
 
 * **forces**: ``qfrc_passive``, the mass matrix with the added mass and ``qacc`` after
   ``mj_forward`` at random states (pose, velocities, joint angles, water and its acceleration);
-* **trajectory**: ``--check-steps`` steps of the survey's cruise from one state, the water and the
-  controls changed every 2 s; ``qpos``, ``qvel``, ``qacc`` compared;
+* **trajectory**: ``--check-steps`` steps of the survey's cruise from one state, the water changed
+  every 8 s and the controls every 6 s; ``qpos``, ``qvel``, ``qacc`` compared;
 * **time**: ``mj_step`` of ``--nstep`` steps (the loop in C), the two interleaved through
   :mod:`harness` (wall time), and the stepping thread's CPU time of the same calls, which the
   machine's other load moves less.

@@ -646,9 +646,10 @@ static void apply_wrenches(Hydro* h, const mjModel* m, mjData* d, mjtNum* qfrc) 
 static void ellipsoid_model(mjtNum t[3], mjtNum f[3], const mjtNum om[3], const mjtNum u[3],
                             const mjtNum r[3], const mjtNum c[5], mjtNum rho, mjtNum mu) {
   if (c[0] == 0 && c[1] == 0 && c[2] == 0 && c[3] == 0 && c[4] == 0) {
-    // all five coefficients zero (the marker geoms): the quadratic and angular drag below are
-    // rho |u| (0 + 0) and rho |m| with m = 0, exact zeros added to the Stokes terms, and there is
-    // no lift; the Stokes drag alone gives the same numbers
+    // all five coefficients zero (the markers, and the plates, whose drag is the plate model's):
+    // the quadratic and angular drag below are rho |u| (0 + 0) and rho |m| with m = 0, exact
+    // zeros added to the Stokes terms, and there is no lift; the Stokes drag alone gives the
+    // same numbers
     const mjtNum d_eq = 2.0 / 3.0 * (r[0] + r[1] + r[2]);
     const mjtNum drag_lin = mu * 3.0 * mjPI * d_eq;
     const mjtNum drag_ang = mu * mjPI * d_eq * d_eq * d_eq;
