@@ -610,7 +610,8 @@ class CurrentAwareMotion:
         """
         # x + increment, then + dt * current, in Python floats (the same operations in the same
         # order as on the arrays)
-        ie, in_, iu = self.base._increment_floats(*u[0].tolist(), dt_s)
+        c, spd, dz = u[0].tolist()
+        ie, in_, iu = self.base._increment_floats(c, spd, dz, dt_s)
         e, n, up, ce, cn = x[0].tolist()
         x_new = np.array([[e + ie + dt_s * ce, n + in_ + dt_s * cn, up + iu, ce, cn]])
         P_new = P[0].copy()
