@@ -77,8 +77,16 @@ class CourseSpeedDepthMotion:
         Returns:
             Displacement ``(east, north, up)``, shape (3,), m, world.
         """
-        ue, un = unit_vector_scalar(u[0])
-        return np.array([dt_s * u[1] * ue, dt_s * u[1] * un, -u[2]])
+        c, spd, dz = np.asarray(u, dtype=float)[:3].tolist()
+        return np.array(self._increment_floats(c, spd, dz, dt_s))
+
+    @staticmethod
+    def _increment_floats(
+        course_rad: float, speed_m_s: float, dz_m: float, dt_s: float
+    ) -> tuple[float, float, float]:
+        """:meth:`increment_one` in Python floats: ``(east, north, up)``, m, world."""
+        ue, un = unit_vector_scalar(course_rad)
+        return dt_s * speed_m_s * ue, dt_s * speed_m_s * un, -dz_m
 
     def f(self, x: Array, u: Array, dt_s: float) -> Array:
         """Predicted state (eq. 17): shape (n, 3)."""
@@ -199,8 +207,8 @@ class CourseSpeedDepthMotion:
 
     def _add_Q_one(self, P: Array, u: Array, dt_s: float) -> None:
         """Add :meth:`Q` of one run, written out, to the leading 3x3 block of ``P`` (d, d)."""
-        ue, un = unit_vector_scalar(u[0])
-        spd = u[1]
+        c, spd = u[:2].tolist()
+        ue, un = unit_vector_scalar(c)
         sc2, ss2 = self.sigma_course_rad**2, self.sigma_speed_m_s**2
         g00, g01, g10, g11 = dt_s * spd * un, dt_s * ue, -dt_s * spd * ue, dt_s * un
         q00 = g00 * g00 * sc2 + g01 * g01 * ss2
@@ -600,9 +608,12 @@ class CurrentAwareMotion:
         Returns:
             ``(x-, P-)``, shapes (1, 5) and (1, 5, 5).
         """
-        x_new = x.copy()
-        x_new[0, :3] += self.base.increment_one(u[0], dt_s)
-        x_new[0, :2] += dt_s * x[0, 3:5]
+        # x + increment, then + dt * current, in Python floats (the same operations in the same
+        # order as on the arrays)
+        c, spd, dz = u[0].tolist()
+        ie, in_, iu = self.base._increment_floats(c, spd, dz, dt_s)
+        e, n, up, ce, cn = x[0].tolist()
+        x_new = np.array([[e + ie + dt_s * ce, n + in_ + dt_s * cn, up + iu, ce, cn]])
         P_new = P[0].copy()
         P_new[:2, :] += dt_s * P_new[3:5, :]  # F P
         P_new[:, :2] += dt_s * P_new[:, 3:5]  # (F P) F^T

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-STUBBED = ["bauv_sim", "nav", "tasks", "tasks.core", "tasks.closed_loop"]
+STUBBED = ["bauv_sim", "nav", "nav.navigator", "tasks", "tasks.core", "tasks.closed_loop"]
 
 
 def _stub(package: str) -> Path:

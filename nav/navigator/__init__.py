@@ -11,25 +11,8 @@
   tick together (late fixes per run, gate, lock-out, DR), vectorised.
 """
 
-from nav.navigator.batch import BatchNavigator
-from nav.navigator.follower import (
-    BroadcastRangeNavigator,
-    FollowerOptions,
-    FollowerReport,
-    LeaderState,
-    RangeFixResult,
-)
-from nav.navigator.online import Estimate, Measurement, Navigator, OnlineNavigator
+import lazy_loader
 
-__all__ = [
-    "BatchNavigator",
-    "BroadcastRangeNavigator",
-    "Estimate",
-    "FollowerOptions",
-    "FollowerReport",
-    "LeaderState",
-    "Measurement",
-    "Navigator",
-    "OnlineNavigator",
-    "RangeFixResult",
-]
+# the public names: those of __init__.pyi, each imported from its module on first use (a mission
+# flying the online navigator does not import the batch and follower navigators)
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

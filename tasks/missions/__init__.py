@@ -27,10 +27,13 @@ declare(
     },
 )
 
+# what every mission is made of (each is a MissionExperiment): imported with the package, so that
+# a fork server that preloads the package (tasks.core.workers) holds it for its workers
+import tasks.closed_loop.experiment  # noqa: E402, F401
 from tasks.core.registry import register_modules  # noqa: E402
 
-# each mission's module is imported when its name is first asked for (tasks.core.registry): a run
-# of one mission does not import the others (0.18 s of mission/survey's start-up)
+# each mission's own module is imported when its name is first asked for (tasks.core.registry): a
+# run of one mission does not import the others' (0.18 s of mission/survey's start-up)
 register_modules(
     {
         f"mission/{name}": f"{__name__}.{name}"

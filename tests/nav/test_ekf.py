@@ -177,6 +177,26 @@ def test_single_run_prediction_equals_the_batched_prediction(motion):
         assert np.allclose(Pf, Pb, rtol=1e-12, atol=1e-12)
 
 
+def test_single_run_prediction_of_the_current_state_is_eq_17_in_its_written_order():
+    """The per-tick prediction of the position-and-current state is ``x + (dt S sin C,
+    dt S cos C, -dz, 0, 0) + dt (c_e, c_n, 0, 0, 0)`` added in that order, bit for bit (the
+    navigator's numbers do not depend on how the single-run path stores them)."""
+    import math
+
+    rng = np.random.default_rng(22)
+    for _ in range(200):
+        x = rng.normal(0, 100, (1, 5))
+        x[0, 3:] = rng.normal(0, 0.3, 2)
+        P = _spd(rng, 5)[None]
+        c, s, dz = rng.uniform(-7, 7), rng.uniform(0, 2), rng.normal(0, 0.3)
+        dt = rng.uniform(0.01, 5.0)
+        xf, _ = SingleRunEKF(CURRENT).predict(x, P, np.array([[c, s, dz]]), dt)
+        expected = x.copy()
+        expected[0, :3] += [dt * s * math.sin(c), dt * s * math.cos(c), -dz]
+        expected[0, :2] += dt * x[0, 3:5]
+        assert np.array_equal(xf, expected)
+
+
 def _measurement_cases(rng, model, d, n=60):
     """States near the transceiver (some vertically above it: azimuth inactive), covariances,
     and measurements of nearby truths with a gross error on every fifth."""
