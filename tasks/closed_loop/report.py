@@ -224,7 +224,9 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
     )
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
     done = [job.result() for job in jobs]
-    files += [f for figures, _ in done for f in figures] + [f for _, rec in done for f in rec]
+    # listed as drawn here: the figures in their order, then the recording
+    figures = sorted((f for drawn, _ in done for f in drawn), key=_figure_order)
+    files += figures + [f for _, rec in done for f in rec]
     text = "".join(t.to_text() + "\n" for t in tables)
     if failures:
         rest = (
@@ -245,16 +247,24 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
 
 def _report_jobs(scn: MissionScenario) -> list[tuple[tuple[str, ...], bool]]:
     """The figures and recording of a mission report as two jobs of about equal time, measured
-    on ``mission/survey`` (CPU s: route 0.58, errors 0.96, state 0.90, recording 0.1 with its
-    libraries imported): the route and errors figures; the state figure and the recording.
-    ``(figures, recording?)`` each, the empty ones left out."""
+    on ``mission/survey`` (CPU s, with their libraries imported: route 0.65, errors 1.0, state
+    0.9, recording 0.1, the last block's run data 0.06, handed out after these): the route and
+    state figures; the errors figure and the recording. ``(figures, recording?)`` each, the
+    empty ones left out."""
     figures = MISSION_FIGURES if scn.report.figures else ()
-    first = ("route", "errors")
+    first = ("route", "state")
     jobs = [
         (tuple(f for f in figures if f in first), False),
         (tuple(f for f in figures if f not in first), scn.report.recording),
     ]
     return [(f, rec) for f, rec in jobs if f or rec]
+
+
+def _figure_order(file: str) -> tuple[int, str]:
+    """Sort key of a figure's file: its figure's place in :data:`MISSION_FIGURES`, then the PNG
+    before the vector file (as :func:`tasks.core.style.save` lists them)."""
+    stem, ext = file.rsplit(".", 1)
+    return MISSION_FIGURES.index(stem), "0" if ext == "png" else ext
 
 
 def _export_block(

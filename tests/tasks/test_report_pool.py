@@ -100,8 +100,8 @@ def test_the_report_processes_write_what_bauv_writes_alone(alone, tmp_path, monk
     # the jobs went to the report processes: the figures in two groups, the recording with one,
     # the run data of the last (only) block
     assert calls == [
-        ("_figures_and_recording", ("mission/short", (("route", "errors"), False))),
-        ("_figures_and_recording", ("mission/short", (("state",), True))),
+        ("_figures_and_recording", ("mission/short", (("route", "state"), False))),
+        ("_figures_and_recording", ("mission/short", (("errors",), True))),
         ("_export_block", ("mission/short", 0)),
     ]
     # the same files in the same order, the same text
