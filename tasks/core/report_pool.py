@@ -51,8 +51,9 @@ def processes_for(work: ReportWork | None) -> int:
 class ReportPool:
     """Local processes that take jobs of a batch's report (see the module docstring).
 
-    They are started at once, so that they import :attr:`ReportWork.preload` while the batch
-    computes; each ends with ``bauv`` (:func:`tasks.core.workers.init_worker`).
+    They are started by :meth:`start` (or the first job), so that they import
+    :attr:`ReportWork.preload` while the batch computes; each ends with ``bauv``
+    (:func:`tasks.core.workers.init_worker`).
 
     Args:
         plan: the batch.
@@ -71,24 +72,36 @@ class ReportPool:
             plan.scenario_sha256,
         )
         self._out = Path(out_dir)
-        preload = (type(plan.experiment).__module__, *work.preload)
-        self._ex: cf.ProcessPoolExecutor | None = cf.ProcessPoolExecutor(
-            max_workers=processes,
-            mp_context=workers_mod.pool_context(preload),
+        self._preload = (type(plan.experiment).__module__, *work.preload)
+        self._processes = processes
+        self._ex: cf.ProcessPoolExecutor | None = None
+        self._closed = False
+
+    def start(self) -> None:
+        """Start the processes now (once), so that they import their preload before the report
+        hands them jobs: where the batch leaves a core free (this process computes the blocks
+        itself, or a worker has no block left to compute)."""
+        if self._ex is not None or self._closed:
+            return
+        self._ex = cf.ProcessPoolExecutor(
+            max_workers=self._processes,
+            mp_context=workers_mod.pool_context(self._preload),
             initializer=_init_report_process,
-            initargs=(os.getpid(), preload),
+            initargs=(os.getpid(), self._preload),
         )
         # one call per process starts them all now (a pool forks or spawns them as calls come)
-        for _ in range(processes):
+        for _ in range(self._processes):
             self._ex.submit(_started)
 
     def submit(self, job: Job, args: tuple[Any, ...]) -> cf.Future:
-        """Hand ``job(scenario, blocks, out_dir, *args)`` to a report process.
+        """Hand ``job(scenario, blocks, out_dir, *args)`` to a report process (started now if it
+        was not).
 
         Raises:
             RuntimeError: if the pool is closed (a process of it died: :func:`offload` then runs
                 the job in this process).
         """
+        self.start()
         if self._ex is None:
             raise RuntimeError("the report pool is closed")
         return self._ex.submit(_run_job, self._plan_data, self._out, job, args)
@@ -102,7 +115,7 @@ class ReportPool:
         """Let the processes end (after their jobs), or with ``stop`` end them now (the batch was
         interrupted or failed; a file they were writing is left as it was: each is written
         atomically)."""
-        ex, self._ex = self._ex, None
+        ex, self._ex, self._closed = self._ex, None, True
         if ex is None:
             return
         if stop:
@@ -111,10 +124,9 @@ class ReportPool:
             ex.shutdown(wait=True)
 
 
-def start_pool(plan: BatchPlan, out_dir: Path, workers: int = 1) -> ReportPool | None:
-    """A :class:`ReportPool` for a batch whose experiment hands out report work, or ``None``
-    (no work, one CPU, or processes cannot be started here: the report then does its jobs
-    itself).
+def report_pool(plan: BatchPlan, out_dir: Path, workers: int = 1) -> ReportPool | None:
+    """A :class:`ReportPool` (not started) for a batch whose experiment hands out report work,
+    or ``None`` (no work or one CPU: the report then does its jobs itself).
 
     It has :func:`processes_for` processes, fewer where the batch's memory would not allow them:
     each holds what the report holds (the terms of :meth:`Experiment.memory
@@ -134,10 +146,7 @@ def start_pool(plan: BatchPlan, out_dir: Path, workers: int = 1) -> ReportPool |
         n -= 1
     if n == 0:
         return None
-    try:
-        return ReportPool(plan, out_dir, work, n)
-    except (OSError, NotImplementedError):  # no process can be started: the report does it all
-        return None
+    return ReportPool(plan, out_dir, work, n)
 
 
 class Offloaded:
@@ -194,7 +203,8 @@ def offload(
     if pool is not None:
         try:
             return Offloaded(pool.submit(job, args), here)
-        except (RuntimeError, cf.process.BrokenProcessPool):
+        # closed, broken, or no process can be started here: this process does it
+        except (RuntimeError, OSError, NotImplementedError, cf.process.BrokenProcessPool):
             pass
     return Offloaded(None, here, here())
 

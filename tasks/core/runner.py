@@ -71,7 +71,7 @@ from tasks.core.plan import (
     scenario_text,
 )
 from tasks.core.registry import ReportContext, ReportSummary
-from tasks.core.report_pool import ReportPool, start_pool
+from tasks.core.report_pool import ReportPool, report_pool
 from tasks.core.resume import MAX_RECORD_BYTES, MAX_SCENARIO_BYTES, plan_resume
 from tasks.core.run_folder import (
     BLOCK_DIR,
@@ -198,7 +198,7 @@ def execute(
                 f"{len(batch.failures)} block(s) failed; the other blocks are saved in {out_dir} "
                 "and --resume retries the failed ones:\n  " + "\n  ".join(batch.failures)
             )
-        batch.start_report_pool(0)  # nothing was computed (--resume of a complete batch)
+        batch.open_report_pool(0)  # nothing was computed (--resume of a complete batch)
         try:
             summary = _write_report(plan, out_dir, progress, batch.overlapped, batch.report_pool)
         except BaseException:
@@ -229,15 +229,22 @@ class _Computation:
         self.failures: list[str] = []
         self.overlapped: OverlappedReport | None = None
         self.report_pool: ReportPool | None = None
+        self.workers = 1
         self.arrivals = Arrivals(set(range(len(plan.blocks))) - set(self.todo))
         self.bar: Any = None if self.todo else self._progress_bar()
 
-    def start_report_pool(self, workers: int) -> None:
-        """Start the report's processes (:mod:`tasks.core.report_pool`), if the experiment hands
-        out report work, so that they import its libraries while the blocks are computed
-        (``workers``: the processes computing blocks meanwhile, for the memory they hold)."""
+    def open_report_pool(self, workers: int) -> None:
+        """The report's processes (:mod:`tasks.core.report_pool`), if the experiment hands out
+        report work (``workers``: the processes computing blocks meanwhile, for the memory they
+        hold); not started yet."""
         if self.report_pool is None:
-            self.report_pool = start_pool(self.plan, self.out_dir, workers)
+            self.report_pool = report_pool(self.plan, self.out_dir, workers)
+
+    def start_report_pool(self) -> None:
+        """Start the report's processes, so that they import their libraries on a free core
+        while the last blocks are computed."""
+        if self.report_pool is not None:
+            self.report_pool.start()
 
     def _progress_bar(self) -> Any:
         from tqdm import tqdm
@@ -287,13 +294,16 @@ class _Computation:
                 for i in self.todo
             }
             if isinstance(ex, InlineExecutor):
-                # forked now, before this process starts a thread or builds a physics
-                self.start_report_pool(1)
+                # forked now, before this process starts a thread or builds a physics: the
+                # other core is free while this process computes the blocks
+                self.open_report_pool(1)
+                self.start_report_pool()
             self.bar = self._progress_bar()
             if not isinstance(ex, InlineExecutor):
-                # after the workers are forked (a pool started before would make them come from
-                # a fork server)
-                self.start_report_pool(workers)
+                # started once a worker has no block left (_save_as_finished): the cores are
+                # busy until then
+                self.open_report_pool(workers)
+                self.workers = workers
                 self.overlapped = OverlappedReport(
                     plan, self.out_dir, self.progress, self.arrivals, self.report_pool
                 )
@@ -326,6 +336,8 @@ class _Computation:
                 raise _output_error(plan, self.out_dir, f"block {i}", exc) from None
             self.arrivals.saved(i)
             self.bar.update(len(plan.blocks[i]))
+            if len(futures) < self.workers:  # a worker has no block left: a core is free
+                self.start_report_pool()
 
     def close_bar(self) -> None:
         """Close the progress bar, if one was opened."""

@@ -122,6 +122,31 @@ def test_the_report_processes_write_what_bauv_writes_alone(alone, tmp_path, monk
     assert len(pids) == 2 and gone(pids)  # the report processes ended with the batch
 
 
+@pytest.mark.slow
+def test_with_two_workers_the_report_processes_start_once_a_core_is_free(tmp_path, monkeypatch):
+    a, b = tmp_path / "one", tmp_path / "two"
+    args = {"n_runs": 3, "seed": 2, "overrides": OVERRIDES, "progress": False}
+    with monkeypatch.context() as m:
+        m.setattr(report_pool, "processes_for", lambda work: 0)
+        _, alone_summary = run(SHORT, out_dir=a, **args)
+    calls = spy_submits(monkeypatch)
+    started = []
+    start = report_pool.ReportPool.start
+
+    def spy_start(self):
+        started.append(sorted(p.name for p in (b / "blocks").glob("block-*.sha256")))
+        return start(self)
+
+    monkeypatch.setattr(report_pool.ReportPool, "start", spy_start)
+    _, summary = run(SHORT, out_dir=b, workers=2, **args)
+    # three blocks of one run on two workers: started once the second block was saved (one
+    # block left, a worker idle), not while both workers computed
+    assert len(started[0]) == 2, started
+    assert [name for name, _ in calls] == ["_figures_and_recording"] * 2 + ["_export_block"]
+    assert same_summary(summary, b, alone_summary, a)
+    assert_same_report(a, b)
+
+
 def before_the_report(monkeypatch, action):
     """Run ``action(out_dir, pool)`` in this process when the report starts (the blocks are
     saved and the report processes started); returns the pids of the report processes."""
