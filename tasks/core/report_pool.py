@@ -19,8 +19,10 @@ report process died, the job runs in ``bauv`` itself; its outputs are the same.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import importlib
 import os
+import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -83,13 +85,17 @@ class ReportPool:
         itself, or a worker has no block left to compute)."""
         if self._ex is not None or self._closed:
             return
+        ctx = workers_mod.pool_context(self._preload)
+        # every process waits at the barrier in its first call, so that the pool starts them all
+        # now: one that has started from a fork server or been spawned is otherwise reused for
+        # the next call (it is idle) and the jobs would queue for it
+        barrier = ctx.Barrier(self._processes)
         self._ex = cf.ProcessPoolExecutor(
             max_workers=self._processes,
-            mp_context=workers_mod.pool_context(self._preload),
+            mp_context=ctx,
             initializer=_init_report_process,
-            initargs=(os.getpid(), self._preload),
+            initargs=(os.getpid(), self._preload, barrier),
         )
-        # one call per process starts them all now (a pool forks or spawns them as calls come)
         for _ in range(self._processes):
             self._ex.submit(_started)
 
@@ -212,15 +218,26 @@ def offload(
 # -- in a report process ------------------------------------------------------------------------
 
 
-def _init_report_process(parent_pid: int, preload: Sequence[str]) -> None:
+_BARRIER: Any = None
+"""The pool's start barrier, in a report process."""
+
+START_WAIT_S = 60.0
+"""How long a report process waits for the others to start, s (then it goes on alone)."""
+
+
+def _init_report_process(parent_pid: int, preload: Sequence[str], barrier: Any) -> None:
+    global _BARRIER
     workers_mod.init_worker(parent_pid)
     for module in preload:
         importlib.import_module(module)
+    _BARRIER = barrier
 
 
 def _started() -> None:
-    """The first call of each report process (it returns once the process has imported its
-    preload)."""
+    """The first call of each report process: it returns once every process of the pool has
+    started and imported its preload (or after :data:`START_WAIT_S`)."""
+    with contextlib.suppress(threading.BrokenBarrierError):
+        _BARRIER.wait(START_WAIT_S)
 
 
 _INPUTS: dict[tuple[str, str], tuple[Config, list[Any]]] = {}
