@@ -138,7 +138,9 @@ def test_with_two_workers_the_report_processes_start_once_a_core_is_free(tmp_pat
         return start(self)
 
     monkeypatch.setattr(report_pool.ReportPool, "start", spy_start)
+    pids = before_the_report(monkeypatch, lambda out_dir, pool: None)
     _, summary = run(SHORT, out_dir=b, workers=2, **args)
+    assert len(pids) == 2 and gone(pids)  # both started (from a fork server: threads run here)
     # three blocks of one run on two workers: started once the second block was saved (one
     # block left, a worker idle), not while both workers computed
     assert len(started[0]) == 2, started
