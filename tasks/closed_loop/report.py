@@ -133,10 +133,11 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
         for job in _report_jobs(scn)
         if drawn
     ]
-    last = [
-        offload(ctx.pool, _export_block, scn, blocks, ctx.out_dir, exp.name, len(blocks) - 1)
-        for _ in blocks[:1]
-    ]
+    last = (
+        [offload(ctx.pool, _export_block, scn, blocks, ctx.out_dir, exp.name, len(blocks) - 1)]
+        if blocks
+        else []
+    )
     files = [write_metrics(ctx.out_dir, metrics), *data_files]
     files += [f for job in last for f in job.result()]
     tables = []
@@ -225,8 +226,9 @@ def report_mission(exp: Experiment, ctx: ReportContext) -> ReportSummary:
     files += write_tables(ctx.out_dir, tables, heading=f"{exp.name}: {exp.summary}")
     done = [job.result() for job in jobs]
     # listed as drawn here: the figures in their order, then the recording
-    figures = sorted((f for drawn, _ in done for f in drawn), key=_figure_order)
-    files += figures + [f for _, rec in done for f in rec]
+    by_figure = {fig: drawn for figures, _ in done for fig, drawn in figures.items()}
+    files += [f for fig in MISSION_FIGURES for f in by_figure.get(fig, [])]
+    files += [f for _, rec in done for f in rec]
     text = "".join(t.to_text() + "\n" for t in tables)
     if failures:
         rest = (
@@ -260,13 +262,6 @@ def _report_jobs(scn: MissionScenario) -> list[tuple[tuple[str, ...], bool]]:
     return [(f, rec) for f, rec in jobs if f or rec]
 
 
-def _figure_order(file: str) -> tuple[int, str]:
-    """Sort key of a figure's file: its figure's place in :data:`MISSION_FIGURES`, then the PNG
-    before the vector file (as :func:`tasks.core.style.save` lists them)."""
-    stem, ext = file.rsplit(".", 1)
-    return MISSION_FIGURES.index(stem), "0" if ext == "png" else ext
-
-
 def _export_block(
     scn: MissionScenario, blocks: list[list[MissionRun]], out_dir: Path, name: str, index: int
 ) -> list[str]:
@@ -288,17 +283,17 @@ def _figures_and_recording(
     out_dir: Path,
     name: str,
     job: tuple[tuple[str, ...], bool],
-) -> tuple[list[str], list[str]]:
+) -> tuple[dict[str, list[str]], list[str]]:
     """A job of the report (:func:`tasks.core.report_pool.offload`): figures of the recorded run
     and, if asked, its recording.
 
     Returns:
-        ``(figure files, [recording file] or [])``, relative to ``out_dir``.
+        ``({figure: its files}, [recording file] or [])``, the files relative to ``out_dir``.
     """
     figures, recording = job
     runs = [r for block in blocks for r in block]
     run = next(r for r in runs if r.run == scn.report.record_run)
-    drawn = mission_figures(name, scn, run, runs, out_dir, figures) if figures else []
+    drawn = {fig: mission_figures(name, scn, run, runs, out_dir, (fig,)) for fig in figures}
     return drawn, [record_mission(name, scn, run, out_dir)] if recording else []
 
 

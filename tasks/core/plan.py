@@ -26,7 +26,7 @@ from bauv_sim.config import Config, load_config, to_plain
 from bauv_sim.errors import ConfigError
 from bauv_sim.rng import check_seed
 from tasks.core import registry
-from tasks.core.registry import Experiment
+from tasks.core.registry import Experiment, MemoryTerm
 
 
 @dataclass(frozen=True)
@@ -164,6 +164,14 @@ def check_layout(n_runs: int, block_size: int) -> None:
         )
 
 
+def memory_bytes(terms: Sequence[MemoryTerm], workers: int, report_copies: int = 1) -> float:
+    """A batch's estimated peak memory from the parts of :meth:`Experiment.memory`, bytes: each
+    part held per block by every one of ``workers`` processes, or else (what the report holds)
+    by ``report_copies`` processes (``bauv`` and its report processes,
+    :mod:`tasks.core.report_pool`)."""
+    return sum(t.bytes * (workers if t.per_block else report_copies) for t in terms)
+
+
 def check_memory(exp: Experiment, scenario: Config, n_runs: int, workers: int = 1) -> None:
     """Refuse a batch whose estimated memory (:meth:`Experiment.memory`) exceeds
     :func:`memory_limit_bytes`, before anything is computed or written.
@@ -181,10 +189,10 @@ def check_memory(exp: Experiment, scenario: Config, n_runs: int, workers: int = 
     terms = exp.memory(scenario, n_runs)
     if not terms:
         return
-    total = sum(t.bytes * (workers if t.per_block else 1) for t in terms)
+    total = memory_bytes(terms, workers)
     limit = memory_limit_bytes()
     if total > limit:
-        worst = max(terms, key=lambda t: t.bytes * (workers if t.per_block else 1))
+        worst = max(terms, key=lambda t: memory_bytes([t], workers))
         raise ConfigError(
             f"{worst.fields}: the batch would need about {_gb(total)} of memory, above the limit "
             f"of {_gb(limit)} ({MEMORY_FRACTION:.0%} of this machine's memory)"

@@ -30,7 +30,7 @@ from typing import Any
 from bauv_sim.config import Config, to_plain, validate
 from tasks.core import files, registry, run_folder
 from tasks.core import workers as workers_mod
-from tasks.core.plan import BatchPlan, memory_limit_bytes
+from tasks.core.plan import BatchPlan, memory_bytes, memory_limit_bytes
 from tasks.core.registry import ReportWork
 
 Job = Callable[..., Any]
@@ -145,10 +145,8 @@ def report_pool(plan: BatchPlan, out_dir: Path, workers: int = 1) -> ReportPool 
     if work is None or n == 0:
         return None
     terms = plan.experiment.memory(plan.scenario, plan.n_runs)
-    batch = sum(t.bytes * (workers if t.per_block else 1) for t in terms)
-    report = sum(t.bytes for t in terms if not t.per_block)
     limit = memory_limit_bytes()
-    while n > 0 and batch + n * report > limit:
+    while n > 0 and memory_bytes(terms, workers, report_copies=1 + n) > limit:
         n -= 1
     if n == 0:
         return None

@@ -230,6 +230,7 @@ class _Computation:
         self.overlapped: OverlappedReport | None = None
         self.report_pool: ReportPool | None = None
         self.workers = 1
+        """Processes computing blocks (a report process starts once one of them is idle)."""
         self.arrivals = Arrivals(set(range(len(plan.blocks))) - set(self.todo))
         self.bar: Any = None if self.todo else self._progress_bar()
 
@@ -239,6 +240,7 @@ class _Computation:
         hold); not started yet."""
         if self.report_pool is None:
             self.report_pool = report_pool(self.plan, self.out_dir, workers)
+            self.workers = workers
 
     def start_report_pool(self) -> None:
         """Start the report's processes, so that they import their libraries on a free core
@@ -303,7 +305,6 @@ class _Computation:
                 # started once a worker has no block left (_save_as_finished): the cores are
                 # busy until then
                 self.open_report_pool(workers)
-                self.workers = workers
                 self.overlapped = OverlappedReport(
                     plan, self.out_dir, self.progress, self.arrivals, self.report_pool
                 )
