@@ -87,8 +87,8 @@ class ReportPool:
             return
         ctx = workers_mod.pool_context(self._preload)
         # every process waits at the barrier in its first call, so that the pool starts them all
-        # now: one that has started from a fork server or been spawned is otherwise reused for
-        # the next call (it is idle) and the jobs would queue for it
+        # now: a pool that starts processes as calls come (fork server, spawn) could otherwise
+        # hand the next call to the first one once it is idle (a guard: not seen measured)
         barrier = ctx.Barrier(self._processes)
         self._ex = cf.ProcessPoolExecutor(
             max_workers=self._processes,
